@@ -1,0 +1,169 @@
+//! Motion feedforward (paper §3, eq. 15–25, 36).
+//!
+//! With the cameras on the arm, a static target appears to move in `Σ_CR` whenever the arm
+//! moves. For joint velocities `q̇` the apparent pose velocity is `^CR ψ̇ = J_m(q) q̇`
+//! (eq. 24, the target's own motion `J_n ^W ψ̇_M` is not predicted), and every GA individual
+//! is moved by `ψ̇ Δt` before it is evaluated on the next frame (eq. 25, 36).
+//!
+//! Derivation used here (equivalent to eq. 23, with the Jacobian taken at the camera origin
+//! rather than assuming `Σ_H = Σ_CR`): with `v`, `ω` the camera's linear and angular velocity
+//! expressed in `Σ_CR`,
+//!
+//! ```text
+//! ṙ = −v − ω × r                 (r = ^CR r_CR,M; eq. 16 with ^W ṙ_M = 0)
+//! ε̇ = ½ (η I − S(ε)) (−ω)         (eq. 19 with ^CR ω_CR,M = −ω; eq. 18)
+//! ```
+//!
+//! and `v = ^CR R_W J_p q̇`, `ω = ^CR R_W J_o q̇` (eq. 20–22). [`psi_rate`] evaluates this per
+//! individual from one [`CameraTwist`] per frame; [`jm`] builds the 6×DOF matrix itself.
+
+use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Vector3};
+
+use crate::kinematics::Chain;
+use crate::pose::Psi;
+use crate::quat::skew;
+
+/// The camera's velocity, expressed in `Σ_CR`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraTwist {
+    /// Linear velocity of the camera origin (m/s).
+    pub v: Vector3<f32>,
+    /// Angular velocity (rad/s).
+    pub w: Vector3<f32>,
+}
+
+impl CameraTwist {
+    /// No motion.
+    pub const ZERO: CameraTwist = CameraTwist { v: Vector3::new(0.0, 0.0, 0.0), w: Vector3::new(0.0, 0.0, 0.0) };
+}
+
+/// Camera twist from joint state: `J(q) q̇` at the camera origin, rotated into `Σ_CR`.
+/// `flange_to_camera` is `^H T_CR`.
+pub fn camera_twist<const DOF: usize>(
+    chain: &Chain<DOF>,
+    q: &[f32; DOF],
+    qd: &[f32; DOF],
+    flange_to_camera: &Isometry3<f32>,
+) -> CameraTwist {
+    let (j, r_wc, _) = chain.jacobian_at(q, flange_to_camera);
+    let jqd = j * SVector::<f32, DOF>::from(*qd);
+    let r_cw = r_wc.transpose();
+    CameraTwist {
+        v: r_cw * Vector3::new(jqd[0], jqd[1], jqd[2]),
+        w: r_cw * Vector3::new(jqd[3], jqd[4], jqd[5]),
+    }
+}
+
+/// `^CR ψ̇` of a static target at `psi` seen from a camera moving with `twist` (eq. 24).
+pub fn psi_rate(twist: &CameraTwist, psi: &Psi) -> [f32; 6] {
+    let r = psi.translation();
+    let rdot = -twist.v - twist.w.cross(&r);
+    let eps = psi.eps();
+    let omega_rel = -twist.w;
+    let edot = (omega_rel * psi.eta() - skew(&eps) * omega_rel) * 0.5;
+    [rdot.x, rdot.y, rdot.z, edot.x, edot.y, edot.z]
+}
+
+/// The motion-feedforward Jacobian `J_m(q)` of eq. 23 for a target at `psi` in `Σ_CR`:
+///
+/// ```text
+/// J_m = [ −^CR R_W J_p + S(r) ^CR R_W J_o      ]
+///       [ −½ (η I − S(ε)) ^CR R_W J_o          ]
+/// ```
+/// with `J_p` taken at the camera origin.
+pub fn jm<const DOF: usize>(
+    chain: &Chain<DOF>,
+    q: &[f32; DOF],
+    flange_to_camera: &Isometry3<f32>,
+    psi: &Psi,
+) -> SMatrix<f32, 6, DOF> {
+    let (j, r_wc, _) = chain.jacobian_at(q, flange_to_camera);
+    let r_cw = r_wc.transpose();
+    let jp = r_cw * j.fixed_rows::<3>(0);
+    let jo = r_cw * j.fixed_rows::<3>(3);
+    let top = -jp + skew(&psi.translation()) * jo;
+    let g: Matrix3<f32> = Matrix3::identity() * psi.eta() - skew(&psi.eps());
+    let bottom = -(g * jo) * 0.5;
+    let mut out = SMatrix::<f32, 6, DOF>::zeros();
+    out.fixed_rows_mut::<3>(0).copy_from(&top);
+    out.fixed_rows_mut::<3>(3).copy_from(&bottom);
+    out
+}
+
+/// `ψ + ψ̇ Δt` (eq. 25). The caller clamps the result into its search space.
+pub fn shift(psi: &mut Psi, rate: &[f32; 6], dt_s: f32) {
+    for (x, r) in psi.0.iter_mut().zip(rate.iter()) {
+        *x += r * dt_s;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::PA10;
+    use crate::quat;
+    use nalgebra::Translation3;
+
+    fn flange_to_camera() -> Isometry3<f32> {
+        Isometry3::from_parts(
+            Translation3::new(0.05, 0.0, 0.06),
+            quat::from_angle_axis(0.1, &Vector3::new(0.0, 1.0, 0.2)).unwrap(),
+        )
+    }
+
+    /// `^CR ψ_M(q)` of a target fixed in the world, computed in f64-free but direct form.
+    fn psi_of(q: &[f32; 7], world_target: &Isometry3<f32>) -> Psi {
+        let cam = PA10.forward(q) * flange_to_camera();
+        Psi::from_isometry(&(cam.inverse() * world_target))
+    }
+
+    #[test]
+    fn jm_matches_finite_differences_of_the_camera_frame_pose() {
+        let configs: [[f32; 7]; 3] = [
+            [0.1, -0.4, 0.3, 1.2, -0.5, 0.7, 0.2],
+            [-1.0, 0.6, -0.8, -1.4, 2.0, -1.1, 3.0],
+            [0.0, 0.5, 0.0, 1.3, 0.0, 0.6, 0.0],
+        ];
+        let qd: [f32; 7] = [0.3, -0.2, 0.5, 0.1, -0.4, 0.25, 0.6];
+        for q in &configs {
+            // A target 0.7 m in front of the camera, rotated.
+            let cam = PA10.forward(q) * flange_to_camera();
+            let target = cam
+                * Isometry3::from_parts(
+                    Translation3::new(0.05, -0.03, 0.7),
+                    quat::from_angle_axis(0.5, &Vector3::new(0.2, 1.0, -0.3)).unwrap(),
+                );
+            let psi = psi_of(q, &target);
+            let h = 1e-3f32;
+            let qp: [f32; 7] = core::array::from_fn(|i| q[i] + h * qd[i]);
+            let qm: [f32; 7] = core::array::from_fn(|i| q[i] - h * qd[i]);
+            let (pp, pm) = (psi_of(&qp, &target), psi_of(&qm, &target));
+            let fd: [f32; 6] = core::array::from_fn(|i| (pp.0[i] - pm.0[i]) / (2.0 * h));
+            let analytic = jm(&PA10, q, &flange_to_camera(), &psi) * SVector::<f32, 7>::from(qd);
+            let twist = camera_twist(&PA10, q, &qd, &flange_to_camera());
+            let per_individual = psi_rate(&twist, &psi);
+            for i in 0..6 {
+                let tol = if i < 3 { 5e-3 } else { 3e-3 };
+                assert!((analytic[i] - fd[i]).abs() < tol, "J_m q̇ [{i}] {} vs fd {}", analytic[i], fd[i]);
+                assert!((per_individual[i] - analytic[i]).abs() < 1e-5, "psi_rate [{i}]");
+            }
+        }
+    }
+
+    #[test]
+    fn static_arm_gives_no_shift() {
+        let twist = camera_twist(&PA10, &[0.2; 7], &[0.0; 7], &Isometry3::identity());
+        let mut psi = Psi::new([0.1, 0.0, 0.7], [0.1, 0.0, 0.0]);
+        let before = psi;
+        let rate = psi_rate(&twist, &psi);
+        shift(&mut psi, &rate, 0.033);
+        assert_eq!(psi, before);
+    }
+
+    #[test]
+    fn pure_camera_translation_moves_target_opposite() {
+        let twist = CameraTwist { v: Vector3::new(0.1, 0.0, 0.0), w: Vector3::zeros() };
+        let rate = psi_rate(&twist, &Psi::new([0.0, 0.0, 0.7], [0.0; 3]));
+        assert_eq!(rate, [-0.1, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    }
+}

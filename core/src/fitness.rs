@@ -1,0 +1,346 @@
+//! The hue fitness of a pose (paper §4.2, eq. 34–35).
+//!
+//! For one camera with the model at pose `(R, t)` in that camera's frame:
+//!
+//! ```text
+//! F_c = max(0, Σ_k∈visible Σ_{p ∈ S_in,k} δ(h(p) ≈ b_k)  −  Σ_{p ∈ S_out} δ(h(p) ≈ any visible b_k)) / H
+//! H   = G² · (number of visible faces)
+//! F   = (F_L + F_R) / 2
+//! ```
+//!
+//! where `≈` is the [`HueLut`] tolerance band and `S_out` holds the contour rows on silhouette
+//! edges only (see [`crate::model`]). A pose whose block is not entirely in front of a camera
+//! scores 0 in that camera.
+//!
+//! **Bounded work.** Of each pair of opposite faces exactly one can face a camera, so each
+//! camera evaluates three faces (the one of each pair on the camera's side), `3·(G² + 4G)`
+//! points, whether or not a face is visible or a strip is on the silhouette: the visibility
+//! only masks the counts. Points outside the image read as "no hue"; nothing is ever read
+//! out of bounds. Per point: three additions (grid walk in homogeneous coordinates), one
+//! division, two multiplications, two float→int conversions, a bounds test, two table loads.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::camera::{Pinhole, StereoRig};
+use crate::config::{MIN_DEPTH_M, MIN_VISIBLE_COS, NO_HUE, STRIP_OFFSET_M};
+use crate::hue::{HueImage, HueLut};
+use crate::model::SurfaceStrips;
+use crate::pose::Psi;
+
+/// Match counts of one camera.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Counts {
+    /// Inner points whose hue matched their face (visible faces only).
+    pub inner_matched: u32,
+    /// Inner points on visible faces (`H`).
+    pub inner_total: u32,
+    /// Contour points on silhouette edges whose hue matched a visible face.
+    pub strip_matched: u32,
+    /// Bitmask of the faces found visible.
+    pub visible: u8,
+}
+
+impl Counts {
+    /// `F_c = max(0, matched − strip_matched) / H`, or 0 when no face is visible.
+    pub fn score(&self) -> f32 {
+        if self.inner_total == 0 {
+            return 0.0;
+        }
+        let net = self.inner_matched.saturating_sub(self.strip_matched);
+        net as f32 / self.inner_total as f32
+    }
+}
+
+/// Fitness of one pose in both cameras.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Fitness {
+    /// `F = (F_L + F_R) / 2`.
+    pub total: f32,
+    /// Left camera's counts.
+    pub left: Counts,
+    /// Right camera's counts.
+    pub right: Counts,
+}
+
+/// A borrowed hue image reduced to what the inner loop needs.
+#[derive(Clone, Copy)]
+struct View<'a> {
+    pixels: &'a [u8],
+    width: u32,
+    height: u32,
+}
+
+impl<'a> View<'a> {
+    fn of<B: AsRef<[u8]>>(img: &'a HueImage<B>) -> Self {
+        Self { pixels: img.pixels(), width: u32::from(img.width()), height: u32::from(img.height()) }
+    }
+
+    /// Hue byte under homogeneous pixel coordinates `(x, y, z)` that carry a +1 pixel shift
+    /// (so truncation toward zero equals `floor` for every in-image point).
+    #[inline(always)]
+    fn sample(&self, p: [f32; 3]) -> u8 {
+        let inv = 1.0 / p[2];
+        let u = ((p[0] * inv) as i32).wrapping_sub(1) as u32;
+        let v = ((p[1] * inv) as i32).wrapping_sub(1) as u32;
+        if u < self.width && v < self.height {
+            match self.pixels.get((v * self.width + u) as usize) {
+                Some(&h) => h,
+                None => NO_HUE,
+            }
+        } else {
+            NO_HUE
+        }
+    }
+}
+
+#[inline(always)]
+fn add(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// `K'·R` and `K'·t`, the pose composed with the intrinsics (with the +1 pixel shift).
+struct Projector {
+    m: [[f32; 3]; 3],
+    c: [f32; 3],
+}
+
+impl Projector {
+    fn new(cam: &Pinhole, r: &Matrix3<f32>, t: &Vector3<f32>) -> Self {
+        let (fx, fy, cx, cy) = (cam.fx(), cam.fy(), cam.cx() + 1.0, cam.cy() + 1.0);
+        let row = |i: usize| [r[(i, 0)], r[(i, 1)], r[(i, 2)]];
+        let (r0, r1, r2) = (row(0), row(1), row(2));
+        let m = [
+            [fx * r0[0] + cx * r2[0], fx * r0[1] + cx * r2[1], fx * r0[2] + cx * r2[2]],
+            [fy * r1[0] + cy * r2[0], fy * r1[1] + cy * r2[1], fy * r1[2] + cy * r2[2]],
+            r2,
+        ];
+        let c = [fx * t.x + cx * t.z, fy * t.y + cy * t.z, t.z];
+        Self { m, c }
+    }
+
+    #[inline(always)]
+    fn dir(&self, v: &Vector3<f32>) -> [f32; 3] {
+        let [a, b, c] = self.m;
+        [
+            a[0] * v.x + a[1] * v.y + a[2] * v.z,
+            b[0] * v.x + b[1] * v.y + b[2] * v.z,
+            c[0] * v.x + c[1] * v.y + c[2] * v.z,
+        ]
+    }
+
+    #[inline(always)]
+    fn point(&self, v: &Vector3<f32>) -> [f32; 3] {
+        add(self.dir(v), self.c)
+    }
+}
+
+/// Counts of one camera for the model at `(r, t)` in that camera's frame.
+///
+/// The work is the same for every pose: see the module docs.
+pub fn camera_counts<const G: usize, B: AsRef<[u8]>>(
+    model: &SurfaceStrips<G>,
+    lut: &HueLut,
+    cam: &Pinhole,
+    image: &HueImage<B>,
+    r: &Matrix3<f32>,
+    t: &Vector3<f32>,
+) -> Counts {
+    let view = View::of(image);
+    let half = model.half_size();
+    let proj = Projector::new(cam, r, t);
+
+    // Nearest depth of the block inflated by the strip offset (every sample point is inside it).
+    let reach = |a: usize| r[(2, a)].abs() * (half[a] + STRIP_OFFSET_M);
+    let in_front = t.z - (reach(0) + reach(1) + reach(2)) > MIN_DEPTH_M;
+
+    // d_a = (column a of R) · t: the camera is on the +a side of the block iff d_a < −h_a.
+    let mut d = [0.0f32; 3];
+    for (a, da) in d.iter_mut().enumerate() {
+        *da = r.column(a).dot(t);
+    }
+    let front = |k: usize| -> bool {
+        let (a, pos) = (k % 3, k < 3);
+        let (da, ha) = (d.get(a).copied().unwrap_or(0.0), half[a]);
+        if pos { da < -ha } else { da > ha }
+    };
+
+    // The face of each opposite pair that is on the camera's side, and whether it is visible.
+    let mut chosen = [0usize; 3];
+    let mut visible_mask = 0u8;
+    for (a, (ck, da)) in chosen.iter_mut().zip(d.iter()).enumerate() {
+        let k = if *da < 0.0 { a } else { a + 3 };
+        *ck = k;
+        let dist = da.abs() - half[a];
+        let sign = if k < 3 { 1.0 } else { -1.0 };
+        let center = t + r.column(a) * (sign * half[a]);
+        if in_front && dist > 0.0 && dist * dist > MIN_VISIBLE_COS * MIN_VISIBLE_COS * center.dot(&center) {
+            visible_mask |= 1 << k;
+        }
+    }
+
+    let mut counts = Counts { visible: visible_mask, ..Counts::default() };
+    let faces = model.faces();
+    for &k in &chosen {
+        let Some(face) = faces.get(k) else { continue };
+        let bit = 1u8 << k;
+        let visible = visible_mask & bit != 0;
+
+        // Inner grid.
+        let (du, dv) = (proj.dir(&face.du), proj.dir(&face.dv));
+        let mut row = proj.point(&face.origin);
+        let mut matched = 0u32;
+        for _ in 0..G {
+            let mut p = row;
+            for _ in 0..G {
+                matched += u32::from(lut.mask(view.sample(p)) & bit != 0);
+                p = add(p, du);
+            }
+            row = add(row, dv);
+        }
+        if visible {
+            counts.inner_matched += matched;
+            counts.inner_total += (G * G) as u32;
+        }
+
+        // Contour rows; they count only on silhouette edges of a visible face.
+        for (strip, &nb) in face.strips.iter().zip(face.neighbour.iter()) {
+            let step = proj.dir(&strip.step);
+            let mut p = proj.point(&strip.origin);
+            let mut hits = 0u32;
+            for _ in 0..G {
+                hits += u32::from(lut.mask(view.sample(p)) & visible_mask != 0);
+                p = add(p, step);
+            }
+            if visible && !front(usize::from(nb)) {
+                counts.strip_matched += hits;
+            }
+        }
+    }
+    counts
+}
+
+/// Evaluates poses against a stereo pair: the model, its hue table and the rig, bundled.
+#[derive(Debug, Clone, Copy)]
+pub struct Evaluator<'m, const G: usize> {
+    model: &'m SurfaceStrips<G>,
+    lut: &'m HueLut,
+    rig: &'m StereoRig,
+    left_r: Matrix3<f32>,
+    left_t: Vector3<f32>,
+}
+
+impl<'m, const G: usize> Evaluator<'m, G> {
+    /// Bundles a model, its hue table and a rig.
+    pub fn new(model: &'m SurfaceStrips<G>, lut: &'m HueLut, rig: &'m StereoRig) -> Self {
+        let lr = &rig.left_from_right;
+        Self {
+            model,
+            lut,
+            rig,
+            left_r: crate::quat::to_rotation_matrix(&lr.rotation),
+            left_t: lr.translation.vector,
+        }
+    }
+
+    /// `F(ψ)` (eq. 35) for a pose given as rotation `r` and translation `t` in `Σ_CR`.
+    pub fn evaluate<B: AsRef<[u8]>>(
+        &self,
+        r: &Matrix3<f32>,
+        t: &Vector3<f32>,
+        left: &HueImage<B>,
+        right: &HueImage<B>,
+    ) -> Fitness {
+        let right_counts = camera_counts(self.model, self.lut, &self.rig.right, right, r, t);
+        let (r_left, t_left) = (self.left_r * r, self.left_r * t + self.left_t);
+        let left_counts = camera_counts(self.model, self.lut, &self.rig.left, left, &r_left, &t_left);
+        Fitness { total: 0.5 * (left_counts.score() + right_counts.score()), left: left_counts, right: right_counts }
+    }
+
+    /// `F(ψ)` for a 6-parameter pose (assumed valid: finite, `|ε| ≤ 1`).
+    pub fn evaluate_psi<B: AsRef<[u8]>>(&self, psi: &Psi, left: &HueImage<B>, right: &HueImage<B>) -> Fitness {
+        self.evaluate(&psi.rotation_unchecked(), &psi.translation(), left, right)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Pinhole;
+    use crate::config::DEFAULT_HUE_TOLERANCE;
+    use crate::model::Block;
+    use crate::synth;
+    use std::vec;
+
+    const W: u16 = 640;
+    const H: u16 = 480;
+
+    fn rig() -> StereoRig {
+        StereoRig::parallel(Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, W, H).unwrap(), 0.1).unwrap()
+    }
+
+    fn scene(psi: &Psi) -> (std::vec::Vec<u8>, std::vec::Vec<u8>) {
+        let rig = rig();
+        let iso = psi.try_to_isometry().unwrap();
+        let mut right = vec![NO_HUE; usize::from(W) * usize::from(H)];
+        let mut left = right.clone();
+        synth::render_block(&Block::PAPER, &rig.right, &iso, &mut right).unwrap();
+        synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut left).unwrap();
+        (left, right)
+    }
+
+    #[test]
+    fn true_pose_scores_exactly_one_and_perturbations_score_less() {
+        let model = SurfaceStrips::<6>::new(&Block::PAPER).unwrap();
+        let hues = model.faces().map(|f| f.hue);
+        let lut = HueLut::new(&hues, DEFAULT_HUE_TOLERANCE);
+        let rig = rig();
+        let eval = Evaluator::new(&model, &lut, &rig);
+        // A corner towards the camera, so three faces are visible: the model diagonal (1,1,1)
+        // turned most of the way onto the camera's −z.
+        let q = crate::quat::from_angle_axis(2.0, &Vector3::new(-1.0, 1.0, 0.1)).unwrap();
+        let truth = Psi::from_parts(&Vector3::new(0.02, -0.01, 0.75), &q);
+        let (l, r) = scene(&truth);
+        let left = HueImage::new_checked(&l[..], W, H).unwrap();
+        let right = HueImage::new_checked(&r[..], W, H).unwrap();
+        let f = eval.evaluate_psi(&truth, &left, &right);
+        assert_eq!(f.total, 1.0, "{f:?}");
+        assert_eq!(f.right.visible.count_ones(), 3);
+        assert_eq!(f.right.inner_total, 3 * 36);
+        // Every perturbation of 8 mm or 0.03 in ε lowers F.
+        for i in 0..6 {
+            for sign in [-1.0f32, 1.0] {
+                let mut p = truth;
+                p.0[i] += sign * if i < 3 { 0.008 } else { 0.03 };
+                let fp = eval.evaluate_psi(&p, &left, &right).total;
+                assert!(fp < 1.0, "gene {i} {sign}: {fp}");
+            }
+        }
+        // Far away poses score (close to) nothing.
+        let far = Psi::new([0.25, 0.2, 1.1], [0.0; 3]);
+        assert!(eval.evaluate_psi(&far, &left, &right).total < 0.2);
+        // A pose behind the camera scores 0 without reading out of bounds.
+        let behind = Psi::new([0.0, 0.0, -0.5], [0.0; 3]);
+        assert_eq!(eval.evaluate_psi(&behind, &left, &right).total, 0.0);
+    }
+
+    #[test]
+    fn a_blank_image_scores_zero() {
+        let model = SurfaceStrips::<4>::new(&Block::PAPER).unwrap();
+        let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
+        let rig = rig();
+        let eval = Evaluator::new(&model, &lut, &rig);
+        let blank = vec![NO_HUE; usize::from(W) * usize::from(H)];
+        let img = HueImage::new_checked(&blank[..], W, H).unwrap();
+        let f = eval.evaluate_psi(&Psi::new([0.0, 0.0, 0.7], [0.0; 3]), &img, &img);
+        assert_eq!(f.total, 0.0);
+        assert!(f.right.inner_total > 0);
+    }
+
+    #[test]
+    fn score_clamps_at_zero() {
+        let c = Counts { inner_matched: 3, inner_total: 10, strip_matched: 7, visible: 1 };
+        assert_eq!(c.score(), 0.0);
+        let c = Counts { inner_matched: 7, inner_total: 10, strip_matched: 2, visible: 1 };
+        assert!((c.score() - 0.5).abs() < 1e-7);
+    }
+}

@@ -1,0 +1,446 @@
+//! The 1-step GA: one generation per call, a statically sized population of poses.
+//!
+//! One [`Ga::generation`] on the newest frame pair:
+//! 1. **evaluate** every individual with the caller's fitness;
+//! 2. the **best** (ties keep the lower index, and the elite sits at index 0, so an equally
+//!    good newcomer does not displace it) is the estimate;
+//! 3. **breed** the next population: the elite unchanged at index 0; `immigrants` fresh
+//!    uniform samples of the search space at the end (they let the GA re-acquire a lost
+//!    target); every other child from two binary-tournament parents, blend crossover
+//!    (BLX-0.25 per gene) with probability `crossover_prob`, then with probability
+//!    `mutation_prob` a triangular perturbation at one of three scales picked at random
+//!    (lateral position, depth along the viewing ray, and ε; see [`GaParams::mutation_scale`]).
+//!    Children are clamped into the search space and `|ε| ≤ 1`.
+//!
+//! Every child draws the same number of random numbers whatever happens to it, so the work
+//! and the generator's state after a generation do not depend on the data. Randomness comes
+//! from any [`rand_core::Rng`]; the tracker uses a seeded `Xoshiro128PlusPlus`.
+
+use rand_core::Rng;
+
+use crate::math;
+use crate::pose::Psi;
+
+/// Why GA settings were rejected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum GaError {
+    /// A bound or parameter is NaN or infinite.
+    NonFinite,
+    /// A search-space minimum is not below its maximum.
+    EmptySearchSpace,
+    /// A probability is outside `[0, 1]` or a scale is negative.
+    BadParameter,
+    /// Too many immigrants for the population (at least the elite and one child must remain).
+    TooManyImmigrants,
+}
+
+impl core::fmt::Display for GaError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::NonFinite => f.write_str("GA parameter is not finite"),
+            Self::EmptySearchSpace => f.write_str("search space is empty"),
+            Self::BadParameter => f.write_str("GA probability or scale out of range"),
+            Self::TooManyImmigrants => f.write_str("too many immigrants for the population"),
+        }
+    }
+}
+
+impl core::error::Error for GaError {}
+
+/// The box of positions (in `Σ_CR`, metres) searched; `ε` ranges over the unit ball.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SearchSpace {
+    t_min: [f32; 3],
+    t_max: [f32; 3],
+}
+
+impl SearchSpace {
+    /// A search box `t_min ≤ t ≤ t_max`.
+    ///
+    /// # Errors
+    /// [`GaError::NonFinite`] or [`GaError::EmptySearchSpace`].
+    pub fn new_checked(t_min: [f32; 3], t_max: [f32; 3]) -> Result<Self, GaError> {
+        if !t_min.iter().chain(t_max.iter()).all(|v| v.is_finite()) {
+            return Err(GaError::NonFinite);
+        }
+        if t_min.iter().zip(t_max.iter()).any(|(lo, hi)| lo >= hi) {
+            return Err(GaError::EmptySearchSpace);
+        }
+        Ok(Self { t_min, t_max })
+    }
+
+    /// Lower position bounds.
+    pub fn t_min(&self) -> [f32; 3] {
+        self.t_min
+    }
+
+    /// Upper position bounds.
+    pub fn t_max(&self) -> [f32; 3] {
+        self.t_max
+    }
+
+    /// Clamps the position into the box and `ε` into the unit ball (non-finite → 0 first).
+    pub fn clamp(&self, psi: &mut Psi) {
+        psi.project_to_ball();
+        for ((x, lo), hi) in psi.0.iter_mut().zip(self.t_min.iter()).zip(self.t_max.iter()) {
+            *x = math::clamp(*x, *lo, *hi);
+        }
+    }
+
+    /// A uniform sample: position uniform in the box, `ε` uniform in the cube `[-1, 1]³`
+    /// then projected onto the ball. Draws exactly 6 numbers.
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> Psi {
+        let mut p = Psi::IDENTITY;
+        for (i, x) in p.0.iter_mut().enumerate() {
+            let u = unit_f32(rng);
+            *x = match (self.t_min.get(i), self.t_max.get(i)) {
+                (Some(lo), Some(hi)) => lo + (hi - lo) * u,
+                _ => 2.0 * u - 1.0,
+            };
+        }
+        p.project_to_ball();
+        p
+    }
+}
+
+/// Number of mutation scales.
+pub const MUTATION_LEVELS: usize = 3;
+
+/// GA settings; [`GaParams::DEFAULT`] states the defaults.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GaParams {
+    /// Probability that a child is a blend of its two parents (else a copy of the first).
+    pub crossover_prob: f32,
+    /// Probability that a child is mutated.
+    pub mutation_prob: f32,
+    /// Fresh uniform samples per generation.
+    pub immigrants: usize,
+    /// Half-widths of the triangular mutation per gene, one row per scale; a mutated child
+    /// uses one row picked uniformly. Columns: lateral `x`, `y` (m), depth along the viewing
+    /// ray (m of `t_z`), then `ε₁, ε₂, ε₃`.
+    pub mutation_scale: [[f32; 6]; MUTATION_LEVELS],
+}
+
+impl GaParams {
+    /// Defaults for a target about 0.5–1 m away at 30 frames/s: crossover 0.5, mutation 0.9,
+    /// one immigrant, mutation scales 20 mm / 0.04, 4 mm / 0.008, 1 mm / 0.002.
+    pub const DEFAULT: GaParams = GaParams {
+        crossover_prob: 0.5,
+        mutation_prob: 0.9,
+        immigrants: 1,
+        mutation_scale: [
+            [0.020, 0.020, 0.020, 0.04, 0.04, 0.04],
+            [0.004, 0.004, 0.004, 0.008, 0.008, 0.008],
+            [0.001, 0.001, 0.001, 0.002, 0.002, 0.002],
+        ],
+    };
+
+    /// Builder: crossover probability.
+    #[must_use]
+    pub fn with_crossover_prob(mut self, p: f32) -> Self {
+        self.crossover_prob = p;
+        self
+    }
+
+    /// Builder: mutation probability.
+    #[must_use]
+    pub fn with_mutation_prob(mut self, p: f32) -> Self {
+        self.mutation_prob = p;
+        self
+    }
+
+    /// Builder: immigrants per generation.
+    #[must_use]
+    pub fn with_immigrants(mut self, n: usize) -> Self {
+        self.immigrants = n;
+        self
+    }
+
+    /// Builder: mutation scales.
+    #[must_use]
+    pub fn with_mutation_scale(mut self, s: [[f32; 6]; MUTATION_LEVELS]) -> Self {
+        self.mutation_scale = s;
+        self
+    }
+
+    /// Checks the parameters for a population of `population` individuals.
+    ///
+    /// # Errors
+    /// [`GaError::NonFinite`], [`GaError::BadParameter`] or [`GaError::TooManyImmigrants`].
+    pub fn validate(&self, population: usize) -> Result<(), GaError> {
+        let scales = self.mutation_scale.iter().flatten();
+        if !self.crossover_prob.is_finite() || !self.mutation_prob.is_finite() || !scales.clone().all(|s| s.is_finite()) {
+            return Err(GaError::NonFinite);
+        }
+        let prob_ok = |p: f32| (0.0..=1.0).contains(&p);
+        if !prob_ok(self.crossover_prob) || !prob_ok(self.mutation_prob) || scales.clone().any(|&s| s < 0.0) {
+            return Err(GaError::BadParameter);
+        }
+        if self.immigrants + 2 > population {
+            return Err(GaError::TooManyImmigrants);
+        }
+        Ok(())
+    }
+}
+
+impl Default for GaParams {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// A uniform `f32` in `[0, 1)` from the top 24 bits of one `u32` (exact, portable).
+#[inline]
+pub fn unit_f32<R: Rng + ?Sized>(rng: &mut R) -> f32 {
+    (rng.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// Triangular noise on `(-1, 1)` (sum of two uniforms): cheap, bounded, peaked at 0.
+#[inline]
+fn triangular<R: Rng + ?Sized>(rng: &mut R) -> f32 {
+    unit_f32(rng) + unit_f32(rng) - 1.0
+}
+
+/// Applies one mutation: `noise` (each in `(-1, 1)`) times `scale`. The third position gene
+/// moves the pose **along its viewing ray** (all of `t` scaled so that `t_z` changes by
+/// `scale[2]·noise[2]`) rather than along `z`: depth is the poorly observed direction of a
+/// camera, and a move along the ray keeps the target's image position, so the GA can refine
+/// depth without undoing the lateral fit.
+fn mutate(c: &mut Psi, scale: &[f32; 6], noise: &[f32; 6]) {
+    let z = c.0[2];
+    let k = if z > 1e-3 { scale[2] * noise[2] / z } else { 0.0 };
+    for x in c.0.iter_mut().take(3) {
+        *x += *x * k;
+    }
+    c.0[0] += scale[0] * noise[0];
+    c.0[1] += scale[1] * noise[1];
+    for ((x, s), n) in c.0.iter_mut().zip(scale.iter()).zip(noise.iter()).skip(3) {
+        *x += s * n;
+    }
+}
+
+/// Population of `P` poses and their last fitness values.
+#[derive(Debug, Clone)]
+pub struct Ga<const P: usize> {
+    pop: [Psi; P],
+    fitness: [f32; P],
+}
+
+/// The outcome of one generation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Best {
+    /// The best individual of the evaluated population.
+    pub psi: Psi,
+    /// Its fitness.
+    pub fitness: f32,
+}
+
+impl<const P: usize> Ga<P> {
+    /// A population with every individual at `psi`.
+    pub fn new(psi: Psi) -> Self {
+        const { assert!(P >= 2, "a population needs at least two members") };
+        Self { pop: [psi; P], fitness: [0.0; P] }
+    }
+
+    /// The individuals (index 0 is the elite after a generation).
+    pub fn individuals(&self) -> &[Psi; P] {
+        &self.pop
+    }
+
+    /// Fitness of each individual at the last evaluation.
+    pub fn fitness(&self) -> &[f32; P] {
+        &self.fitness
+    }
+
+    /// Re-seeds the population around `center`: index 0 exactly at it, the others uniformly
+    /// within `±spread` per gene, clamped into `space`.
+    pub fn reset_around<R: Rng + ?Sized>(&mut self, center: &Psi, spread: &[f32; 6], space: &SearchSpace, rng: &mut R) {
+        for (i, ind) in self.pop.iter_mut().enumerate() {
+            let mut p = *center;
+            for (x, s) in p.0.iter_mut().zip(spread.iter()) {
+                let u = 2.0 * unit_f32(rng) - 1.0;
+                if i > 0 {
+                    *x += s * u;
+                }
+            }
+            space.clamp(&mut p);
+            *ind = p;
+        }
+        self.fitness = [0.0; P];
+    }
+
+    /// Re-seeds the whole population uniformly over `space`.
+    pub fn reset_uniform<R: Rng + ?Sized>(&mut self, space: &SearchSpace, rng: &mut R) {
+        for ind in self.pop.iter_mut() {
+            *ind = space.sample(rng);
+        }
+        self.fitness = [0.0; P];
+    }
+
+    /// Applies `f` to every individual, then clamps it into `space` (used for the
+    /// feedforward shift, eq. 36).
+    pub fn shift_all(&mut self, space: &SearchSpace, mut f: impl FnMut(&mut Psi)) {
+        for ind in self.pop.iter_mut() {
+            f(ind);
+            space.clamp(ind);
+        }
+    }
+
+    /// Step 1–2: evaluates every individual with `fitness` and returns the best.
+    pub fn evaluate(&mut self, mut fitness: impl FnMut(&Psi) -> f32) -> Best {
+        let mut best = Best { psi: Psi::IDENTITY, fitness: f32::NEG_INFINITY };
+        for (ind, f) in self.pop.iter().zip(self.fitness.iter_mut()) {
+            let v = fitness(ind);
+            // NaN never wins and is stored as 0.
+            *f = if v.is_nan() { 0.0 } else { v };
+            if *f > best.fitness {
+                best = Best { psi: *ind, fitness: *f };
+            }
+        }
+        best
+    }
+
+    /// Step 3: breeds the next population from the evaluated one; `best` is the result of
+    /// [`Ga::evaluate`].
+    pub fn breed<R: Rng + ?Sized>(&mut self, best: &Best, params: &GaParams, space: &SearchSpace, rng: &mut R) {
+        let parents = self.pop;
+        let fit = self.fitness;
+        let pick = |rng: &mut R| -> Psi {
+            let a = (rng.next_u32() as usize) % P;
+            let b = (rng.next_u32() as usize) % P;
+            let fa = fit.get(a).copied().unwrap_or(0.0);
+            let fb = fit.get(b).copied().unwrap_or(0.0);
+            let i = if fb > fa { b } else { a };
+            parents.get(i).copied().unwrap_or(best.psi)
+        };
+        let first_immigrant = P - params.immigrants.min(P - 1);
+        for (i, child) in self.pop.iter_mut().enumerate() {
+            if i == 0 {
+                *child = best.psi;
+                continue;
+            }
+            if i >= first_immigrant {
+                *child = space.sample(rng);
+                continue;
+            }
+            let a = pick(rng);
+            let b = pick(rng);
+            let do_cross = unit_f32(rng) < params.crossover_prob;
+            let mut c = a;
+            for ((x, xa), xb) in c.0.iter_mut().zip(a.0.iter()).zip(b.0.iter()) {
+                let alpha = 1.5 * unit_f32(rng) - 0.25;
+                if do_cross {
+                    *x = xa + alpha * (xb - xa);
+                }
+            }
+            let do_mutate = unit_f32(rng) < params.mutation_prob;
+            let level = (rng.next_u32() as usize) % MUTATION_LEVELS;
+            let scale = params.mutation_scale.get(level).copied().unwrap_or([0.0; 6]);
+            let noise: [f32; 6] = core::array::from_fn(|_| triangular(rng));
+            if do_mutate {
+                mutate(&mut c, &scale, &noise);
+            }
+            space.clamp(&mut c);
+            *child = c;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand_core::SeedableRng;
+    use rand_xoshiro::Xoshiro128PlusPlus;
+
+    fn space() -> SearchSpace {
+        SearchSpace::new_checked([-0.5, -0.5, 0.2], [0.5, 0.5, 1.5]).unwrap()
+    }
+
+    /// A smooth stand-in fitness peaked at `target`.
+    fn bowl(target: &Psi) -> impl Fn(&Psi) -> f32 + '_ {
+        move |p: &Psi| {
+            let d2: f32 = p.0.iter().zip(target.0.iter()).map(|(a, b)| (a - b) * (a - b)).sum();
+            1.0 / (1.0 + 100.0 * d2)
+        }
+    }
+
+    #[test]
+    fn elitism_never_loses_the_best_on_a_static_fitness() {
+        let target = Psi::new([0.1, -0.05, 0.7], [0.1, 0.2, -0.1]);
+        let mut rng = Xoshiro128PlusPlus::seed_from_u64(7);
+        let mut ga = Ga::<30>::new(Psi::IDENTITY);
+        ga.reset_uniform(&space(), &mut rng);
+        let f = bowl(&target);
+        let mut last = f32::NEG_INFINITY;
+        for _ in 0..300 {
+            let best = ga.evaluate(&f);
+            assert!(best.fitness >= last, "{} < {last}", best.fitness);
+            last = best.fitness;
+            ga.breed(&best, &GaParams::DEFAULT, &space(), &mut rng);
+            assert_eq!(ga.individuals()[0], best.psi);
+        }
+        assert!(last > 0.999, "did not converge: {last}");
+    }
+
+    #[test]
+    fn same_seed_same_result() {
+        let run = |seed| {
+            let mut rng = Xoshiro128PlusPlus::seed_from_u64(seed);
+            let mut ga = Ga::<20>::new(Psi::IDENTITY);
+            ga.reset_uniform(&space(), &mut rng);
+            let target = Psi::new([0.0, 0.0, 0.8], [0.0; 3]);
+            let f = bowl(&target);
+            let mut best = ga.evaluate(&f);
+            for _ in 0..50 {
+                ga.breed(&best, &GaParams::DEFAULT, &space(), &mut rng);
+                best = ga.evaluate(&f);
+            }
+            best
+        };
+        assert_eq!(run(3), run(3));
+        assert_ne!(run(3).psi, run(4).psi);
+    }
+
+    #[test]
+    fn children_stay_in_the_search_space() {
+        let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
+        let s = space();
+        let mut ga = Ga::<16>::new(Psi::new([0.5, 0.5, 1.5], [0.9, 0.4, 0.0]));
+        let wild = GaParams::DEFAULT.with_mutation_scale([[10.0; 6]; 3]).with_immigrants(3);
+        for _ in 0..100 {
+            let best = ga.evaluate(|_| 0.5);
+            ga.breed(&best, &wild, &s, &mut rng);
+            for p in ga.individuals() {
+                assert!(p.validate().is_ok());
+                for (i, x) in p.0.iter().take(3).enumerate() {
+                    assert!(*x >= s.t_min()[i] && *x <= s.t_max()[i]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rng_use_is_independent_of_the_data() {
+        // Two populations with different fitness leave the generator in the same state.
+        let s = space();
+        let mut r1 = Xoshiro128PlusPlus::seed_from_u64(9);
+        let mut r2 = Xoshiro128PlusPlus::seed_from_u64(9);
+        let mut g1 = Ga::<12>::new(Psi::IDENTITY);
+        let mut g2 = Ga::<12>::new(Psi::new([0.1, 0.1, 0.9], [0.0; 3]));
+        let b1 = g1.evaluate(|p| p.0[0]);
+        let b2 = g2.evaluate(|_| 0.0);
+        g1.breed(&b1, &GaParams::DEFAULT.with_crossover_prob(1.0), &s, &mut r1);
+        g2.breed(&b2, &GaParams::DEFAULT.with_mutation_prob(0.0), &s, &mut r2);
+        assert_eq!(r1.next_u32(), r2.next_u32());
+    }
+
+    #[test]
+    fn parameter_validation() {
+        assert_eq!(SearchSpace::new_checked([0.0; 3], [0.0; 3]), Err(GaError::EmptySearchSpace));
+        assert_eq!(SearchSpace::new_checked([f32::NAN; 3], [1.0; 3]), Err(GaError::NonFinite));
+        assert_eq!(GaParams::DEFAULT.with_crossover_prob(1.5).validate(10), Err(GaError::BadParameter));
+        assert_eq!(GaParams::DEFAULT.with_immigrants(9).validate(10), Err(GaError::TooManyImmigrants));
+        assert!(GaParams::DEFAULT.validate(10).is_ok());
+    }
+}

@@ -1,0 +1,271 @@
+//! Hue images: the primitive pixel layer under the fitness (paper §4.2, Fig. 6).
+//!
+//! A hue image is one byte per pixel, row-major, no padding. A byte `h < HUE_UNITS` is a hue
+//! of `2·h` degrees (red 0, green 60 ≙ 120°, blue 120 ≙ 240°); [`NO_HUE`] marks pixels too
+//! dark or too grey to have a hue. Bytes `HUE_UNITS..=254` are tolerated and never match.
+//!
+//! [`HueImage`] validates its size once, in [`HueImage::new_checked`]; after that no accessor
+//! can panic. It borrows or owns any `AsRef<[u8]>`, so a camera DMA buffer and a simulator's
+//! `Vec<u8>` are the same type.
+
+use crate::config::{HUE_UNITS, MAX_IMAGE_SIDE, MIN_SATURATION, MIN_VALUE, NO_HUE};
+
+/// Why a buffer is not a hue image of the given size.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ImageError {
+    /// Width or height is 0 or above [`MAX_IMAGE_SIDE`].
+    BadSize {
+        /// Requested width.
+        width: u16,
+        /// Requested height.
+        height: u16,
+    },
+    /// The buffer is shorter than `width · height`.
+    TooShort {
+        /// Bytes needed.
+        needed: u32,
+        /// Bytes given.
+        got: u32,
+    },
+}
+
+impl core::fmt::Display for ImageError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Self::BadSize { width, height } => write!(f, "bad hue image size {width}x{height}"),
+            Self::TooShort { needed, got } => write!(f, "hue buffer has {got} bytes, needs {needed}"),
+        }
+    }
+}
+
+impl core::error::Error for ImageError {}
+
+/// A validated `width × height` hue image over a byte buffer.
+#[derive(Debug, Clone, Copy)]
+pub struct HueImage<B: AsRef<[u8]>> {
+    buf: B,
+    width: u16,
+    height: u16,
+}
+
+impl<B: AsRef<[u8]>> HueImage<B> {
+    /// Wraps `buf` as a `width × height` hue image (extra trailing bytes are ignored).
+    ///
+    /// # Errors
+    /// [`ImageError::BadSize`] or [`ImageError::TooShort`].
+    ///
+    /// # Examples
+    /// ```
+    /// use evorec_core::hue::{HueImage, ImageError};
+    /// let img = HueImage::new_checked([0u8; 12], 4, 3).unwrap();
+    /// assert_eq!(img.get(3, 2), Some(0));
+    /// assert_eq!(img.get(4, 0), None);
+    /// assert!(matches!(HueImage::new_checked([0u8; 11], 4, 3), Err(ImageError::TooShort { .. })));
+    /// ```
+    pub fn new_checked(buf: B, width: u16, height: u16) -> Result<Self, ImageError> {
+        if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+            return Err(ImageError::BadSize { width, height });
+        }
+        let needed = u32::from(width) * u32::from(height);
+        let got = u32::try_from(buf.as_ref().len()).unwrap_or(u32::MAX);
+        if got < needed {
+            return Err(ImageError::TooShort { needed, got });
+        }
+        Ok(Self { buf, width, height })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u16 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u16 {
+        self.height
+    }
+
+    /// The `width · height` pixel bytes, row-major.
+    pub fn pixels(&self) -> &[u8] {
+        let n = usize::from(self.width) * usize::from(self.height);
+        let b = self.buf.as_ref();
+        b.get(..n).unwrap_or(b)
+    }
+
+    /// The hue byte at column `x`, row `y`, or `None` outside the image.
+    pub fn get(&self, x: u16, y: u16) -> Option<u8> {
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        self.pixels().get(usize::from(y) * usize::from(self.width) + usize::from(x)).copied()
+    }
+
+    /// Gives the buffer back.
+    pub fn into_inner(self) -> B {
+        self.buf
+    }
+}
+
+/// Converts an 8-bit RGB pixel to a hue byte, with integer arithmetic only (cheap on an MCU).
+///
+/// Pixels with `max(r,g,b) < MIN_VALUE` or saturation `(max−min)/max < MIN_SATURATION/255`
+/// get [`NO_HUE`]. Otherwise the HSV hue, rounded to the nearest 2° unit, in `0..HUE_UNITS`.
+///
+/// # Examples
+/// ```
+/// use evorec_core::{hue::rgb_to_hue, config::NO_HUE};
+/// assert_eq!(rgb_to_hue(200, 0, 0), 0);     // red, 0°
+/// assert_eq!(rgb_to_hue(0, 200, 0), 60);    // green, 120°
+/// assert_eq!(rgb_to_hue(0, 0, 200), 120);   // blue, 240°
+/// assert_eq!(rgb_to_hue(200, 200, 0), 30);  // yellow, 60°
+/// assert_eq!(rgb_to_hue(128, 128, 128), NO_HUE);
+/// assert_eq!(rgb_to_hue(10, 0, 0), NO_HUE); // too dark
+/// ```
+pub fn rgb_to_hue(r: u8, g: u8, b: u8) -> u8 {
+    let max = r.max(g).max(b);
+    let min = r.min(g).min(b);
+    let delta = i32::from(max) - i32::from(min);
+    if max < MIN_VALUE || delta * 255 < i32::from(MIN_SATURATION) * i32::from(max) || delta == 0 {
+        return NO_HUE;
+    }
+    let (r, g, b) = (i32::from(r), i32::from(g), i32::from(b));
+    // Sector offset (in 2° units) and signed position inside it, in [-delta, delta].
+    let (offset, diff) = if r >= g && r >= b {
+        (0, g - b)
+    } else if g >= b {
+        (60, b - r)
+    } else {
+        (120, r - g)
+    };
+    let units = i32::from(HUE_UNITS);
+    // 30·diff/delta units = 60°·diff/delta, rounded half up; then wrapped into 0..180.
+    let h = offset + (60 * diff + delta).div_euclid(2 * delta);
+    u8::try_from(h.rem_euclid(units)).unwrap_or(NO_HUE)
+}
+
+/// Converts hue degrees to the nearest hue unit (any real angle, wrapped into `0..HUE_UNITS`).
+pub fn degrees_to_units(deg: f32) -> u8 {
+    let units = f32::from(HUE_UNITS);
+    let mut u = deg / 2.0;
+    // Bounded wrap: a finite f32 angle beyond ±1e6° is nonsense input; clamp it first.
+    u = crate::math::clamp(u, -1.0e6, 1.0e6);
+    let r = u - units * libm::floorf(u / units);
+    let n = libm::roundf(r) as i32;
+    u8::try_from(n.rem_euclid(i32::from(HUE_UNITS))).unwrap_or(0)
+}
+
+/// Circular distance between two hue units (0..=90).
+pub fn hue_distance(a: u8, b: u8) -> u8 {
+    let d = a.abs_diff(b);
+    d.min(HUE_UNITS.saturating_sub(d))
+}
+
+/// A 256-entry table: bit `k` of `lut[h]` is set when hue byte `h` matches the hue `b_k` of
+/// face `k` within the tolerance band (a real camera never returns exactly `b_k`, so the
+/// Kronecker δ of eq. 34 is applied to the quantised, banded hue).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct HueLut {
+    table: [u8; 256],
+}
+
+impl HueLut {
+    /// Table for up to 8 face hues (in hue units) with a band of `±tolerance` units.
+    /// `NO_HUE` and bytes `≥ HUE_UNITS` match nothing.
+    pub fn new(face_hues: &[u8], tolerance: u8) -> Self {
+        let mut table = [0u8; 256];
+        for (h, entry) in (0u8..HUE_UNITS).zip(table.iter_mut()) {
+            for (k, &b) in face_hues.iter().take(8).enumerate() {
+                if hue_distance(h, b % HUE_UNITS) <= tolerance {
+                    *entry |= 1 << k;
+                }
+            }
+        }
+        Self { table }
+    }
+
+    /// The face bitmask of hue byte `h`.
+    #[inline(always)]
+    pub fn mask(&self, h: u8) -> u8 {
+        // Indexing a [u8; 256] by a u8 cannot go out of bounds.
+        self.table[usize::from(h)]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rgb_to_hue_covers_the_circle() {
+        assert_eq!(rgb_to_hue(255, 0, 255), 150); // magenta 300°
+        assert_eq!(rgb_to_hue(0, 255, 255), 90); // cyan 180°
+        assert_eq!(rgb_to_hue(255, 0, 4), 0); // -0.94° = 359.06° = unit 179.53, rounds to 180 ≡ 0
+        assert_eq!(rgb_to_hue(255, 0, 12), 179); // -2.82° = 357.18° = unit 178.6, rounds to 179
+        assert_eq!(rgb_to_hue(255, 128, 0), 15); // orange 30.1°
+        // Brightness does not change hue.
+        assert_eq!(rgb_to_hue(100, 50, 0), rgb_to_hue(200, 100, 0));
+    }
+
+    #[test]
+    fn rgb_to_hue_matches_float_reference_everywhere() {
+        for r in (0..=255).step_by(5) {
+            for g in (0..=255).step_by(5) {
+                for b in (0..=255).step_by(5) {
+                    let h = rgb_to_hue(r as u8, g as u8, b as u8);
+                    let (rf, gf, bf) = (r as f64, g as f64, b as f64);
+                    let max = rf.max(gf).max(bf);
+                    let min = rf.min(gf).min(bf);
+                    let d = max - min;
+                    if max < f64::from(MIN_VALUE) || d * 255.0 < f64::from(MIN_SATURATION) * max || d == 0.0 {
+                        assert_eq!(h, NO_HUE);
+                        continue;
+                    }
+                    let deg = if max == rf {
+                        60.0 * (gf - bf) / d
+                    } else if max == gf {
+                        60.0 * (bf - rf) / d + 120.0
+                    } else {
+                        60.0 * (rf - gf) / d + 240.0
+                    };
+                    let units = deg.rem_euclid(360.0) / 2.0;
+                    let dist = (f64::from(h) - units).abs();
+                    assert!(dist.min(180.0 - dist) <= 0.5 + 1e-9, "rgb {r},{g},{b}: {h} vs {units}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn lut_bands_wrap_around_red() {
+        let lut = HueLut::new(&[0, 60, 120, 0, 60, 120], 5);
+        assert_eq!(lut.mask(0), 0b001001);
+        assert_eq!(lut.mask(175), 0b001001);
+        assert_eq!(lut.mask(174), 0);
+        assert_eq!(lut.mask(65), 0b010010);
+        assert_eq!(lut.mask(66), 0);
+        assert_eq!(lut.mask(NO_HUE), 0);
+        assert_eq!(lut.mask(200), 0);
+    }
+
+    #[test]
+    fn degree_conversion_wraps() {
+        assert_eq!(degrees_to_units(0.0), 0);
+        assert_eq!(degrees_to_units(240.0), 120);
+        assert_eq!(degrees_to_units(-2.0), 179);
+        assert_eq!(degrees_to_units(359.2), 0);
+        assert_eq!(degrees_to_units(720.0 + 120.0), 60);
+        assert_eq!(hue_distance(2, 178), 4);
+    }
+
+    #[test]
+    fn image_view_is_checked() {
+        assert_eq!(
+            HueImage::new_checked(&[0u8; 4][..], 0, 4).unwrap_err(),
+            ImageError::BadSize { width: 0, height: 4 }
+        );
+        let img = HueImage::new_checked(&[1u8, 2, 3, 4, 5, 6, 7][..], 3, 2).unwrap();
+        assert_eq!(img.pixels().len(), 6);
+        assert_eq!(img.get(2, 1), Some(6));
+        assert_eq!(img.get(0, 2), None);
+    }
+}

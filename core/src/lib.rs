@@ -1,0 +1,86 @@
+//! # evorec-core
+//!
+//! On-line evolutionary 3D pose recognition for hand-eye stereo cameras, after
+//! *"On-line Stable Evolutionary Recognition by Quaternion Motion-Feedforward Compensation"*:
+//! a genetic algorithm searches the pose `ψ = [t; ε]` of a known coloured block by projecting a
+//! 3D surface-strips model into both hue images; **one** generation runs per new frame pair
+//! (the "1-step GA"), so recognition converges over the frame sequence, and the apparent
+//! motion caused by the arm carrying the cameras is fed forward from the joint state
+//! (`ψ̇ = J_m(q) q̇`).
+//!
+//! `#![no_std]`, no allocation, no `unsafe`; all storage is sized by const generics.
+//!
+//! ## Layers
+//! - [`math`]: the only path to `sqrt`/`sin`/… (libm), so host and Cortex-M4 agree bit for bit.
+//! - [`quat`], [`pose`]: unit quaternions (eq. 1–12) and the 6-parameter pose (eq. 13).
+//! - [`camera`]: pinhole cameras and the stereo rig (eq. 26–31).
+//! - [`hue`]: validated hue-image views, RGB→hue, the hue match table.
+//! - [`model`]: the surface-strips block model; [`fitness`]: eq. 34–35.
+//! - [`ga`]: the 1-step GA; [`kinematics`]: DH chains, the PA-10, Jacobians;
+//!   [`feedforward`]: eq. 15–25.
+//! - [`tracker`]: one generation per frame pair; [`board`]: the camera-controller trait and
+//!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.
+//!
+//! ## Work per generation
+//! Per individual and camera the fitness evaluates exactly
+//! [`SurfaceStrips::POINTS_PER_CAMERA`](model::SurfaceStrips::POINTS_PER_CAMERA)
+//! `= 3·(G² + 4G)` sample points, visible or not; a generation evaluates `P` individuals in
+//! two cameras and breeds `P − 1` children with a fixed number of random draws each. No loop
+//! depends on the data, so the worst case is the typical case.
+//!
+//! ## Example
+//! ```
+//! use evorec_core::{camera::{Pinhole, StereoRig}, ga::SearchSpace, model::Block, pose::Psi,
+//!     tracker::{Tracker, TrackerConfig, StereoFrame, JointSample, Feedforward}, hue::HueImage,
+//!     synth, config::NO_HUE};
+//! use nalgebra::Isometry3;
+//!
+//! let cam = Pinhole::new_checked(200.0, 200.0, 80.0, 60.0, 160, 120).unwrap();
+//! let rig = StereoRig::parallel(cam, 0.1).unwrap();
+//! let space = SearchSpace::new_checked([-0.2, -0.2, 0.4], [0.2, 0.2, 1.0]).unwrap();
+//! let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(1);
+//! let mut tracker: Tracker = Tracker::new(config).unwrap();
+//!
+//! // A synthetic frame pair of the block 0.7 m ahead.
+//! let truth = Psi::new([0.0, 0.0, 0.7], [0.05, 0.1, 0.0]);
+//! let iso = truth.try_to_isometry().unwrap();
+//! let (mut l, mut r) = ([NO_HUE; 160 * 120], [NO_HUE; 160 * 120]);
+//! synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
+//! synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
+//! let frame = StereoFrame {
+//!     left: HueImage::new_checked(&l[..], 160, 120).unwrap(),
+//!     right: HueImage::new_checked(&r[..], 160, 120).unwrap(),
+//! };
+//! let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
+//! tracker.reset_around(&Psi::new([0.02, -0.01, 0.68], [0.0; 3]), &[0.02; 6]).unwrap();
+//! let mut est = tracker.step(&frame, &joints, 0.0, Feedforward::Off).unwrap();
+//! for _ in 0..60 {
+//!     est = tracker.step(&frame, &joints, 0.033, Feedforward::Off).unwrap();
+//! }
+//! assert!(est.fitness > 0.8);
+//! assert!((est.psi.translation() - truth.translation()).norm() < 0.02);
+//! ```
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod board;
+pub mod camera;
+pub mod config;
+pub mod feedforward;
+pub mod fitness;
+pub mod ga;
+pub mod hue;
+pub mod kinematics;
+pub mod math;
+pub mod model;
+pub mod pose;
+pub mod quat;
+pub mod synth;
+pub mod tracker;
+
+pub use tracker::{Estimate, Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};

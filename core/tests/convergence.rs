@@ -1,0 +1,129 @@
+//! The tracker converges over frames on a static synthetic stereo pair.
+
+use evorec_core::camera::{Pinhole, StereoRig};
+use evorec_core::config::NO_HUE;
+use evorec_core::ga::SearchSpace;
+use evorec_core::hue::HueImage;
+use evorec_core::model::Block;
+use evorec_core::pose::Psi;
+use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
+use evorec_core::{quat, synth};
+use nalgebra::{Isometry3, Vector3};
+
+fn render(rig: &StereoRig, truth: &Psi) -> (Vec<u8>, Vec<u8>) {
+    let (w, h) = (usize::from(rig.right.width()), usize::from(rig.right.height()));
+    let iso = truth.try_to_isometry().unwrap();
+    let (mut l, mut r) = (vec![NO_HUE; w * h], vec![NO_HUE; w * h]);
+    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
+    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
+    (l, r)
+}
+
+fn run(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: bool) -> (Psi, Psi, f32) {
+    let cam = Pinhole::new_checked(f, f, f32::from(width) / 2.0, f32::from(height) / 2.0, width, height).unwrap();
+    let rig = StereoRig::parallel(cam, 0.1).unwrap();
+    let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed);
+    let mut tracker: Tracker = Tracker::new(config).unwrap();
+    let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
+    let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
+    let (l, r) = render(&rig, &truth);
+    let frame = StereoFrame {
+        left: HueImage::new_checked(&l[..], width, height).unwrap(),
+        right: HueImage::new_checked(&r[..], width, height).unwrap(),
+    };
+    // Start 40 mm and ~6° off.
+    let mut start = truth;
+    start.0[0] += 0.03;
+    start.0[1] -= 0.02;
+    start.0[2] += 0.04;
+    start.0[4] += 0.05;
+    tracker.reset_around(&start, &[0.01, 0.01, 0.01, 0.02, 0.02, 0.02]).unwrap();
+    let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
+    let mut est = None;
+    for i in 0..frames {
+        let e = tracker.step(&frame, &joints, 0.033, Feedforward::Off).unwrap();
+        if verbose && i % 10 == 0 {
+            let d: Vec<f32> = e.psi.0.iter().zip(truth.0.iter()).map(|(a, b)| a - b).collect();
+            println!("{i:4} F={:.4} d={:?}", e.fitness, d);
+        }
+        est = Some(e);
+    }
+    let e = est.unwrap();
+    (truth, e.psi, e.fitness)
+}
+
+#[test]
+fn converges_from_a_perturbed_start_at_640x480() {
+    let (truth, est, f) = run(640, 480, 800.0, 1, 200, true);
+    assert!(f > 0.95, "F = {f}");
+    let dt = (est.translation() - truth.translation()).norm();
+    let de = (est.eps() - truth.eps()).norm();
+    assert!(dt < 0.004 && de < 0.01, "position error {dt} m, eps error {de}");
+}
+
+#[test]
+fn converges_at_160x120() {
+    let (truth, est, f) = run(160, 120, 200.0, 2, 200, true);
+    assert!(f > 0.9, "F = {f}");
+    let dt = (est.translation() - truth.translation()).norm();
+    assert!(dt < 0.01, "position error {dt} m");
+}
+
+/// Tuning aid (not a check): final errors over many seeds.
+#[test]
+#[ignore]
+fn seed_sweep() {
+    for (w, h, f) in [(640u16, 480u16, 800.0f32), (160, 120, 200.0)] {
+        let mut worst = 0.0f32;
+        let mut sum = 0.0f32;
+        let mut fs = 0.0;
+        for seed in 0..12 {
+            let (truth, est, fit) = run(w, h, f, seed, 150, false);
+            let dt = (est.translation() - truth.translation()).norm();
+            worst = worst.max(dt);
+            sum += dt;
+            fs += fit;
+        }
+        println!("{w}x{h}: mean pos err {:.2} mm, worst {:.2} mm, mean F {:.3}", sum / 12.0 * 1e3, worst * 1e3, fs / 12.0);
+    }
+}
+
+/// Tuning aid: fitness along the segment from a stuck estimate to the truth.
+#[test]
+#[ignore]
+fn landscape_probe() {
+    let (w, h, f) = (640u16, 480u16, 800.0f32);
+    let cam = Pinhole::new_checked(f, f, f32::from(w) / 2.0, f32::from(h) / 2.0, w, h).unwrap();
+    let rig = StereoRig::parallel(cam, 0.1).unwrap();
+    let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space);
+    let tracker: Tracker = Tracker::new(config).unwrap();
+    let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
+    let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
+    let (l, r) = render(&rig, &truth);
+    let frame = StereoFrame {
+        left: HueImage::new_checked(&l[..], w, h).unwrap(),
+        right: HueImage::new_checked(&r[..], w, h).unwrap(),
+    };
+    for (name, d) in [
+        ("z along ray", [0.0, 0.0, 0.04, 0.0, 0.0, 0.0]),
+        ("stuck", [0.0072, 0.0026, 0.037, 0.0078, 0.0245, -0.0085]),
+        ("e2", [0.0, 0.0, 0.0, 0.0, 0.03, 0.0]),
+    ] {
+        for i in 0..=10 {
+            let a = 1.0 - i as f32 / 10.0;
+            let mut p = truth;
+            for k in 0..6 {
+                p.0[k] += a * d[k];
+            }
+            if name == "z along ray" {
+                let s = (truth.0[2] + a * d[2]) / truth.0[2];
+                p.0[0] = truth.0[0] * s;
+                p.0[1] = truth.0[1] * s;
+            }
+            let fit = tracker.fitness_of(&p, &frame).unwrap();
+            println!("{name:12} a={a:.1} F={:.3} L={:?} R={:?}", fit.total, fit.left, fit.right);
+        }
+    }
+}

@@ -1,0 +1,2 @@
+//! Firmware board glue (placeholder until the firmware issue).
+#![no_std]

@@ -1,0 +1,2 @@
+//! evorec CLI.
+fn main() {}

@@ -16,8 +16,8 @@
 //! Errors follow embedded-hal's pattern: a board's error type implements [`Error`], whose
 //! [`ErrorKind`] generic code can act on ([`ErrorKind::EndOfStream`] ends [`run`] normally).
 
-use crate::tracker::{Estimate, Feedforward, JointSample, NoProbe, PhaseProbe, StereoFrame, Tracker};
 use crate::hue::HueImage;
+use crate::tracker::{Estimate, Feedforward, JointSample, NoProbe, PhaseProbe, StereoFrame, Tracker};
 
 /// What went wrong on a board, for generic code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -186,10 +186,7 @@ impl StereoRig {
         Ok(Self {
             right: camera,
             left: camera,
-            left_from_right: Isometry3::from_parts(
-                Translation3::new(baseline_m, 0.0, 0.0),
-                UnitQuaternion::identity(),
-            ),
+            left_from_right: Isometry3::from_parts(Translation3::new(baseline_m, 0.0, 0.0), UnitQuaternion::identity()),
         })
     }
 

@@ -9,23 +9,31 @@ pub const PA10_DOF: usize = 7;
 /// Default GA population size (individuals evaluated per generation).
 pub const DEFAULT_POPULATION: usize = 40;
 
-/// Default side of the sample grid per face: `G × G` inner points and `G` contour-strip points
-/// on each of the face's four edges.
+/// Default number of sample points on each row of the surface-strips model.
 pub const DEFAULT_GRID: usize = 6;
 
-/// Distance (metres) by which the outermost inner sample points of a face sit inside its edges.
-///
-/// Small, so that the model at the true pose samples inside the face but a shift of a few
-/// millimetres moves them off it.
-pub const FACE_INSET_M: f32 = 0.002;
+/// Distances (metres) inside a face's edge of the rows of inner sample points `S_in,k`
+/// that run along that edge. Graded: the nearest row makes the fitness sharp (a few
+/// millimetres of error move it off the face), the deeper ones keep a slope towards the
+/// optimum over a wider range. Must be increasing and positive.
+pub const INNER_INSETS_M: [f32; 3] = [0.002, 0.008, 0.025];
 
-/// Distance (metres) of the contour strip `S_out` outside a silhouette edge, measured in the
-/// plane of the visible face.
-pub const STRIP_OFFSET_M: f32 = 0.003;
+/// Distances (metres) outside a face's edge, in the face's plane, of the contour-strip rows
+/// `S_out` along that edge. Increasing and positive.
+pub const OUTER_OFFSETS_M: [f32; 2] = [0.003, 0.010];
+
+/// Rows per edge: inner then outer.
+pub const ROWS_PER_EDGE: usize = INNER_INSETS_M.len() + OUTER_OFFSETS_M.len();
 
 /// A face counts as visible only when the cosine between its outward normal and the direction
 /// towards the camera exceeds this (≈ 84°): faces seen edge-on hold no usable sample area.
 pub const MIN_VISIBLE_COS: f32 = 0.1;
+
+/// A face counts as visible only when its narrowest side spans at least this many pixels
+/// across its foreshortened direction (about `f · side · cos θ / distance`): a face seen as
+/// a sliver cannot hold its inner rows, and the true pose would score below a pose that hides
+/// it. Resolution-dependent on purpose.
+pub const MIN_FACE_PX: f32 = 4.0;
 
 /// Sample points closer to the camera plane than this (metres) make a camera's score zero.
 pub const MIN_DEPTH_M: f32 = 0.05;

@@ -8,21 +8,23 @@
 //! F   = (F_L + F_R) / 2
 //! ```
 //!
-//! where `≈` is the [`HueLut`] tolerance band and `S_out` holds the contour rows on silhouette
-//! edges only (see [`crate::model`]). A pose whose block is not entirely in front of a camera
-//! scores 0 in that camera.
+//! where `≈` is the [`HueLut`] tolerance band, a face is visible when it faces the camera at
+//! less than ~84° ([`MIN_VISIBLE_COS`]) and spans at least [`MIN_FACE_PX`] pixels, `S_in,k` the inner rows of face `k`, `H` their
+//! number on the visible faces, and `S_out` the outer rows on silhouette edges only (see
+//! [`crate::model`]). A pose whose block is not entirely in front of a camera scores 0 in that
+//! camera.
 //!
 //! **Bounded work.** Of each pair of opposite faces exactly one can face a camera, so each
-//! camera evaluates three faces (the one of each pair on the camera's side), `3·(G² + 4G)`
-//! points, whether or not a face is visible or a strip is on the silhouette: the visibility
-//! only masks the counts. Points outside the image read as "no hue"; nothing is ever read
+//! camera evaluates three faces (the one of each pair on the camera's side),
+//! [`SurfaceStrips::POINTS_PER_CAMERA`] points, whether or not a face is visible or a strip
+//! is on the silhouette: the visibility only masks the counts. Points outside the image read as "no hue"; nothing is ever read
 //! out of bounds. Per point: three additions (grid walk in homogeneous coordinates), one
 //! division, two multiplications, two float→int conversions, a bounds test, two table loads.
 
 use nalgebra::{Matrix3, Vector3};
 
 use crate::camera::{Pinhole, StereoRig};
-use crate::config::{MIN_DEPTH_M, MIN_VISIBLE_COS, NO_HUE, STRIP_OFFSET_M};
+use crate::config::{INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX, MIN_VISIBLE_COS, NO_HUE, OUTER_OFFSETS_M};
 use crate::hue::{HueImage, HueLut};
 use crate::model::SurfaceStrips;
 use crate::pose::Psi;
@@ -148,9 +150,11 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>>(
     let view = View::of(image);
     let half = model.half_size();
     let proj = Projector::new(cam, r, t);
+    let focal = cam.fx().min(cam.fy());
 
-    // Nearest depth of the block inflated by the strip offset (every sample point is inside it).
-    let reach = |a: usize| r[(2, a)].abs() * (half[a] + STRIP_OFFSET_M);
+    // Nearest depth of the block inflated by the outer rows (every sample point is inside it).
+    let margin = OUTER_OFFSETS_M.iter().fold(0.0f32, |m, d| m.max(*d));
+    let reach = |a: usize| r[(2, a)].abs() * (half[a] + margin);
     let in_front = t.z - (reach(0) + reach(1) + reach(2)) > MIN_DEPTH_M;
 
     // d_a = (column a of R) · t: the camera is on the +a side of the block iff d_a < −h_a.
@@ -158,8 +162,8 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>>(
     for (a, da) in d.iter_mut().enumerate() {
         *da = r.column(a).dot(t);
     }
-    let front = |k: usize| -> bool {
-        let (a, pos) = (k % 3, k < 3);
+    let front = |k: u8| -> bool {
+        let (a, pos) = (usize::from(k % 3), k < 3);
         let (da, ha) = (d.get(a).copied().unwrap_or(0.0), half[a]);
         if pos { da < -ha } else { da > ha }
     };
@@ -173,47 +177,55 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>>(
         let dist = da.abs() - half[a];
         let sign = if k < 3 { 1.0 } else { -1.0 };
         let center = t + r.column(a) * (sign * half[a]);
-        if in_front && dist > 0.0 && dist * dist > MIN_VISIBLE_COS * MIN_VISIBLE_COS * center.dot(&center) {
+        let c2 = center.dot(&center);
+        // Narrowest full side of the face, and its foreshortened size in pixels ≥ MIN_FACE_PX:
+        // f · side · (dist / |c|) / |c| ≥ MIN_FACE_PX.
+        let side = 2.0 * half[(a + 1) % 3].min(half[(a + 2) % 3]);
+        if in_front
+            && dist > 0.0
+            && dist * dist > MIN_VISIBLE_COS * MIN_VISIBLE_COS * c2
+            && focal * side * dist >= MIN_FACE_PX * c2
+        {
             visible_mask |= 1 << k;
         }
     }
 
     let mut counts = Counts { visible: visible_mask, ..Counts::default() };
-    let faces = model.faces();
     for &k in &chosen {
-        let Some(face) = faces.get(k) else { continue };
+        let Some(face) = model.faces().get(k) else { continue };
         let bit = 1u8 << k;
-        let visible = visible_mask & bit != 0;
-
-        // Inner grid.
-        let (du, dv) = (proj.dir(&face.du), proj.dir(&face.dv));
-        let mut row = proj.point(&face.origin);
-        let mut matched = 0u32;
-        for _ in 0..G {
-            let mut p = row;
-            for _ in 0..G {
-                matched += u32::from(lut.mask(view.sample(p)) & bit != 0);
-                p = add(p, du);
+        let (mut inner, mut outer) = (0u32, 0u32);
+        for edge in &face.edges {
+            let step = proj.dir(&edge.step);
+            let base = proj.point(&edge.base);
+            let inward = proj.dir(&edge.inward);
+            let row_start = |dist: f32| -> [f32; 3] {
+                [base[0] + dist * inward[0], base[1] + dist * inward[1], base[2] + dist * inward[2]]
+            };
+            for &dist in &INNER_INSETS_M {
+                let mut p = row_start(dist);
+                for _ in 0..G {
+                    inner += u32::from(lut.mask(view.sample(p)) & bit != 0);
+                    p = add(p, step);
+                }
             }
-            row = add(row, dv);
-        }
-        if visible {
-            counts.inner_matched += matched;
-            counts.inner_total += (G * G) as u32;
-        }
-
-        // Contour rows; they count only on silhouette edges of a visible face.
-        for (strip, &nb) in face.strips.iter().zip(face.neighbour.iter()) {
-            let step = proj.dir(&strip.step);
-            let mut p = proj.point(&strip.origin);
             let mut hits = 0u32;
-            for _ in 0..G {
-                hits += u32::from(lut.mask(view.sample(p)) & visible_mask != 0);
-                p = add(p, step);
+            for &dist in &OUTER_OFFSETS_M {
+                let mut p = row_start(-dist);
+                for _ in 0..G {
+                    hits += u32::from(lut.mask(view.sample(p)) & visible_mask != 0);
+                    p = add(p, step);
+                }
             }
-            if visible && !front(usize::from(nb)) {
-                counts.strip_matched += hits;
+            // Outer rows count only on silhouette edges (the face across is hidden).
+            if !front(edge.neighbour) {
+                outer += hits;
             }
+        }
+        if visible_mask & bit != 0 {
+            counts.inner_matched += inner;
+            counts.inner_total += SurfaceStrips::<G>::INNER_PER_FACE as u32;
+            counts.strip_matched += outer;
         }
     }
     counts
@@ -233,13 +245,7 @@ impl<'m, const G: usize> Evaluator<'m, G> {
     /// Bundles a model, its hue table and a rig.
     pub fn new(model: &'m SurfaceStrips<G>, lut: &'m HueLut, rig: &'m StereoRig) -> Self {
         let lr = &rig.left_from_right;
-        Self {
-            model,
-            lut,
-            rig,
-            left_r: crate::quat::to_rotation_matrix(&lr.rotation),
-            left_t: lr.translation.vector,
-        }
+        Self { model, lut, rig, left_r: crate::quat::to_rotation_matrix(&lr.rotation), left_t: lr.translation.vector }
     }
 
     /// `F(ψ)` (eq. 35) for a pose given as rotation `r` and translation `t` in `Σ_CR`.
@@ -305,7 +311,7 @@ mod tests {
         let f = eval.evaluate_psi(&truth, &left, &right);
         assert_eq!(f.total, 1.0, "{f:?}");
         assert_eq!(f.right.visible.count_ones(), 3);
-        assert_eq!(f.right.inner_total, 3 * 36);
+        assert_eq!(f.right.inner_total, 3 * SurfaceStrips::<6>::INNER_PER_FACE as u32);
         // Every perturbation of 8 mm or 0.03 in ε lowers F.
         for i in 0..6 {
             for sign in [-1.0f32, 1.0] {

@@ -123,10 +123,10 @@ pub struct GaParams {
 }
 
 impl GaParams {
-    /// Defaults for a target about 0.5–1 m away at 30 frames/s: crossover 0.5, mutation 0.9,
+    /// Defaults for a target about 0.5–1 m away at 30 frames/s: crossover 0.2, mutation 0.9,
     /// one immigrant, mutation scales 20 mm / 0.04, 4 mm / 0.008, 1 mm / 0.002.
     pub const DEFAULT: GaParams = GaParams {
-        crossover_prob: 0.5,
+        crossover_prob: 0.2,
         mutation_prob: 0.9,
         immigrants: 1,
         mutation_scale: [
@@ -170,7 +170,8 @@ impl GaParams {
     /// [`GaError::NonFinite`], [`GaError::BadParameter`] or [`GaError::TooManyImmigrants`].
     pub fn validate(&self, population: usize) -> Result<(), GaError> {
         let scales = self.mutation_scale.iter().flatten();
-        if !self.crossover_prob.is_finite() || !self.mutation_prob.is_finite() || !scales.clone().all(|s| s.is_finite()) {
+        if !self.crossover_prob.is_finite() || !self.mutation_prob.is_finite() || !scales.clone().all(|s| s.is_finite())
+        {
             return Err(GaError::NonFinite);
         }
         let prob_ok = |p: f32| (0.0..=1.0).contains(&p);

@@ -75,10 +75,23 @@ pub fn isometry(r: &Matrix3<f32>, t: &Vector3<f32>) -> Isometry3<f32> {
     Isometry3::from_parts(Translation3::from(*t), q)
 }
 
+/// The joint frames of a chain at one configuration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frames<const DOF: usize> {
+    /// Rotation of frame `i − 1` (whose `z` is joint `i`'s axis), `i = 1..=DOF`.
+    pub rotations: [Matrix3<f32>; DOF],
+    /// Origin of frame `i − 1`.
+    pub origins: [Vector3<f32>; DOF],
+    /// Flange rotation.
+    pub flange_rotation: Matrix3<f32>,
+    /// Flange origin.
+    pub flange_origin: Vector3<f32>,
+}
+
 impl<const DOF: usize> Chain<DOF> {
     /// The frames `T_0 = I, T_0·T_1, …, T_0⋯T_DOF` as rotation and origin, by matrix
     /// products (no quaternion round trip, so no rounding beyond the products).
-    pub fn frames(&self, q: &[f32; DOF]) -> ([Matrix3<f32>; DOF], [Vector3<f32>; DOF], Matrix3<f32>, Vector3<f32>) {
+    pub fn frames(&self, q: &[f32; DOF]) -> Frames<DOF> {
         let mut rots = [Matrix3::identity(); DOF];
         let mut origins = [Vector3::zeros(); DOF];
         let mut r = Matrix3::identity();
@@ -93,13 +106,13 @@ impl<const DOF: usize> Chain<DOF> {
             p += r * tl;
             r *= rl;
         }
-        (rots, origins, r, p)
+        Frames { rotations: rots, origins, flange_rotation: r, flange_origin: p }
     }
 
     /// Flange rotation and position in the base frame.
     pub fn forward_rp(&self, q: &[f32; DOF]) -> (Matrix3<f32>, Vector3<f32>) {
-        let (_, _, r, p) = self.frames(q);
-        (r, p)
+        let f = self.frames(q);
+        (f.flange_rotation, f.flange_origin)
     }
 
     /// Flange pose `^W T_H(q)`.
@@ -118,7 +131,7 @@ impl<const DOF: usize> Chain<DOF> {
         q: &[f32; DOF],
         flange_to_tool: &Isometry3<f32>,
     ) -> (SMatrix<f32, 6, DOF>, Matrix3<f32>, Vector3<f32>) {
-        let (rots, origins, r, p) = self.frames(q);
+        let Frames { rotations: rots, origins, flange_rotation: r, flange_origin: p } = self.frames(q);
         let r_ht = quat::to_rotation_matrix(&flange_to_tool.rotation);
         let p_tool = p + r * flange_to_tool.translation.vector;
         let r_tool = r * r_ht;
@@ -143,6 +156,7 @@ impl<const DOF: usize> Chain<DOF> {
 }
 
 #[cfg(test)]
+#[allow(clippy::excessive_precision, clippy::approx_constant)] // reference values are copied verbatim
 mod tests {
     use super::*;
 
@@ -174,8 +188,15 @@ mod tests {
             q: [0.1, -0.4, 0.3, 1.2, -0.5, 0.7, 0.2],
             p: [0.2286037161, 0.1594286319, 1.0814767738],
             r: [
-                0.1613818846, -0.0340020721, 0.9863061119, -0.2551876358, 0.9639793813, 0.0749868191,
-                -0.9533284627, -0.2637946391, 0.1468919009,
+                0.1613818846,
+                -0.0340020721,
+                0.9863061119,
+                -0.2551876358,
+                0.9639793813,
+                0.0749868191,
+                -0.9533284627,
+                -0.2637946391,
+                0.1468919009,
             ],
             j: [
                 [-0.1594286319, 0.7626475825, -0.1766417838, 0.3453931326, -0.0000650744, 0.0131936128, 0.0],
@@ -190,8 +211,15 @@ mod tests {
             q: [-1.0, 0.6, -0.8, -1.4, 2.0, -1.1, 3.0],
             p: [0.2686105213, 0.1930377525, 1.0179388255],
             r: [
-                -0.7089881402, 0.5102392303, -0.4868179791, -0.6656479714, -0.7121684879, 0.2229996032,
-                -0.2329132782, 0.4821534742, 0.8445587204,
+                -0.7089881402,
+                0.5102392303,
+                -0.4868179791,
+                -0.6656479714,
+                -0.7121684879,
+                0.2229996032,
+                -0.2329132782,
+                0.4821534742,
+                0.8445587204,
             ],
             j: [
                 [-0.1930377525, 0.3797994683, -0.4933084378, 0.1244220884, 0.0431476562, 0.0503910380, 0.0],

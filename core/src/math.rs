@@ -39,11 +39,7 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
 /// `x` clamped into `[lo, hi]`; NaN becomes `lo`, so the result is always inside the range.
 #[inline(always)]
 pub fn clamp(x: f32, lo: f32, hi: f32) -> f32 {
-    if x >= lo {
-        if x <= hi { x } else { hi }
-    } else {
-        lo
-    }
+    if x >= lo { if x <= hi { x } else { hi } } else { lo }
 }
 
 #[cfg(test)]

@@ -11,20 +11,33 @@
 //! and each has one hue `b_k`. The paper's block is 100 × 150 × 200 mm with red (0°), green
 //! (120°) and blue (240°) on the ±x, ±y, ±z pairs.
 //!
-//! Sample points, all in `Σ_M`:
-//! - `S_in,k`: a `G × G` grid on face `k`, its outer rows [`FACE_INSET_M`] inside the edges;
-//! - `S_out`: for each edge of each face a row of `G` points in the plane of that face,
-//!   [`STRIP_OFFSET_M`] beyond the edge. When face `k` is visible and the face across that
-//!   edge is not, the edge is on the silhouette and the row projects just outside it, whatever
-//!   the viewpoint (the ray to such a point stays on the camera side of face `k`'s plane before
-//!   it and on the far side of the hidden face's plane after it, so it never meets the block).
+//! Sample points, all in `Σ_M`, lie on **strips along the four edges of every face**, each
+//! strip a set of rows of `G` points parallel to the edge:
 //!
-//! Points are stored as grids (origin + integer steps), so a projected grid can be walked with
-//! three additions per point (the perspective map is linear in homogeneous coordinates).
+//! ```text
+//!            outer rows  (S_out)   ·  ·  ·  ·  ·  ·     OUTER_OFFSETS_M beyond the edge
+//!                                  ·  ·  ·  ·  ·  ·
+//!   edge ─────────────────────────────────────────────
+//!            inner rows  (S_in,k)  ·  ·  ·  ·  ·  ·     INNER_INSETS_M inside the edge
+//!                                  ·  ·  ·  ·  ·  ·
+//!                                  ·  ·  ·  ·  ·  ·
+//! ```
+//!
+//! Only points near the edges tell a good pose from a slightly wrong one, so that is where
+//! all the points are; the graded distances give the fitness a slope over a useful range
+//! while the nearest rows keep it sharp. Outer rows lie in the plane of their face. When face
+//! `k` is visible and the face across the edge is not, the edge is on the silhouette and the
+//! outer rows project just outside it, whatever the viewpoint (the ray to such a point stays
+//! on the camera side of face `k`'s plane before it and on the far side of the hidden face's
+//! plane after it, so it never meets the block); on other edges the outer rows fall on the
+//! neighbouring face and are not counted.
+//!
+//! Rows are stored as start point + step, so a projected row is walked with three additions
+//! per point (the perspective map is linear in homogeneous coordinates).
 
 use nalgebra::{Point3, Vector3};
 
-use crate::config::{FACE_INSET_M, STRIP_OFFSET_M};
+use crate::config::{INNER_INSETS_M, OUTER_OFFSETS_M};
 use crate::hue;
 
 /// Number of faces of the block.
@@ -36,7 +49,7 @@ pub const FACES: usize = 6;
 pub enum ModelError {
     /// A size or hue is NaN or infinite.
     NonFinite,
-    /// An edge is not longer than twice [`FACE_INSET_M`] plus 1 mm.
+    /// An edge is not longer than twice the deepest inner inset plus 2 mm.
     TooSmall,
 }
 
@@ -62,10 +75,8 @@ pub struct Block {
 
 impl Block {
     /// The paper's block: 100 × 150 × 200 mm; ±x red, ±y green, ±z blue.
-    pub const PAPER: Block = Block {
-        size_m: [0.100, 0.150, 0.200],
-        face_hues_deg: [0.0, 120.0, 240.0, 0.0, 120.0, 240.0],
-    };
+    pub const PAPER: Block =
+        Block { size_m: [0.100, 0.150, 0.200], face_hues_deg: [0.0, 120.0, 240.0, 0.0, 120.0, 240.0] };
 
     /// Outward unit normal of face `k` (in `Σ_M`).
     pub fn normal(k: usize) -> Vector3<f32> {
@@ -113,34 +124,48 @@ fn unit(axis: usize) -> Vector3<f32> {
     v
 }
 
-/// A row of `G` sample points: `origin + i·step`, `i = 0..G`.
+/// One edge of a face and the strip of sample rows along it.
+///
+/// Row `r` (signed distance `d_r`: [`INNER_INSETS_M`] positive, then [`OUTER_OFFSETS_M`]
+/// negated) has the points `base + d_r·inward + i·step`, `i = 0..G`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Row {
-    /// First point (`Σ_M`, metres).
-    pub origin: Vector3<f32>,
-    /// Step between points.
+pub struct Edge {
+    /// Start of the rows on the edge line (`Σ_M`, metres).
+    pub base: Vector3<f32>,
+    /// Step between the points of a row, along the edge.
     pub step: Vector3<f32>,
+    /// Unit vector in the face's plane, perpendicular to the edge, pointing into the face.
+    pub inward: Vector3<f32>,
+    /// The face across this edge.
+    pub neighbour: u8,
 }
 
 /// The sample geometry of one face.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FaceSamples {
-    /// Inner grid: point `(i, j)` is `origin + i·du + j·dv`, `i, j = 0..G`.
-    pub origin: Vector3<f32>,
-    /// Grid step along the first in-plane axis.
-    pub du: Vector3<f32>,
-    /// Grid step along the second in-plane axis.
-    pub dv: Vector3<f32>,
-    /// Contour rows beyond the four edges.
-    pub strips: [Row; 4],
-    /// For each strip, the face across that edge.
-    pub neighbour: [u8; 4],
+    /// The four edges with their strips.
+    pub edges: [Edge; 4],
     /// Hue `b_k` in hue units.
     pub hue: u8,
 }
 
-/// The surface-strips model of a [`Block`] with `G × G` inner points and `4·G` contour points
-/// per face.
+/// Signed distances of the rows of a strip from its edge (inner positive, outer negative).
+pub const ROW_DISTANCES_M: [f32; crate::config::ROWS_PER_EDGE] = {
+    let mut d = [0.0; crate::config::ROWS_PER_EDGE];
+    let mut i = 0;
+    while i < INNER_INSETS_M.len() {
+        d[i] = INNER_INSETS_M[i];
+        i += 1;
+    }
+    let mut j = 0;
+    while j < OUTER_OFFSETS_M.len() {
+        d[INNER_INSETS_M.len() + j] = -OUTER_OFFSETS_M[j];
+        j += 1;
+    }
+    d
+};
+
+/// The surface-strips model of a [`Block`] with rows of `G` points.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SurfaceStrips<const G: usize> {
     block: Block,
@@ -149,58 +174,50 @@ pub struct SurfaceStrips<const G: usize> {
 }
 
 impl<const G: usize> SurfaceStrips<G> {
-    /// Inner sample points per face.
-    pub const INNER_PER_FACE: usize = G * G;
+    /// Inner sample points per face (`n_k`).
+    pub const INNER_PER_FACE: usize = 4 * INNER_INSETS_M.len() * G;
     /// Contour-strip points per face.
-    pub const STRIP_PER_FACE: usize = 4 * G;
+    pub const OUTER_PER_FACE: usize = 4 * OUTER_OFFSETS_M.len() * G;
     /// Sample points evaluated per camera for one pose: always three faces (one of each
     /// opposite pair), visible or not, so the work does not depend on the pose.
-    pub const POINTS_PER_CAMERA: usize = 3 * (G * G + 4 * G);
+    pub const POINTS_PER_CAMERA: usize = 3 * (Self::INNER_PER_FACE + Self::OUTER_PER_FACE);
 
     /// Builds the sample points of `block`.
     ///
     /// # Errors
     /// [`ModelError::NonFinite`] or [`ModelError::TooSmall`].
     pub fn new(block: &Block) -> Result<Self, ModelError> {
-        const { assert!(G >= 2, "the sample grid needs at least 2 points per side") };
+        const { assert!(G >= 2, "a sample row needs at least 2 points") };
         if !block.size_m.iter().chain(block.face_hues_deg.iter()).all(|v| v.is_finite()) {
             return Err(ModelError::NonFinite);
         }
-        if block.size_m.iter().any(|&s| s <= 2.0 * FACE_INSET_M + 1e-3) {
+        let deepest = INNER_INSETS_M.iter().fold(0.0f32, |m, d| m.max(*d));
+        if block.size_m.iter().any(|&s| s <= 2.0 * deepest + 2e-3) {
             return Err(ModelError::TooSmall);
         }
+        let m0 = INNER_INSETS_M.iter().fold(f32::MAX, |m, d| m.min(*d));
         let half = Vector3::from(block.size_m.map(|s| 0.5 * s));
         let steps = (G - 1) as f32;
-        let mut faces = [FaceSamples {
-            origin: Vector3::zeros(),
-            du: Vector3::zeros(),
-            dv: Vector3::zeros(),
-            strips: [Row { origin: Vector3::zeros(), step: Vector3::zeros() }; 4],
-            neighbour: [0; 4],
-            hue: 0,
-        }; FACES];
+        let blank = Edge { base: Vector3::zeros(), step: Vector3::zeros(), inward: Vector3::zeros(), neighbour: 0 };
+        let mut faces = [FaceSamples { edges: [blank; 4], hue: 0 }; FACES];
         for (k, (face, hue_deg)) in faces.iter_mut().zip(block.face_hues_deg.iter()).enumerate() {
             let a = k % 3;
             let (b, c) = ((a + 1) % 3, (a + 2) % 3);
             let (hb, hc) = (half[b], half[c]);
             let center = Block::normal(k) * half[a];
             let (eb, ec) = (unit(b), unit(c));
-            let du = eb * (2.0 * (hb - FACE_INSET_M) / steps);
-            let dv = ec * (2.0 * (hc - FACE_INSET_M) / steps);
-            face.origin = center - eb * (hb - FACE_INSET_M) - ec * (hc - FACE_INSET_M);
-            face.du = du;
-            face.dv = dv;
-            face.hue = hue::degrees_to_units(*hue_deg);
-            // Rows along e_c beyond the ±b edges, rows along e_b beyond the ±c edges.
-            let row_c = center - ec * (hc - FACE_INSET_M);
-            let row_b = center - eb * (hb - FACE_INSET_M);
-            face.strips = [
-                Row { origin: row_c + eb * (hb + STRIP_OFFSET_M), step: dv },
-                Row { origin: row_c - eb * (hb + STRIP_OFFSET_M), step: dv },
-                Row { origin: row_b + ec * (hc + STRIP_OFFSET_M), step: du },
-                Row { origin: row_b - ec * (hc + STRIP_OFFSET_M), step: du },
+            // Edges on the ±b sides run along e_c; edges on the ±c sides run along e_b.
+            let along_c = ec * (2.0 * (hc - m0) / steps);
+            let along_b = eb * (2.0 * (hb - m0) / steps);
+            let start_c = -ec * (hc - m0);
+            let start_b = -eb * (hb - m0);
+            face.edges = [
+                Edge { base: center + eb * hb + start_c, step: along_c, inward: -eb, neighbour: b as u8 },
+                Edge { base: center - eb * hb + start_c, step: along_c, inward: eb, neighbour: (b + 3) as u8 },
+                Edge { base: center + ec * hc + start_b, step: along_b, inward: -ec, neighbour: c as u8 },
+                Edge { base: center - ec * hc + start_b, step: along_b, inward: ec, neighbour: (c + 3) as u8 },
             ];
-            face.neighbour = [b as u8, (b + 3) as u8, c as u8, (c + 3) as u8];
+            face.hue = hue::degrees_to_units(*hue_deg);
         }
         Ok(Self { block: *block, half, faces })
     }
@@ -220,22 +237,27 @@ impl<const G: usize> SurfaceStrips<G> {
         &self.faces
     }
 
-    /// The `G²` inner points of face `k` (empty for `k ≥ 6`).
-    pub fn inner_points(&self, k: usize) -> impl Iterator<Item = Point3<f32>> + '_ {
-        let face = self.faces.get(k);
-        (0..G * G).filter_map(move |n| {
-            let f = face?;
-            Some(Point3::from(f.origin + f.du * (n % G) as f32 + f.dv * (n / G) as f32))
+    fn rows(&self, k: usize, inner: bool) -> impl Iterator<Item = Point3<f32>> + '_ {
+        let edges = self.faces.get(k).map(|f| f.edges).unwrap_or(
+            [Edge { base: Vector3::zeros(), step: Vector3::zeros(), inward: Vector3::zeros(), neighbour: 0 }; 4],
+        );
+        let n = if self.faces.get(k).is_some() { 4 } else { 0 };
+        edges.into_iter().take(n).flat_map(move |e| {
+            ROW_DISTANCES_M
+                .iter()
+                .filter(move |d| (**d > 0.0) == inner)
+                .flat_map(move |d| (0..G).map(move |i| Point3::from(e.base + e.inward * *d + e.step * i as f32)))
         })
     }
 
-    /// The `G` points of contour strip `e` (0..4) of face `k`.
-    pub fn strip_points(&self, k: usize, e: usize) -> impl Iterator<Item = Point3<f32>> + '_ {
-        let row = self.faces.get(k).and_then(|f| f.strips.get(e));
-        (0..G).filter_map(move |i| {
-            let r = row?;
-            Some(Point3::from(r.origin + r.step * i as f32))
-        })
+    /// The inner points `S_in,k` of face `k` (empty for `k ≥ 6`).
+    pub fn inner_points(&self, k: usize) -> impl Iterator<Item = Point3<f32>> + '_ {
+        self.rows(k, true)
+    }
+
+    /// The contour-strip points of face `k` on all four edges (empty for `k ≥ 6`).
+    pub fn outer_points(&self, k: usize) -> impl Iterator<Item = Point3<f32>> + '_ {
+        self.rows(k, false)
     }
 }
 
@@ -250,37 +272,41 @@ mod tests {
         for k in 0..FACES {
             let n = Block::normal(k);
             let a = k % 3;
-            let pts: std::vec::Vec<_> = m.inner_points(k).collect();
-            assert_eq!(pts.len(), 36);
-            for p in &pts {
+            let inner: std::vec::Vec<_> = m.inner_points(k).collect();
+            assert_eq!(inner.len(), SurfaceStrips::<6>::INNER_PER_FACE);
+            for p in &inner {
                 assert!((p.coords.dot(&n) - h[a]).abs() < 1e-6);
-                for ax in 0..3 {
-                    assert!(p[ax].abs() <= h[ax] - FACE_INSET_M + 1e-6 || ax == a);
+                for ax in (0..3).filter(|&ax| ax != a) {
+                    assert!(p[ax].abs() <= h[ax] - INNER_INSETS_M[0] + 1e-6, "{p}");
                 }
             }
-            for e in 0..4 {
-                let s: std::vec::Vec<_> = m.strip_points(k, e).collect();
-                assert_eq!(s.len(), 6);
-                for p in &s {
-                    // In the face's plane, beyond exactly one edge by the strip offset.
-                    assert!((p.coords.dot(&n) - h[a]).abs() < 1e-6);
-                    let beyond = (0..3).filter(|&ax| ax != a && p[ax].abs() > h[ax]).count();
-                    assert_eq!(beyond, 1);
-                    let nb = usize::from(m.faces()[k].neighbour[e]);
-                    let nn = Block::normal(nb);
-                    assert!((p.coords.dot(&nn) - h[nb % 3] - STRIP_OFFSET_M).abs() < 1e-6);
-                }
+            let outer: std::vec::Vec<_> = m.outer_points(k).collect();
+            assert_eq!(outer.len(), SurfaceStrips::<6>::OUTER_PER_FACE);
+            for p in &outer {
+                // In the face's plane, beyond exactly one edge, by one of the offsets.
+                assert!((p.coords.dot(&n) - h[a]).abs() < 1e-6);
+                let beyond: std::vec::Vec<usize> = (0..3).filter(|&ax| ax != a && p[ax].abs() > h[ax]).collect();
+                assert_eq!(beyond.len(), 1);
+                let ax = beyond[0];
+                let off = p[ax].abs() - h[ax];
+                assert!(OUTER_OFFSETS_M.iter().any(|o| (off - o).abs() < 1e-6), "{off}");
+            }
+            for e in m.faces()[k].edges {
+                let nb = usize::from(e.neighbour);
+                // The inward direction points away from the neighbour face.
+                assert!((e.inward + Block::normal(nb)).norm() < 1e-6);
             }
         }
-        assert_eq!(SurfaceStrips::<6>::POINTS_PER_CAMERA, 180);
+        assert_eq!(SurfaceStrips::<6>::POINTS_PER_CAMERA, 3 * 4 * 5 * 6);
     }
 
     #[test]
     fn hues_and_validation() {
         let m = SurfaceStrips::<4>::new(&Block::PAPER).unwrap();
         let hues: std::vec::Vec<u8> = m.faces().iter().map(|f| f.hue).collect();
+        assert_eq!(ROW_DISTANCES_M, [0.002, 0.008, 0.025, -0.003, -0.010]);
         assert_eq!(hues, [0, 60, 120, 0, 60, 120]);
-        let tiny = Block { size_m: [0.004, 0.1, 0.1], ..Block::PAPER };
+        let tiny = Block { size_m: [0.05, 0.1, 0.1], ..Block::PAPER };
         assert_eq!(SurfaceStrips::<4>::new(&tiny), Err(ModelError::TooSmall));
         let nan = Block { size_m: [f32::NAN, 0.1, 0.1], ..Block::PAPER };
         assert_eq!(SurfaceStrips::<4>::new(&nan), Err(ModelError::NonFinite));

@@ -150,11 +150,7 @@ pub fn canonical(q: &UnitQuaternion<f32>) -> UnitQuaternion<f32> {
     } else {
         q.k < 0.0
     };
-    if flip {
-        UnitQuaternion::new_unchecked(-q.into_inner())
-    } else {
-        *q
-    }
+    if flip { UnitQuaternion::new_unchecked(-q.into_inner()) } else { *q }
 }
 
 /// Time derivative of `{η, ε}` under angular velocity `ω` (propagation rule, eq. 7–8):
@@ -170,6 +166,7 @@ pub fn propagation(q: &UnitQuaternion<f32>, omega: &Vector3<f32>) -> (f32, Vecto
 }
 
 #[cfg(test)]
+#[allow(clippy::excessive_precision, clippy::approx_constant)] // reference values are copied verbatim
 mod tests {
     use super::*;
     use core::f32::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
@@ -216,15 +213,29 @@ mod tests {
         let cases: [([f32; 9], [f32; 4]); 3] = [
             (
                 [
-                    0.1613818846, -0.0340020721, 0.9863061119, -0.2551876358, 0.9639793813, 0.0749868191,
-                    -0.9533284627, -0.2637946391, 0.1468919009,
+                    0.1613818846,
+                    -0.0340020721,
+                    0.9863061119,
+                    -0.2551876358,
+                    0.9639793813,
+                    0.0749868191,
+                    -0.9533284627,
+                    -0.2637946391,
+                    0.1468919009,
                 ],
                 [-0.1123728197, 0.6433711207, -0.0733666052, 0.7536997358],
             ),
             (
                 [
-                    -0.7089881402, 0.5102392303, -0.4868179791, -0.6656479714, -0.7121684879, 0.2229996032,
-                    -0.2329132782, 0.4821534742, 0.8445587204,
+                    -0.7089881402,
+                    0.5102392303,
+                    -0.4868179791,
+                    -0.6656479714,
+                    -0.7121684879,
+                    0.2229996032,
+                    -0.2329132782,
+                    0.4821534742,
+                    0.8445587204,
                 ],
                 [0.1991366536, -0.1951031342, -0.9035645174, 0.3253467735],
             ),

@@ -17,7 +17,12 @@ use crate::model::{Block, FACES};
 ///
 /// # Errors
 /// [`ImageError::TooShort`] if `out` is smaller than the camera image.
-pub fn render_block(block: &Block, cam: &Pinhole, cam_from_model: &Isometry3<f32>, out: &mut [u8]) -> Result<(), ImageError> {
+pub fn render_block(
+    block: &Block,
+    cam: &Pinhole,
+    cam_from_model: &Isometry3<f32>,
+    out: &mut [u8],
+) -> Result<(), ImageError> {
     let (w, h) = (usize::from(cam.width()), usize::from(cam.height()));
     if out.len() < w * h {
         return Err(ImageError::TooShort { needed: (w * h) as u32, got: out.len() as u32 });
@@ -69,10 +74,10 @@ pub fn fill_convex(poly: &[Point2<f32>; 4], value: u8, w: usize, h: usize, out: 
                 pos |= cross > 0.0;
                 neg |= cross < 0.0;
             }
-            if !(pos && neg) {
-                if let Some(o) = out.get_mut(y * w + x) {
-                    *o = value;
-                }
+            if !(pos && neg)
+                && let Some(o) = out.get_mut(y * w + x)
+            {
+                *o = value;
             }
         }
     }

@@ -366,7 +366,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
 
         probe.mark(Phase::Feedforward);
         if feedforward == Feedforward::On {
-            let twist = feedforward::camera_twist(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
+            let twist =
+                feedforward::camera_twist(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
             self.ga.shift_all(&self.config.search, |psi| {
                 let rate = feedforward::psi_rate(&twist, psi);
                 feedforward::shift(psi, &rate, dt_s);

@@ -2,7 +2,7 @@
 
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::NO_HUE;
-use evorec_core::ga::SearchSpace;
+use evorec_core::ga::{GaParams, SearchSpace};
 use evorec_core::hue::HueImage;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
@@ -20,10 +20,14 @@ fn render(rig: &StereoRig, truth: &Psi) -> (Vec<u8>, Vec<u8>) {
 }
 
 fn run(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: bool) -> (Psi, Psi, f32) {
+    run_with(width, height, f, seed, frames, verbose, GaParams::DEFAULT)
+}
+
+fn run_with(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: bool, ga: GaParams) -> (Psi, Psi, f32) {
     let cam = Pinhole::new_checked(f, f, f32::from(width) / 2.0, f32::from(height) / 2.0, width, height).unwrap();
     let rig = StereoRig::parallel(cam, 0.1).unwrap();
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed);
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_ga(ga);
     let mut tracker: Tracker = Tracker::new(config).unwrap();
     let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
     let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
@@ -55,37 +59,66 @@ fn run(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: bool)
 
 #[test]
 fn converges_from_a_perturbed_start_at_640x480() {
-    let (truth, est, f) = run(640, 480, 800.0, 1, 200, true);
-    assert!(f > 0.95, "F = {f}");
-    let dt = (est.translation() - truth.translation()).norm();
-    let de = (est.eps() - truth.eps()).norm();
-    assert!(dt < 0.004 && de < 0.01, "position error {dt} m, eps error {de}");
+    for seed in 1..=4 {
+        let (truth, est, f) = run(640, 480, 800.0, seed, 300, false);
+        let dt = (est.translation() - truth.translation()).norm();
+        let de = (est.eps() - truth.eps()).norm();
+        assert!(f > 0.97, "seed {seed}: F = {f}");
+        assert!(dt < 0.005 && de < 0.015, "seed {seed}: position error {dt} m, eps error {de}");
+    }
 }
 
 #[test]
-fn converges_at_160x120() {
-    let (truth, est, f) = run(160, 120, 200.0, 2, 200, true);
-    assert!(f > 0.9, "F = {f}");
-    let dt = (est.translation() - truth.translation()).norm();
-    assert!(dt < 0.01, "position error {dt} m");
+fn converges_at_160x120_laterally() {
+    // At 160x120 (f = 200 px) one pixel of disparity is ~26 mm of depth at 0.72 m, so depth
+    // stays coarse; the lateral position must still converge.
+    for seed in 1..=4 {
+        let (truth, est, f) = run(160, 120, 200.0, seed, 300, false);
+        assert!(f > 0.9, "seed {seed}: F = {f}");
+        let d = est.translation() - truth.translation();
+        assert!(d.x.abs() < 0.004 && d.y.abs() < 0.004, "seed {seed}: lateral error {d}");
+        assert!(d.z.abs() < 0.04, "seed {seed}: depth error {d}");
+    }
 }
 
-/// Tuning aid (not a check): final errors over many seeds.
+/// Tuning aid (not a check): final errors over many seeds for a few GA settings.
 #[test]
 #[ignore]
 fn seed_sweep() {
-    for (w, h, f) in [(640u16, 480u16, 800.0f32), (160, 120, 200.0)] {
-        let mut worst = 0.0f32;
-        let mut sum = 0.0f32;
-        let mut fs = 0.0;
-        for seed in 0..12 {
-            let (truth, est, fit) = run(w, h, f, seed, 150, false);
-            let dt = (est.translation() - truth.translation()).norm();
-            worst = worst.max(dt);
-            sum += dt;
-            fs += fit;
+    let d = GaParams::DEFAULT;
+    let variants = [
+        ("default", d),
+        (
+            "smaller",
+            d.with_mutation_scale([
+                [0.010, 0.010, 0.010, 0.02, 0.02, 0.02],
+                [0.003, 0.003, 0.003, 0.006, 0.006, 0.006],
+                [0.0007, 0.0007, 0.0007, 0.0015, 0.0015, 0.0015],
+            ]),
+        ),
+        ("cross0.2", d.with_crossover_prob(0.2)),
+        ("cross0.8", d.with_crossover_prob(0.8)),
+        ("imm0", d.with_immigrants(0)),
+    ];
+    for (name, ga) in variants {
+        for (w, h, f) in [(640u16, 480u16, 800.0f32), (160, 120, 200.0)] {
+            let mut worst = 0.0f32;
+            let mut sum = 0.0f32;
+            let mut fs = 0.0;
+            for seed in 0..12 {
+                let (truth, est, fit) = run_with(w, h, f, seed, 300, false, ga);
+                let dt = (est.translation() - truth.translation()).norm();
+                worst = worst.max(dt);
+                sum += dt;
+                fs += fit;
+            }
+            println!(
+                "{name:10} {w}x{h}: mean pos err {:.2} mm, worst {:.2} mm, mean F {:.3}",
+                sum / 12.0 * 1e3,
+                worst * 1e3,
+                fs / 12.0
+            );
         }
-        println!("{w}x{h}: mean pos err {:.2} mm, worst {:.2} mm, mean F {:.3}", sum / 12.0 * 1e3, worst * 1e3, fs / 12.0);
     }
 }
 
@@ -114,8 +147,8 @@ fn landscape_probe() {
         for i in 0..=10 {
             let a = 1.0 - i as f32 / 10.0;
             let mut p = truth;
-            for k in 0..6 {
-                p.0[k] += a * d[k];
+            for (x, dk) in p.0.iter_mut().zip(d.iter()) {
+                *x += a * dk;
             }
             if name == "z along ray" {
                 let s = (truth.0[2] + a * d[2]) / truth.0[2];

@@ -48,6 +48,14 @@ fn benches(c: &mut Criterion) {
     pose.0[0] += 0.003;
     group.bench_function("one_pose", |b| b.iter(|| eval.evaluate_psi(black_box(&pose), &left, &right)));
     group.finish();
+    {
+        let model = SurfaceStrips::<4>::new(&Block::PAPER).expect("model");
+        let eval = Evaluator::new(&model, &lut, &rig);
+        c.bench_function("fitness_g4", |b| b.iter(|| eval.evaluate_psi(black_box(&pose), &left, &right)));
+        let model = SurfaceStrips::<16>::new(&Block::PAPER).expect("model");
+        let eval = Evaluator::new(&model, &lut, &rig);
+        c.bench_function("fitness_g16", |b| b.iter(|| eval.evaluate_psi(black_box(&pose), &left, &right)));
+    }
 
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).expect("space");
     let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(1);

@@ -39,7 +39,7 @@ impl core::fmt::Display for CameraError {
         match self {
             Self::NonFinite => f.write_str("camera parameter is not finite"),
             Self::BadFocalLength => f.write_str("focal length must be positive"),
-            Self::BadSize => f.write_str("image size must be 1..=4096 pixels per side"),
+            Self::BadSize => f.write_str("image size must be 1..=2048 pixels per side"),
             Self::BadBaseline => f.write_str("stereo baseline must be positive"),
         }
     }

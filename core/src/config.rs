@@ -10,7 +10,7 @@ pub const PA10_DOF: usize = 7;
 pub const DEFAULT_POPULATION: usize = 40;
 
 /// Default number of sample points on each row of the surface-strips model.
-pub const DEFAULT_GRID: usize = 6;
+pub const DEFAULT_GRID: usize = 8;
 
 /// Distances (metres) inside a face's edge of the rows of inner sample points `S_in,k`
 /// that run along that edge. Graded: the nearest row makes the fitness sharp (a few
@@ -55,5 +55,7 @@ pub const MIN_VALUE: u8 = 40;
 /// Minimum saturation `(max − min) / max`, in 1/255 steps, for a pixel to have a hue.
 pub const MIN_SATURATION: u8 = 80;
 
-/// Largest image side accepted by [`crate::hue::HueImage`] (keeps `width·height` inside `u32`).
-pub const MAX_IMAGE_SIDE: u16 = 4096;
+/// Largest image side accepted by [`crate::hue::HueImage`] and [`crate::camera::Pinhole`]:
+/// pixel coordinates stay below 2²² so the fitness can round them exactly (see
+/// `fitness::View::index`).
+pub const MAX_IMAGE_SIDE: u16 = 2048;

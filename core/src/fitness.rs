@@ -69,30 +69,58 @@ pub struct Fitness {
 struct View<'a> {
     pixels: &'a [u8],
     width: u32,
-    height: u32,
 }
 
 impl<'a> View<'a> {
     fn of<B: AsRef<[u8]>>(img: &'a HueImage<B>) -> Self {
-        Self { pixels: img.pixels(), width: u32::from(img.width()), height: u32::from(img.height()) }
+        Self { pixels: img.pixels(), width: u32::from(img.width()) }
     }
 
-    /// Hue byte under homogeneous pixel coordinates `(x, y, z)` that carry a +1 pixel shift
-    /// (so truncation toward zero equals `floor` for every in-image point).
+    /// 1 if pixel `(u, v)` (wrapping values from [`round_bits`]) is inside the image and its
+    /// hue mask intersects `want`, else 0.
+    ///
+    /// Rounding uses the exact float trick `(v + 1.5·2²³).to_bits() − bits(1.5·2²³)`, which is
+    /// the round-to-nearest integer for |v| < 2²²; every value outside that range, negative,
+    /// infinite or NaN lands far outside `0..width` as an unsigned number, so one unsigned
+    /// compare per axis rejects it. Branch-free, no saturating conversion, and the same IEEE
+    /// operations on every target.
     #[inline(always)]
-    fn sample(&self, p: [f32; 3]) -> u8 {
-        let inv = 1.0 / p[2];
-        let u = ((p[0] * inv) as i32).wrapping_sub(1) as u32;
-        let v = ((p[1] * inv) as i32).wrapping_sub(1) as u32;
-        if u < self.width && v < self.height {
-            match self.pixels.get((v * self.width + u) as usize) {
-                Some(&h) => h,
-                None => NO_HUE,
-            }
-        } else {
-            NO_HUE
-        }
+    fn hit(&self, lut: &HueLut, want: u8, u: u32, v: u32) -> u32 {
+        // Row-major index in 64 bits (no wrap-around); the slice's own bounds check then rejects
+        // every v outside the image, so only u needs a test of its own.
+        let index = if u < self.width { u64::from(v) * u64::from(self.width) + u64::from(u) } else { u64::MAX };
+        let h = match usize::try_from(index).ok().and_then(|i| self.pixels.get(i)) {
+            Some(&h) => h,
+            None => NO_HUE,
+        };
+        u32::from(lut.mask(h) & want != 0)
     }
+}
+
+/// Counts the points of one row whose hue mask intersects `want`. The row has `G` points
+/// `start + i·step`, walked by adding `step` (three additions per point).
+#[inline(always)]
+fn count_row<const G: usize>(view: &View<'_>, lut: &HueLut, want: u8, start: [f32; 3], step: [f32; 3]) -> u32 {
+    let [mut x, mut y, mut w] = start;
+    let mut hits = 0u32;
+    for _ in 0..G {
+        let inv = 1.0 / w;
+        hits += view.hit(lut, want, round_bits(x * inv), round_bits(y * inv));
+        x += step[0];
+        y += step[1];
+        w += step[2];
+    }
+    hits
+}
+
+/// `1.5 · 2²³`: adding it to a float of magnitude below 2²² leaves the rounded integer in the
+/// low mantissa bits.
+const ROUND_MAGIC: f32 = 12_582_912.0;
+
+/// Round-to-nearest of `v` as a wrapping `u32` (see [`View::sample`]).
+#[inline(always)]
+fn round_bits(v: f32) -> u32 {
+    (v + ROUND_MAGIC).to_bits().wrapping_sub(ROUND_MAGIC.to_bits())
 }
 
 #[inline(always)]
@@ -100,7 +128,8 @@ fn add(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
-/// `K'·R` and `K'·t`, the pose composed with the intrinsics (with the +1 pixel shift).
+/// `K'·R` and `K'·t`, the pose composed with the intrinsics (principal point shifted by −½
+/// pixel for [`View::sample`]'s rounding).
 struct Projector {
     m: [[f32; 3]; 3],
     c: [f32; 3],
@@ -108,7 +137,7 @@ struct Projector {
 
 impl Projector {
     fn new(cam: &Pinhole, r: &Matrix3<f32>, t: &Vector3<f32>) -> Self {
-        let (fx, fy, cx, cy) = (cam.fx(), cam.fy(), cam.cx() + 1.0, cam.cy() + 1.0);
+        let (fx, fy, cx, cy) = (cam.fx(), cam.fy(), cam.cx() - 0.5, cam.cy() - 0.5);
         let row = |i: usize| [r[(i, 0)], r[(i, 1)], r[(i, 2)]];
         let (r0, r1, r2) = (row(0), row(1), row(2));
         let m = [
@@ -203,19 +232,11 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>>(
                 [base[0] + dist * inward[0], base[1] + dist * inward[1], base[2] + dist * inward[2]]
             };
             for &dist in &INNER_INSETS_M {
-                let mut p = row_start(dist);
-                for _ in 0..G {
-                    inner += u32::from(lut.mask(view.sample(p)) & bit != 0);
-                    p = add(p, step);
-                }
+                inner += count_row::<G>(&view, lut, bit, row_start(dist), step);
             }
             let mut hits = 0u32;
             for &dist in &OUTER_OFFSETS_M {
-                let mut p = row_start(-dist);
-                for _ in 0..G {
-                    hits += u32::from(lut.mask(view.sample(p)) & visible_mask != 0);
-                    p = add(p, step);
-                }
+                hits += count_row::<G>(&view, lut, visible_mask, row_start(-dist), step);
             }
             // Outer rows count only on silhouette edges (the face across is hidden).
             if !front(edge.neighbour) {
@@ -296,7 +317,7 @@ mod tests {
 
     #[test]
     fn true_pose_scores_exactly_one_and_perturbations_score_less() {
-        let model = SurfaceStrips::<6>::new(&Block::PAPER).unwrap();
+        let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
         let hues = model.faces().map(|f| f.hue);
         let lut = HueLut::new(&hues, DEFAULT_HUE_TOLERANCE);
         let rig = rig();
@@ -311,7 +332,7 @@ mod tests {
         let f = eval.evaluate_psi(&truth, &left, &right);
         assert_eq!(f.total, 1.0, "{f:?}");
         assert_eq!(f.right.visible.count_ones(), 3);
-        assert_eq!(f.right.inner_total, 3 * SurfaceStrips::<6>::INNER_PER_FACE as u32);
+        assert_eq!(f.right.inner_total, 3 * SurfaceStrips::<8>::INNER_PER_FACE as u32);
         // Every perturbation of 8 mm or 0.03 in ε lowers F.
         for i in 0..6 {
             for sign in [-1.0f32, 1.0] {

@@ -267,13 +267,13 @@ mod tests {
 
     #[test]
     fn inner_points_lie_on_their_faces_and_strips_outside() {
-        let m = SurfaceStrips::<6>::new(&Block::PAPER).unwrap();
+        let m = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
         let h = m.half_size();
         for k in 0..FACES {
             let n = Block::normal(k);
             let a = k % 3;
             let inner: std::vec::Vec<_> = m.inner_points(k).collect();
-            assert_eq!(inner.len(), SurfaceStrips::<6>::INNER_PER_FACE);
+            assert_eq!(inner.len(), SurfaceStrips::<8>::INNER_PER_FACE);
             for p in &inner {
                 assert!((p.coords.dot(&n) - h[a]).abs() < 1e-6);
                 for ax in (0..3).filter(|&ax| ax != a) {
@@ -281,7 +281,7 @@ mod tests {
                 }
             }
             let outer: std::vec::Vec<_> = m.outer_points(k).collect();
-            assert_eq!(outer.len(), SurfaceStrips::<6>::OUTER_PER_FACE);
+            assert_eq!(outer.len(), SurfaceStrips::<8>::OUTER_PER_FACE);
             for p in &outer {
                 // In the face's plane, beyond exactly one edge, by one of the offsets.
                 assert!((p.coords.dot(&n) - h[a]).abs() < 1e-6);
@@ -297,7 +297,7 @@ mod tests {
                 assert!((e.inward + Block::normal(nb)).norm() < 1e-6);
             }
         }
-        assert_eq!(SurfaceStrips::<6>::POINTS_PER_CAMERA, 3 * 4 * 5 * 6);
+        assert_eq!(SurfaceStrips::<8>::POINTS_PER_CAMERA, 3 * 4 * 5 * 8);
     }
 
     #[test]

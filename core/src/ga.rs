@@ -114,8 +114,16 @@ pub struct GaParams {
     pub crossover_prob: f32,
     /// Probability that a child is mutated.
     pub mutation_prob: f32,
+    /// Probability that each gene of a mutated child is perturbed. Below 1 the GA makes
+    /// moves in few coordinates at a time, which is how it follows ridges of the fitness where
+    /// two parameters compensate each other (depth against yaw, say).
+    pub gene_mutation_prob: f32,
     /// Fresh uniform samples per generation.
     pub immigrants: usize,
+    /// Individuals drawn per tournament (the fittest of them is a parent); at least 1.
+    pub tournament: usize,
+    /// Cumulative probabilities of picking mutation scale 0, 1 (scale 2 takes the rest).
+    pub level_cdf: [f32; MUTATION_LEVELS - 1],
     /// Half-widths of the triangular mutation per gene, one row per scale; a mutated child
     /// uses one row picked uniformly. Columns: lateral `x`, `y` (m), depth along the viewing
     /// ray (m of `t_z`), then `ε₁, ε₂, ε₃`.
@@ -123,12 +131,17 @@ pub struct GaParams {
 }
 
 impl GaParams {
-    /// Defaults for a target about 0.5–1 m away at 30 frames/s: crossover 0.2, mutation 0.9,
-    /// one immigrant, mutation scales 20 mm / 0.04, 4 mm / 0.008, 1 mm / 0.002.
+    /// Defaults for a target about 0.5–1 m away at 30 frames/s: tournaments of 3, crossover
+    /// 0.2, mutation 0.9 with each gene perturbed with probability 0.35, one immigrant,
+    /// mutation scales 20 mm / 0.04, 4 mm / 0.008, 1 mm / 0.002 picked with probabilities
+    /// 0.25, 0.35, 0.4.
     pub const DEFAULT: GaParams = GaParams {
         crossover_prob: 0.2,
         mutation_prob: 0.9,
+        gene_mutation_prob: 0.35,
         immigrants: 1,
+        tournament: 3,
+        level_cdf: [0.25, 0.6],
         mutation_scale: [
             [0.020, 0.020, 0.020, 0.04, 0.04, 0.04],
             [0.004, 0.004, 0.004, 0.008, 0.008, 0.008],
@@ -147,6 +160,13 @@ impl GaParams {
     #[must_use]
     pub fn with_mutation_prob(mut self, p: f32) -> Self {
         self.mutation_prob = p;
+        self
+    }
+
+    /// Builder: per-gene mutation probability.
+    #[must_use]
+    pub fn with_gene_mutation_prob(mut self, p: f32) -> Self {
+        self.gene_mutation_prob = p;
         self
     }
 
@@ -170,12 +190,12 @@ impl GaParams {
     /// [`GaError::NonFinite`], [`GaError::BadParameter`] or [`GaError::TooManyImmigrants`].
     pub fn validate(&self, population: usize) -> Result<(), GaError> {
         let scales = self.mutation_scale.iter().flatten();
-        if !self.crossover_prob.is_finite() || !self.mutation_prob.is_finite() || !scales.clone().all(|s| s.is_finite())
-        {
+        let probs = [self.crossover_prob, self.mutation_prob, self.gene_mutation_prob];
+        if !probs.iter().all(|p| p.is_finite()) || !scales.clone().all(|s| s.is_finite()) {
             return Err(GaError::NonFinite);
         }
         let prob_ok = |p: f32| (0.0..=1.0).contains(&p);
-        if !prob_ok(self.crossover_prob) || !prob_ok(self.mutation_prob) || scales.clone().any(|&s| s < 0.0) {
+        if !probs.iter().all(|p| prob_ok(*p)) || scales.clone().any(|&s| s < 0.0) {
             return Err(GaError::BadParameter);
         }
         if self.immigrants + 2 > population {
@@ -307,13 +327,16 @@ impl<const P: usize> Ga<P> {
     pub fn breed<R: Rng + ?Sized>(&mut self, best: &Best, params: &GaParams, space: &SearchSpace, rng: &mut R) {
         let parents = self.pop;
         let fit = self.fitness;
+        let rounds = params.tournament.max(1);
         let pick = |rng: &mut R| -> Psi {
-            let a = (rng.next_u32() as usize) % P;
-            let b = (rng.next_u32() as usize) % P;
-            let fa = fit.get(a).copied().unwrap_or(0.0);
-            let fb = fit.get(b).copied().unwrap_or(0.0);
-            let i = if fb > fa { b } else { a };
-            parents.get(i).copied().unwrap_or(best.psi)
+            let mut winner = (rng.next_u32() as usize) % P;
+            for _ in 1..rounds {
+                let c = (rng.next_u32() as usize) % P;
+                if fit.get(c).copied().unwrap_or(0.0) > fit.get(winner).copied().unwrap_or(0.0) {
+                    winner = c;
+                }
+            }
+            parents.get(winner).copied().unwrap_or(best.psi)
         };
         let first_immigrant = P - params.immigrants.min(P - 1);
         for (i, child) in self.pop.iter_mut().enumerate() {
@@ -336,9 +359,15 @@ impl<const P: usize> Ga<P> {
                 }
             }
             let do_mutate = unit_f32(rng) < params.mutation_prob;
-            let level = (rng.next_u32() as usize) % MUTATION_LEVELS;
+            let u = unit_f32(rng);
+            let level = params.level_cdf.iter().filter(|&&c| u >= c).count();
             let scale = params.mutation_scale.get(level).copied().unwrap_or([0.0; 6]);
-            let noise: [f32; 6] = core::array::from_fn(|_| triangular(rng));
+            let mut noise: [f32; 6] = core::array::from_fn(|_| triangular(rng));
+            for n in noise.iter_mut() {
+                if unit_f32(rng) >= params.gene_mutation_prob {
+                    *n = 0.0;
+                }
+            }
             if do_mutate {
                 mutate(&mut c, &scale, &noise);
             }

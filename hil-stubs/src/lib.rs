@@ -1,2 +1,89 @@
-//! Firmware board glue (placeholder until the firmware issue).
+//! # evorec-firmware
+//!
+//! The evorec tracker on a Cortex-M4F camera controller (`thumbv7em-none-eabihf`), run under
+//! QEMU (`mps2-an386`) for hardware-in-the-loop tests, and the host side of its link.
+//!
+//! ```text
+//!   host (std)                                     firmware (no_std, QEMU mps2-an386)
+//!   HilSession ── CONFIG ─► evorec-h2f.fifo ─► serve(): Setup → Tracker (static)
+//!              ── FRAME  ─►                     board::run(LinkBoard, tracker)
+//!              ◄─ ESTIMATE ─ evorec-f2h.fifo ◄─   frame → joints → 1 generation → publish
+//!              ── END    ─►  ...            ◄─ DONE (counts, stack high-water mark)
+//! ```
+//!
+//! The firmware is glue only: [`link_board::LinkBoard`] implements the core's
+//! [`CameraController<7>`](evorec_core::board::CameraController) over the link
+//! ([`protocol`]), and the main loop is the core's generic
+//! [`evorec_core::board::run`]. The host builds its reference tracker from the same
+//! [`protocol::Setup`] ([`setup`]), so host and target trackers are bit-identical and so are
+//! their estimates (checked by `tests/tests/hil_equivalence.rs` of the workspace).
+//!
+//! ## On-board frame size and memory
+//! Frames are 2 × 160×120 hue bytes ([`FRAME_WIDTH`] × [`FRAME_HEIGHT`], 37.5 KiB), received
+//! straight into two static buffers (no second copy). The tracker (the core's defaults: 7 DOF,
+//! [`DEFAULT_POPULATION`](evorec_core::config::DEFAULT_POPULATION) individuals,
+//! [`DEFAULT_GRID`](evorec_core::config::DEFAULT_GRID) samples per row) lives in a static too. `memory.x` at the workspace root budgets an STM32F4-class
+//! part (1 MiB flash, 128 KiB SRAM); the firmware's own budget is flash ≤ 256 KiB and
+//! statics + stack ≤ 128 KiB. The stack is painted by cortex-m-rt before `main` and its
+//! high-water mark is reported in `DONE` and in the log.
+//!
+//! Measured (rustc 1.95, release profile: fat LTO, opt-level 3; core defaults P = 40, G = 8):
+//!
+//! | what                                   | bytes   | how                                   |
+//! |----------------------------------------|---------|---------------------------------------|
+//! | flash (`.vector_table+.text+.rodata+.data`) | 100 664 | `llvm-size -B` text + data        |
+//! | static RAM (`.data+.bss`)              | 41 320  | `llvm-size -B` data + bss             |
+//! | stack high-water mark                  | 13 892  | stack painting, 119-frame HIL run     |
+//! | RAM total                              | 55 212  | of 128 KiB                            |
+//!
+//! The stack peak is the tracker's construction ([`setup`]'s `build_tracker_in`, ≈ 11.9 KB
+//! frame from `Tracker::new`); the per-frame loop needs far less.
+//!
+//! ## Commands (run inside `hil-stubs/`, whose `.cargo/config.toml` selects the target)
+//! - build the firmware: `cargo build --release`
+//!   (→ `target/thumbv7em-none-eabihf/release/evorec-firmware`)
+//! - run it on QEMU: `cargo run --release` (without a host on the FIFOs it runs a demo on
+//!   on-board synthetic frames)
+//! - on-target tests: `cargo test --release --test on_target`
+//! - host checks of this crate: from the workspace root,
+//!   `cargo test -p evorec-firmware --features host` and
+//!   `cargo clippy -p evorec-firmware --all-targets --features host -- -D warnings`
+//!
+//! ## Features
+//! - `host`: the `host` module (`host::HilSession`), the std host side of the QEMU link.
+//!
+//! ## `unsafe`
+//! The crate denies `unsafe_code`; the semihosting calls and the stack scan live in one
+//! module (`sys`, target only) with a `SAFETY` comment on every block.
 #![no_std]
+#![deny(unsafe_code)]
+#![deny(missing_docs)]
+#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
+
+#[cfg(any(test, feature = "host"))]
+extern crate std;
+
+pub mod crc;
+pub mod link_board;
+pub mod protocol;
+pub mod selftest;
+pub mod setup;
+
+#[cfg(feature = "host")]
+pub mod host;
+
+#[cfg(target_os = "none")]
+pub mod rt;
+#[cfg(target_os = "none")]
+#[allow(unsafe_code)]
+pub mod sys;
+
+/// Width of the on-board hue frames (pixels).
+pub const FRAME_WIDTH: u16 = 160;
+/// Height of the on-board hue frames (pixels).
+pub const FRAME_HEIGHT: u16 = 120;
+/// Bytes of one on-board hue image (`FRAME_WIDTH · FRAME_HEIGHT`).
+pub const IMAGE_BYTES: usize = FRAME_WIDTH as usize * FRAME_HEIGHT as usize;
+
+/// The firmware's tracker: the core's defaults (7 DOF, default population and grid).
+pub type FirmwareTracker = evorec_core::Tracker;

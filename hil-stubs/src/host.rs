@@ -1,0 +1,556 @@
+//! The host side of the hardware-in-the-loop link (feature `host`, needs std).
+//!
+//! [`HilSession`] runs the firmware ELF under QEMU (`mps2-an386`, Cortex-M4F) and talks to it
+//! over two named FIFOs in a working directory, with the [`crate::protocol`]:
+//!
+//! ```no_run
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! use evorec_firmware::host::{HilSession, Reply, default_firmware_path};
+//! use evorec_firmware::protocol::Frame;
+//! # let setup: evorec_firmware::protocol::Setup = todo!();
+//! # let (left, right, joints) = (vec![255u8; 160 * 120], vec![255u8; 160 * 120], todo!());
+//! let mut hil = HilSession::start(&default_firmware_path(), "out/hil".as_ref(), &setup)?;
+//! let frame = Frame { width: 160, height: 120, joints, left: &left, right: &right };
+//! match hil.step(1, 33_333, &frame)? {
+//!     Reply::Estimate(e) => println!("ψ = {:?}, F = {}", e.psi, e.fitness),
+//!     Reply::Rejected => println!("the tracker refused the frame"),
+//! }
+//! let summary = hil.finish()?; // END → DONE, QEMU exits with success
+//! println!("stack high-water mark: {} bytes", summary.done.stack_used_bytes);
+//! # Ok(()) }
+//! ```
+//!
+//! In the working directory the session creates `evorec-h2f.fifo` and `evorec-f2h.fifo`
+//! (replacing stale ones) and `firmware.log` (QEMU's stdout and stderr: the firmware's `log`
+//! output). Both sides open the FIFOs in the same order (host→firmware first), because
+//! opening a FIFO blocks until its other end is opened. Every wait is bounded
+//! ([`HilOptions`]); a QEMU that exits or hangs is reported with the tail of its log, and
+//! dropping a session kills QEMU.
+
+use std::format;
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, BufReader, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::string::{String, ToString};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::thread;
+use std::time::{Duration, Instant};
+use std::vec::Vec;
+
+use evorec_core::Tracker;
+use evorec_core::tracker::Estimate;
+
+use crate::protocol::{
+    ByteSink, ByteSource, DecodeError, Done, Envelope, ErrorCode, Frame, Message, MsgType, ReadError, Setup,
+    WriteError, read_message, write_message,
+};
+use crate::setup::SetupError;
+
+/// How to install QEMU on Debian/Ubuntu.
+pub const QEMU_INSTALL_HINT: &str = "apt-get update && apt-get install -y qemu-system-arm";
+/// How to build the firmware.
+pub const FIRMWARE_BUILD_HINT: &str = "cd hil-stubs && cargo build --release";
+/// Environment variable naming the firmware ELF (overrides [`default_firmware_path`]'s search).
+pub const FIRMWARE_ENV: &str = "EVOREC_FIRMWARE_ELF";
+/// Host → firmware FIFO name (in the working directory).
+pub const HOST_TO_FIRMWARE: &str = "evorec-h2f.fifo";
+/// Firmware → host FIFO name.
+pub const FIRMWARE_TO_HOST: &str = "evorec-f2h.fifo";
+/// QEMU's output file name.
+pub const LOG_FILE: &str = "firmware.log";
+
+/// Where `cargo build --release` in `hil-stubs/` puts the firmware: `$EVOREC_FIRMWARE_ELF` if
+/// set, else `$CARGO_TARGET_DIR` (relative paths taken from the workspace root) or the
+/// workspace's `target/`, then `thumbv7em-none-eabihf/release/evorec-firmware`.
+pub fn default_firmware_path() -> PathBuf {
+    if let Some(p) = std::env::var_os(FIRMWARE_ENV) {
+        return PathBuf::from(p);
+    }
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let target = match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(dir) => workspace.join(dir), // `join` keeps an absolute `dir` as it is
+        None => workspace.join("target"),
+    };
+    target.join("thumbv7em-none-eabihf").join("release").join("evorec-firmware")
+}
+
+/// Session settings; [`HilOptions::default`] states the defaults.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HilOptions {
+    /// The QEMU executable (default `qemu-system-arm`, found through `PATH`).
+    pub qemu: PathBuf,
+    /// Longest wait for QEMU to open the link (default 30 s).
+    pub start_timeout: Duration,
+    /// Longest wait for any one reply, and for QEMU to exit after `DONE` (default 60 s).
+    pub reply_timeout: Duration,
+}
+
+impl Default for HilOptions {
+    fn default() -> Self {
+        Self {
+            qemu: PathBuf::from("qemu-system-arm"),
+            start_timeout: Duration::from_secs(30),
+            reply_timeout: Duration::from_secs(60),
+        }
+    }
+}
+
+/// Why a session failed. The `Display` text says what to do where there is something to do.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum HilError {
+    /// The QEMU executable was not found.
+    QemuNotFound {
+        /// The program that was looked for.
+        program: PathBuf,
+    },
+    /// The firmware ELF does not exist.
+    FirmwareNotFound {
+        /// The path that was looked at.
+        path: PathBuf,
+    },
+    /// A file-system or process operation failed.
+    Io {
+        /// What was being done.
+        what: String,
+        /// The error.
+        source: io::Error,
+    },
+    /// The setup gives no tracker (checked on the host before QEMU starts).
+    Setup(SetupError),
+    /// The firmware refused the `CONFIG` (its `ACK` status).
+    ConfigRefused {
+        /// The status code (see [`SetupError::describe_code`]).
+        code: u32,
+    },
+    /// The firmware sent `ERROR` and stops.
+    Firmware {
+        /// The code (see [`ErrorCode`]).
+        code: u32,
+        /// The end of the firmware's log.
+        log_tail: String,
+    },
+    /// QEMU exited (or closed the link) before the conversation ended.
+    QemuExited {
+        /// Its exit status, if it has exited.
+        status: Option<ExitStatus>,
+        /// The end of its log.
+        log_tail: String,
+    },
+    /// Nothing arrived in time; QEMU was killed.
+    Timeout {
+        /// What was awaited.
+        waiting_for: &'static str,
+        /// How long.
+        after: Duration,
+        /// The end of QEMU's log.
+        log_tail: String,
+    },
+    /// The firmware sent a malformed message.
+    Protocol(DecodeError),
+    /// The firmware sent a valid message that does not fit the conversation.
+    Unexpected {
+        /// What arrived.
+        got: MsgType,
+        /// Its sequence number.
+        sequence: u32,
+        /// What was awaited.
+        expected: &'static str,
+    },
+    /// A frame's images are not `width · height` bytes each.
+    BadFrame {
+        /// `width · height`.
+        expected: usize,
+        /// Left image length.
+        left: usize,
+        /// Right image length.
+        right: usize,
+    },
+}
+
+impl std::fmt::Display for HilError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::QemuNotFound { program } => {
+                write!(f, "{} not found: install it with `{QEMU_INSTALL_HINT}`", program.display())
+            }
+            Self::FirmwareNotFound { path } => write!(
+                f,
+                "firmware image {} not found: build it with `{FIRMWARE_BUILD_HINT}` \
+                 (or point {FIRMWARE_ENV} at an ELF)",
+                path.display()
+            ),
+            Self::Io { what, source } => write!(f, "{what}: {source}"),
+            Self::Setup(e) => write!(f, "setup gives no tracker: {e}"),
+            Self::ConfigRefused { code } => {
+                write!(f, "firmware refused the CONFIG: status {code} ({})", SetupError::describe_code(*code))
+            }
+            Self::Firmware { code, log_tail } => {
+                let what = match ErrorCode::from_u32(*code) {
+                    Some(ErrorCode::Link) => "link failure",
+                    Some(ErrorCode::Decode) => "malformed message",
+                    Some(ErrorCode::Unexpected) => "unexpected message",
+                    _ => "other failure",
+                };
+                write!(f, "firmware stopped with error {code} ({what}); its log ends:\n{log_tail}")
+            }
+            Self::QemuExited { status, log_tail } => match status {
+                Some(s) => write!(f, "QEMU exited early ({s}); its log ends:\n{log_tail}"),
+                None => write!(f, "QEMU closed the link early; its log ends:\n{log_tail}"),
+            },
+            Self::Timeout { waiting_for, after, log_tail } => {
+                write!(
+                    f,
+                    "no {waiting_for} from the firmware within {after:?} (QEMU killed); its log ends:\n{log_tail}"
+                )
+            }
+            Self::Protocol(e) => write!(f, "malformed message from the firmware: {e}"),
+            Self::Unexpected { got, sequence, expected } => {
+                write!(f, "expected {expected} from the firmware, got {got:?} (sequence {sequence})")
+            }
+            Self::BadFrame { expected, left, right } => {
+                write!(f, "frame images have {left} and {right} bytes, width x height is {expected}")
+            }
+        }
+    }
+}
+
+impl std::error::Error for HilError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Self::Io { source, .. } => Some(source),
+            Self::Setup(e) => Some(e),
+            Self::Protocol(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+fn io_error(what: impl Into<String>) -> impl FnOnce(io::Error) -> HilError {
+    let what = what.into();
+    move |source| HilError::Io { what, source }
+}
+
+/// A [`ByteSource`]/[`ByteSink`] over any `std::io` reader or writer.
+#[derive(Debug)]
+pub struct IoLink<T>(pub T);
+
+impl<T: Read> ByteSource for IoLink<T> {
+    type Error = io::Error;
+    fn read_exact(&mut self, buf: &mut [u8]) -> Result<(), io::Error> {
+        self.0.read_exact(buf)
+    }
+}
+
+impl<T: Write> ByteSink for IoLink<T> {
+    type Error = io::Error;
+    fn write_all(&mut self, bytes: &[u8]) -> Result<(), io::Error> {
+        self.0.write_all(bytes)
+    }
+}
+
+/// The firmware's answer to a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Reply {
+    /// The estimate of the generation run on the frame.
+    Estimate(Estimate),
+    /// The tracker refused the frame (wrong size, non-finite joints, time step out of range).
+    Rejected,
+}
+
+/// What a finished session reports.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Summary {
+    /// The firmware's `DONE`: loop counts and stack high-water mark.
+    pub done: Done,
+    /// QEMU's output (the firmware's log).
+    pub log_path: PathBuf,
+}
+
+type Incoming = Result<Envelope<'static>, HilError>;
+
+/// A running firmware under QEMU with an open link; see the [module docs](self).
+#[derive(Debug)]
+pub struct HilSession {
+    qemu: Child,
+    exited: Option<ExitStatus>,
+    tx: Option<File>,
+    rx: Receiver<Incoming>,
+    log_path: PathBuf,
+    options: HilOptions,
+}
+
+impl HilSession {
+    /// [`HilSession::start_with`] with [`HilOptions::default`].
+    ///
+    /// # Errors
+    /// As [`HilSession::start_with`].
+    pub fn start(firmware: &Path, workdir: &Path, setup: &Setup) -> Result<Self, HilError> {
+        Self::start_with(firmware, workdir, setup, &HilOptions::default())
+    }
+
+    /// Checks `setup` on the host, creates the FIFOs in `workdir` (created if missing), starts
+    /// QEMU on `firmware` there, opens the link, sends `CONFIG` and waits for the `ACK`.
+    ///
+    /// # Errors
+    /// [`HilError::Setup`], [`HilError::FirmwareNotFound`], [`HilError::QemuNotFound`],
+    /// [`HilError::ConfigRefused`], or a failure of the link or QEMU.
+    pub fn start_with(firmware: &Path, workdir: &Path, setup: &Setup, options: &HilOptions) -> Result<Self, HilError> {
+        let _: Tracker = setup.build_tracker().map_err(HilError::Setup)?;
+        if !firmware.is_file() {
+            return Err(HilError::FirmwareNotFound { path: firmware.to_path_buf() });
+        }
+        let firmware = firmware.canonicalize().map_err(io_error(format!("resolve {}", firmware.display())))?;
+        fs::create_dir_all(workdir).map_err(io_error(format!("create {}", workdir.display())))?;
+        let h2f = workdir.join(HOST_TO_FIRMWARE);
+        let f2h = workdir.join(FIRMWARE_TO_HOST);
+        for fifo in [&h2f, &f2h] {
+            make_fifo(fifo)?;
+        }
+        let log_path = workdir.join(LOG_FILE);
+        let log = File::create(&log_path).map_err(io_error(format!("create {}", log_path.display())))?;
+        let log_err = log.try_clone().map_err(io_error("duplicate the log handle"))?;
+        let qemu = Command::new(&options.qemu)
+            .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic"])
+            .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+            .arg(&firmware)
+            .current_dir(workdir)
+            .stdin(Stdio::null())
+            .stdout(log)
+            .stderr(log_err)
+            .spawn()
+            .map_err(|e| match e.kind() {
+                io::ErrorKind::NotFound => HilError::QemuNotFound { program: options.qemu.clone() },
+                _ => HilError::Io { what: format!("start {}", options.qemu.display()), source: e },
+            })?;
+        let (_unused_tx, rx) = mpsc::channel();
+        let mut session = Self { qemu, exited: None, tx: None, rx, log_path, options: options.clone() };
+        let deadline = Instant::now() + options.start_timeout;
+        session.tx = Some(session.open_fifo(&h2f, true, deadline)?);
+        let from_fw = session.open_fifo(&f2h, false, deadline)?;
+        session.rx = spawn_reader(from_fw);
+
+        session.send(&Envelope::bare(Message::Config(*setup)))?;
+        match session.recv("ACK")? {
+            Envelope { message: Message::Ack(0), .. } => Ok(session),
+            Envelope { message: Message::Ack(code), .. } => Err(HilError::ConfigRefused { code }),
+            env => Err(unexpected(&env, "ACK")),
+        }
+    }
+
+    /// Sends one frame pair (`sequence`, `capture_time_us` as the board's `FrameInfo`) and
+    /// waits for the firmware's answer.
+    ///
+    /// # Errors
+    /// [`HilError::BadFrame`], or a failure of the link or QEMU.
+    pub fn step(&mut self, sequence: u32, capture_time_us: u64, frame: &Frame<'_>) -> Result<Reply, HilError> {
+        self.send(&Envelope { sequence, capture_time_us, message: Message::Frame(*frame) })?;
+        let env = self.recv("ESTIMATE")?;
+        match env.message {
+            Message::Estimate(e) if env.sequence == sequence => Ok(Reply::Estimate(e)),
+            Message::Rejected if env.sequence == sequence => Ok(Reply::Rejected),
+            _ => Err(unexpected(&env, "ESTIMATE or REJECTED for the frame just sent")),
+        }
+    }
+
+    /// Sends `END`, waits for `DONE` and for QEMU to exit with success.
+    ///
+    /// # Errors
+    /// A failure of the link, or QEMU exiting with failure ([`HilError::QemuExited`]).
+    pub fn finish(mut self) -> Result<Summary, HilError> {
+        self.send(&Envelope::bare(Message::End))?;
+        let done = match self.recv("DONE")? {
+            Envelope { message: Message::Done(d), .. } => d,
+            env => return Err(unexpected(&env, "DONE")),
+        };
+        self.tx = None;
+        let status = self.wait_exit(self.options.reply_timeout)?;
+        match status {
+            Some(s) if s.success() => Ok(Summary { done, log_path: self.log_path.clone() }),
+            Some(s) => Err(HilError::QemuExited { status: Some(s), log_tail: self.log_tail() }),
+            None => {
+                self.kill();
+                Err(HilError::Timeout {
+                    waiting_for: "exit after DONE",
+                    after: self.options.reply_timeout,
+                    log_tail: self.log_tail(),
+                })
+            }
+        }
+    }
+
+    /// QEMU's output file (the firmware's log).
+    pub fn log_path(&self) -> &Path {
+        &self.log_path
+    }
+
+    fn send(&mut self, env: &Envelope<'_>) -> Result<(), HilError> {
+        let mut bytes = IoLink(Vec::with_capacity(crate::protocol::encoded_len(&env.message)));
+        write_message(&mut bytes, env).map_err(|e| match e {
+            WriteError::ImageSize { expected, left, right } => HilError::BadFrame { expected, left, right },
+            WriteError::Link(e) => HilError::Io { what: "encode a message".to_string(), source: e },
+        })?;
+        let Some(tx) = self.tx.as_mut() else {
+            return Err(HilError::Io { what: "send".to_string(), source: io::ErrorKind::NotConnected.into() });
+        };
+        match tx.write_all(&bytes.0).and_then(|()| tx.flush()) {
+            Ok(()) => Ok(()),
+            // A broken pipe means QEMU went away: report that rather than the pipe.
+            Err(e) if e.kind() == io::ErrorKind::BrokenPipe => Err(self.link_closed()),
+            Err(e) => Err(HilError::Io { what: "write to the firmware FIFO".to_string(), source: e }),
+        }
+    }
+
+    fn recv(&mut self, waiting_for: &'static str) -> Result<Envelope<'static>, HilError> {
+        match self.rx.recv_timeout(self.options.reply_timeout) {
+            Ok(Ok(Envelope { message: Message::Error(code), .. })) => {
+                let _ = self.wait_exit(Duration::from_secs(5));
+                Err(HilError::Firmware { code, log_tail: self.log_tail() })
+            }
+            Ok(Ok(env)) => Ok(env),
+            Ok(Err(HilError::QemuExited { .. })) | Err(RecvTimeoutError::Disconnected) => Err(self.link_closed()),
+            Ok(Err(e)) => Err(e),
+            Err(RecvTimeoutError::Timeout) => {
+                self.kill();
+                Err(HilError::Timeout { waiting_for, after: self.options.reply_timeout, log_tail: self.log_tail() })
+            }
+        }
+    }
+
+    /// The link closed: wait a little for QEMU's exit status and report it.
+    fn link_closed(&mut self) -> HilError {
+        let status = self.wait_exit(Duration::from_secs(5)).ok().flatten();
+        HilError::QemuExited { status, log_tail: self.log_tail() }
+    }
+
+    /// Opens one FIFO end while watching QEMU; a blocked open is released by opening the FIFO
+    /// read-write ourselves (which never blocks on Linux).
+    fn open_fifo(&mut self, path: &Path, write: bool, deadline: Instant) -> Result<File, HilError> {
+        let (tx, rx) = mpsc::channel();
+        let p = path.to_path_buf();
+        let opener = thread::spawn(move || {
+            let _ = tx.send(OpenOptions::new().read(!write).write(write).open(&p));
+        });
+        loop {
+            match rx.recv_timeout(Duration::from_millis(20)) {
+                Ok(r) => {
+                    let _ = opener.join();
+                    return r.map_err(io_error(format!("open {}", path.display())));
+                }
+                Err(RecvTimeoutError::Disconnected) => {
+                    return Err(HilError::Io {
+                        what: format!("open {}", path.display()),
+                        source: io::Error::other("opener thread failed"),
+                    });
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+            }
+            let exited = self.try_exited()?;
+            let timed_out = Instant::now() > deadline;
+            if exited.is_some() || timed_out {
+                let _release = OpenOptions::new().read(true).write(true).open(path);
+                let _ = opener.join();
+                if timed_out && exited.is_none() {
+                    self.kill();
+                    return Err(HilError::Timeout {
+                        waiting_for: "link open",
+                        after: self.options.start_timeout,
+                        log_tail: self.log_tail(),
+                    });
+                }
+                return Err(HilError::QemuExited { status: exited, log_tail: self.log_tail() });
+            }
+        }
+    }
+
+    fn try_exited(&mut self) -> Result<Option<ExitStatus>, HilError> {
+        if self.exited.is_none() {
+            self.exited = self.qemu.try_wait().map_err(io_error("poll QEMU"))?;
+        }
+        Ok(self.exited)
+    }
+
+    /// Waits up to `limit` for QEMU to exit.
+    fn wait_exit(&mut self, limit: Duration) -> Result<Option<ExitStatus>, HilError> {
+        let deadline = Instant::now() + limit;
+        loop {
+            if let Some(s) = self.try_exited()? {
+                return Ok(Some(s));
+            }
+            if Instant::now() > deadline {
+                return Ok(None);
+            }
+            thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    fn kill(&mut self) {
+        if self.exited.is_none() {
+            let _ = self.qemu.kill();
+            self.exited = self.qemu.wait().ok();
+        }
+    }
+
+    /// The last lines of QEMU's log.
+    fn log_tail(&self) -> String {
+        let text = fs::read(&self.log_path).unwrap_or_default();
+        let start = text.len().saturating_sub(2000);
+        String::from_utf8_lossy(text.get(start..).unwrap_or_default()).into_owned()
+    }
+}
+
+impl Drop for HilSession {
+    fn drop(&mut self) {
+        self.tx = None;
+        self.kill();
+    }
+}
+
+fn unexpected(env: &Envelope<'_>, expected: &'static str) -> HilError {
+    HilError::Unexpected { got: env.message.kind(), sequence: env.sequence, expected }
+}
+
+/// Replaces whatever is at `path` with a fresh FIFO.
+fn make_fifo(path: &Path) -> Result<(), HilError> {
+    match fs::remove_file(path) {
+        Ok(()) => {}
+        Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+        Err(e) => return Err(HilError::Io { what: format!("remove {}", path.display()), source: e }),
+    }
+    let status =
+        Command::new("mkfifo").arg(path).status().map_err(io_error(format!("run mkfifo {}", path.display())))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(HilError::Io { what: format!("mkfifo {}", path.display()), source: io::Error::other(status.to_string()) })
+    }
+}
+
+/// Reads messages from the firmware until the link closes; each goes to the channel.
+fn spawn_reader(file: File) -> Receiver<Incoming> {
+    let (tx, rx) = mpsc::channel();
+    thread::spawn(move || {
+        let mut src = IoLink(BufReader::new(file));
+        loop {
+            let item = match read_message(&mut src, &mut [], &mut []) {
+                Ok(env) => match env.message.detach() {
+                    Some(message) => {
+                        Ok(Envelope { sequence: env.sequence, capture_time_us: env.capture_time_us, message })
+                    }
+                    None => {
+                        Err(HilError::Unexpected { got: MsgType::Frame, sequence: env.sequence, expected: "a reply" })
+                    }
+                },
+                Err(ReadError::Decode(e)) => Err(HilError::Protocol(e)),
+                // End of file (QEMU closed the FIFO) or a read error: the link is gone.
+                Err(ReadError::Link(_)) => Err(HilError::QemuExited { status: None, log_tail: String::new() }),
+            };
+            let stop = item.is_err();
+            if tx.send(item).is_err() || stop {
+                break;
+            }
+        }
+    });
+    rx
+}

@@ -1,0 +1,102 @@
+//! The evorec firmware (thumbv7em-none-eabihf, QEMU `mps2-an386`).
+//!
+//! At start the firmware opens the link FIFOs (see `evorec_firmware::rt`) and serves the host
+//! (`evorec_firmware::link_board::serve`): `CONFIG` → tracker, one generation per `FRAME`
+//! through the core's `board::run`, `END` → `DONE` with the stack high-water mark, then exits
+//! QEMU with success. Without a host (no FIFOs in QEMU's working directory) it tracks 30
+//! on-board synthetic frames instead, so `cargo run --release` shows it working.
+//!
+//! Built for the host, this binary only explains how to build the real one.
+#![cfg_attr(target_os = "none", no_std)]
+#![cfg_attr(target_os = "none", no_main)]
+#![deny(unsafe_code)]
+
+#[cfg(target_os = "none")]
+mod firmware {
+    use cortex_m_rt::entry;
+    use evorec_core::board;
+    use evorec_core::tracker::Feedforward;
+    use evorec_firmware::link_board::{self, StackUsage};
+    use evorec_firmware::protocol::Setup;
+    use evorec_firmware::{FirmwareTracker, rt, selftest, sys};
+    use static_cell::ConstStaticCell;
+
+    /// The tracker (a static, built from the host's `CONFIG`).
+    static TRACKER: ConstStaticCell<Option<FirmwareTracker>> = ConstStaticCell::new(None);
+
+    /// Frames of the demo mode.
+    const DEMO_FRAMES: u32 = 30;
+
+    fn report_stack() -> StackUsage {
+        let s = sys::stack_usage();
+        log::info!("stack high-water mark: {} of {} bytes", s.used_bytes, s.size_bytes);
+        s
+    }
+
+    #[entry]
+    fn main() -> ! {
+        rt::init_logger(log::LevelFilter::Info);
+        let (Some([left, right]), Some(slot)) = (rt::frame_buffers(), TRACKER.try_take()) else {
+            log::error!("static buffers taken twice");
+            rt::exit(false)
+        };
+        match rt::open_link() {
+            Ok((rx, tx)) => {
+                log::info!("link open");
+                match link_board::serve(rx, tx, slot, left, right, report_stack) {
+                    Ok(stats) => {
+                        log::info!(
+                            "END: {} frames, {} estimates, {} rejected",
+                            stats.frames,
+                            stats.published,
+                            stats.rejected
+                        );
+                        rt::exit(true)
+                    }
+                    Err(e) => {
+                        log::error!("stopped: {e}");
+                        rt::exit(false)
+                    }
+                }
+            }
+            Err(_) => {
+                log::info!("no host link ({:?} missing): demo on on-board synthetic frames", rt::HOST_TO_FIRMWARE);
+                rt::exit(demo(slot, left, right))
+            }
+        }
+    }
+
+    /// Tracks [`DEMO_FRAMES`] frames of [`selftest::SynthBoard`]; true on success.
+    fn demo(slot: &mut Option<FirmwareTracker>, left: &mut [u8], right: &mut [u8]) -> bool {
+        let Ok(config) = selftest::tracker_config() else { return false };
+        let Ok(setup) = Setup::from_tracker_config(&config, Feedforward::On, &selftest::START, &selftest::SPREAD)
+        else {
+            return false;
+        };
+        let Ok(tracker) = setup.build_tracker_in(slot) else { return false };
+        let Ok(mut camera) = selftest::SynthBoard::new(DEMO_FRAMES) else { return false };
+        match board::run(&mut camera, tracker, Feedforward::On, left, right, DEMO_FRAMES) {
+            Ok(stats) => {
+                log::info!("demo: {} frames, {} estimates", stats.frames, stats.published);
+                report_stack();
+                stats.published == DEMO_FRAMES
+            }
+            Err(e) => {
+                log::error!("demo: {e:?}");
+                false
+            }
+        }
+    }
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    println!(
+        "evorec-firmware runs on a Cortex-M4F (thumbv7em-none-eabihf), not on the host.\n\
+         Build it:        cd hil-stubs && cargo build --release\n\
+         Run it on QEMU:  cd hil-stubs && cargo run --release\n\
+         On-target tests: cd hil-stubs && cargo test --release --test on_target\n\
+         (needs `rustup target add thumbv7em-none-eabihf` and \
+         `apt-get update && apt-get install -y qemu-system-arm`)"
+    );
+}

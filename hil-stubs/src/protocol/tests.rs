@@ -1,0 +1,280 @@
+//! Round trips and rejection of corrupt input.
+
+use super::payload::decode_small;
+use super::payload::encode_payload;
+use super::*;
+use std::vec;
+use std::vec::Vec;
+
+pub(crate) fn sample_setup() -> Setup {
+    Setup {
+        fx: 200.0,
+        fy: 201.5,
+        cx: 80.0,
+        cy: 60.25,
+        width: 160,
+        height: 120,
+        baseline_m: 0.1,
+        block_size_m: [0.1, 0.15, 0.2],
+        face_hues_deg: [0.0, 120.0, 240.0, 0.0, 120.0, 240.0],
+        flange_to_camera_t: [0.0, 0.06, 0.1],
+        flange_to_camera_q: [0.998_750_26, 0.0, 0.0, 0.049_979_17],
+        search_min: [-0.2, -0.2, 0.4],
+        search_max: [0.2, 0.2, 1.0],
+        seed: 0x0123_4567_89AB_CDEF,
+        hue_tolerance: 5,
+        feedforward: Feedforward::On,
+        max_dt_s: 0.5,
+        ga: GaParams::DEFAULT,
+        initial_psi: Psi::new([0.01, -0.02, 0.7], [0.05, 0.1, -0.03]),
+        initial_spread: [0.02; 6],
+    }
+}
+
+fn encode(env: &Envelope<'_>) -> Vec<u8> {
+    let mut buf = vec![0u8; encoded_len(&env.message)];
+    let mut sink = SliceSink::new(&mut buf);
+    write_message(&mut sink, env).unwrap();
+    assert_eq!(sink.written().len(), buf.len());
+    buf
+}
+
+fn small_messages() -> Vec<Envelope<'static>> {
+    vec![
+        Envelope::bare(Message::Config(sample_setup())),
+        Envelope {
+            sequence: 41,
+            capture_time_us: 1_366_653,
+            message: Message::Estimate(Estimate {
+                psi: Psi::new([0.01, -0.02, 0.7], [f32::MIN_POSITIVE, -0.0, 1.0e-30]),
+                fitness: 0.875,
+                generation: 42,
+            }),
+        },
+        Envelope::bare(Message::End),
+        Envelope::bare(Message::Ack(4)),
+        Envelope { sequence: 7, capture_time_us: 99, message: Message::Rejected },
+        Envelope::bare(Message::Done(Done {
+            frames: 120,
+            published: 119,
+            rejected: 1,
+            stack_used_bytes: 5000,
+            stack_size_bytes: 80_000,
+        })),
+        Envelope::bare(Message::Error(2)),
+    ]
+}
+
+#[test]
+fn small_messages_round_trip() {
+    for env in small_messages() {
+        let bytes = encode(&env);
+        let (back, used) = decode(&bytes, &mut [], &mut []).unwrap();
+        assert_eq!(used, bytes.len());
+        assert_eq!(back, env);
+    }
+}
+
+#[test]
+fn payload_sizes_match_the_constants() {
+    assert_eq!(encode(&Envelope::bare(Message::Config(sample_setup()))).len(), HEADER_LEN + CONFIG_LEN + CRC_LEN);
+    assert_eq!(FRAME_FIXED_LEN, 68);
+    assert_eq!(ESTIMATE_LEN, 32);
+}
+
+#[test]
+fn nan_bits_cross_unchanged() {
+    let odd_nan = f32::from_bits(0x7FC0_1234);
+    let env = Envelope::bare(Message::Estimate(Estimate {
+        psi: Psi::new([odd_nan, 0.0, 0.0], [0.0; 3]),
+        fitness: f32::from_bits(0xFFA0_0001),
+        generation: 1,
+    }));
+    let bytes = encode(&env);
+    let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
+    let Message::Estimate(e) = back.message else { panic!("not an estimate") };
+    assert_eq!(e.psi.0[0].to_bits(), 0x7FC0_1234);
+    assert_eq!(e.fitness.to_bits(), 0xFFA0_0001);
+}
+
+fn frame_bytes(w: u16, h: u16) -> (Vec<u8>, Vec<u8>) {
+    let n = usize::from(w) * usize::from(h);
+    ((0..n).map(|i| (i % 181) as u8).collect(), (0..n).map(|i| (i % 7) as u8 + 60).collect())
+}
+
+fn joints() -> JointSample<DOF> {
+    JointSample { q: [0.1, -0.2, 0.3, 1.2, 0.0, -0.5, 2.0], qd: [0.05; DOF], time_us: 1234 }
+}
+
+#[test]
+fn frame_round_trip_into_receive_buffers() {
+    let (l, r) = frame_bytes(16, 9);
+    let env = Envelope {
+        sequence: 3,
+        capture_time_us: 100_000,
+        message: Message::Frame(Frame { width: 16, height: 9, joints: joints(), left: &l, right: &r }),
+    };
+    let bytes = encode(&env);
+    assert_eq!(bytes.len(), HEADER_LEN + FRAME_FIXED_LEN + 2 * 144 + CRC_LEN);
+    let (mut lb, mut rb) = ([0u8; 200], [0u8; 200]);
+    let (back, used) = decode(&bytes, &mut lb, &mut rb).unwrap();
+    assert_eq!(used, bytes.len());
+    assert_eq!(back, env);
+}
+
+#[test]
+fn frame_larger_than_buffers_is_refused() {
+    let (l, r) = frame_bytes(16, 9);
+    let env = Envelope::bare(Message::Frame(Frame { width: 16, height: 9, joints: joints(), left: &l, right: &r }));
+    let bytes = encode(&env);
+    let (mut lb, mut rb) = ([0u8; 143], [0u8; 200]);
+    assert_eq!(
+        decode(&bytes, &mut lb, &mut rb).unwrap_err(),
+        ReadError::Decode(DecodeError::FrameTooLarge { pixels: 144, capacity: 143 })
+    );
+}
+
+#[test]
+fn frame_with_wrong_image_slices_is_not_written() {
+    let (l, r) = frame_bytes(4, 4);
+    let env = Envelope::bare(Message::Frame(Frame { width: 4, height: 5, joints: joints(), left: &l, right: &r }));
+    let mut buf = [0u8; 512];
+    let mut sink = SliceSink::new(&mut buf);
+    assert!(matches!(write_message(&mut sink, &env), Err(WriteError::ImageSize { expected: 20, .. })));
+    assert!(sink.written().is_empty());
+}
+
+#[test]
+fn bad_magic_version_type_and_length_are_rejected() {
+    let good = encode(&Envelope::bare(Message::Ack(0)));
+    let mut b = good.clone();
+    b[0] = b'X';
+    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadMagic(*b"XVRC")));
+    let mut b = good.clone();
+    b[4] = 2;
+    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadVersion(2)));
+    let mut b = good.clone();
+    b[5] = 99;
+    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::UnknownType(99)));
+    let mut b = good.clone();
+    b[12] = 5;
+    assert_eq!(
+        decode(&b, &mut [], &mut []).unwrap_err(),
+        ReadError::Decode(DecodeError::BadLength { kind: MsgType::Ack, len: 5 })
+    );
+}
+
+#[test]
+fn bad_crc_is_rejected() {
+    let good = encode(&Envelope::bare(Message::Config(sample_setup())));
+    // A flipped payload bit, a flipped header bit that keeps the header valid, a bad trailer.
+    for pos in [HEADER_LEN + 10, 9, good.len() - 1] {
+        let mut b = good.clone();
+        b[pos] ^= 0x10;
+        assert!(
+            matches!(decode(&b, &mut [], &mut []), Err(ReadError::Decode(DecodeError::BadCrc { .. }))),
+            "flip at {pos}"
+        );
+    }
+}
+
+#[test]
+fn truncated_input_is_rejected() {
+    let (l, r) = frame_bytes(8, 8);
+    let env = Envelope::bare(Message::Frame(Frame { width: 8, height: 8, joints: joints(), left: &l, right: &r }));
+    let good = encode(&env);
+    for cut in [0, 1, HEADER_LEN - 1, HEADER_LEN, HEADER_LEN + 30, good.len() - 5, good.len() - 1] {
+        let (mut lb, mut rb) = ([0u8; 64], [0u8; 64]);
+        assert_eq!(decode(&good[..cut], &mut lb, &mut rb).unwrap_err(), ReadError::Link(Truncated), "cut {cut}");
+    }
+}
+
+#[test]
+fn bad_feedforward_flag_is_rejected() {
+    let mut payload = [0u8; MAX_SMALL_PAYLOAD];
+    let (len, _) = encode_payload(&Message::Config(sample_setup()), &mut payload);
+    // The feedforward flag sits after 30 f32 fields, the seed and the hue tolerance.
+    let ff = 4 * 4 + 2 * 2 + 4 + 12 + 24 + 12 + 16 + 12 + 12 + 8 + 1;
+    assert_eq!(payload[ff], 1);
+    payload[ff] = 2;
+    assert_eq!(decode_small(MsgType::Config, &payload[..len]), Err(DecodeError::BadValue));
+}
+
+#[test]
+fn stream_of_messages_decodes_in_order() {
+    let mut stream = Vec::new();
+    for env in small_messages() {
+        stream.extend(encode(&env));
+    }
+    let mut src = SliceSource::new(&stream);
+    for env in small_messages() {
+        assert_eq!(read_message(&mut src, &mut [], &mut []).unwrap(), env);
+    }
+    assert!(src.remaining().is_empty());
+}
+
+mod prop {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn any_f32() -> impl Strategy<Value = f32> {
+        any::<u32>().prop_map(f32::from_bits)
+    }
+
+    proptest! {
+        #[test]
+        fn estimate_round_trips_bit_exactly(
+            psi in proptest::array::uniform6(any_f32()),
+            fitness in any_f32(),
+            generation in any::<u32>(),
+            sequence in any::<u32>(),
+            time in any::<u64>(),
+        ) {
+            let env = Envelope {
+                sequence,
+                capture_time_us: time,
+                message: Message::Estimate(Estimate { psi: Psi(psi), fitness, generation }),
+            };
+            let bytes = encode(&env);
+            let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
+            let Message::Estimate(e) = back.message else { panic!("not an estimate") };
+            prop_assert_eq!(e.psi.0.map(f32::to_bits), psi.map(f32::to_bits));
+            prop_assert_eq!(e.fitness.to_bits(), fitness.to_bits());
+            prop_assert_eq!(e.generation, generation);
+            prop_assert_eq!((back.sequence, back.capture_time_us), (sequence, time));
+        }
+
+        #[test]
+        fn frames_round_trip(
+            w in 1u16..24, h in 1u16..24, seed in any::<u8>(),
+            q in proptest::array::uniform7(any_f32()), time in any::<u64>(),
+        ) {
+            let n = usize::from(w) * usize::from(h);
+            let l: Vec<u8> = (0..n).map(|i| (i as u8).wrapping_mul(seed)).collect();
+            let r: Vec<u8> = (0..n).map(|i| (i as u8) ^ seed).collect();
+            let joints = JointSample { q, qd: q, time_us: time };
+            let env = Envelope {
+                sequence: u32::from(seed),
+                capture_time_us: time,
+                message: Message::Frame(Frame { width: w, height: h, joints, left: &l, right: &r }),
+            };
+            let bytes = encode(&env);
+            let (mut lb, mut rb) = (vec![0u8; n], vec![0u8; n]);
+            let (back, _) = decode(&bytes, &mut lb, &mut rb).unwrap();
+            let Message::Frame(f) = back.message else { panic!("not a frame") };
+            prop_assert_eq!((f.width, f.height, f.left, f.right), (w, h, &l[..], &r[..]));
+            prop_assert_eq!(f.joints.q.map(f32::to_bits), q.map(f32::to_bits));
+        }
+
+        /// Any single flipped bit anywhere in a message is detected (as a bad header,
+        /// a length mismatch, a truncation or a CRC mismatch), never decoded as valid.
+        #[test]
+        fn any_single_bit_flip_is_rejected(which in 0usize..7, bit in any::<usize>()) {
+            let env = small_messages()[which];
+            let mut bytes = encode(&env);
+            let bit = bit % (bytes.len() * 8);
+            bytes[bit / 8] ^= 1 << (bit % 8);
+            prop_assert!(decode(&bytes, &mut [], &mut []).is_err());
+        }
+    }
+}

@@ -1,0 +1,180 @@
+//! One run of a scenario: the simulated board drives the core's tracker through the core's
+//! generic loop, exactly as the firmware does; the result is a trace and its summary
+//! (paper eq. 40–41).
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use evorec_core::board;
+use evorec_core::config::{DEFAULT_GRID, DEFAULT_POPULATION, PA10_DOF};
+use evorec_core::ga::SearchSpace;
+use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
+use serde::Serialize;
+
+use crate::scenario::{Method, Scenario};
+use crate::sim::{self, SimBoard, TraceRow, World};
+
+/// The tracker the simulator runs: PA-10, default population and sample rows.
+pub type SimTracker = Tracker<PA10_DOF, DEFAULT_POPULATION, DEFAULT_GRID>;
+
+/// Half-widths of the initial population around the known true pose at `t = 0` (the paper
+/// starts "with known initial target's pose"): 2 mm and 0.004 in ε.
+pub const INITIAL_SPREAD: [f32; 6] = [0.002, 0.002, 0.002, 0.004, 0.004, 0.004];
+
+/// The search space in `Σ_CR`: ±0.4 m laterally, 0.3–1.3 m deep.
+pub fn search_space() -> SearchSpace {
+    // The bounds are constants that satisfy the checks.
+    SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap_or_else(|e| unreachable!("{e}"))
+}
+
+/// The tracker configuration of a scenario.
+///
+/// # Errors
+/// Invalid camera settings.
+pub fn tracker_config(s: &Scenario) -> Result<TrackerConfig<PA10_DOF>> {
+    Ok(TrackerConfig::pa10(sim::rig(s)?, sim::block(s), sim::flange_to_camera(s), search_space()).with_seed(s.seed))
+}
+
+/// The feedforward switch of a method.
+pub fn feedforward(m: Method) -> Feedforward {
+    match m {
+        Method::Ga => Feedforward::Off,
+        Method::Ff => Feedforward::On,
+    }
+}
+
+/// Accuracy of a run (paper eq. 40–41): mean fitness and RMS errors over all frames.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Accuracy {
+    /// Mean fitness `F̄`.
+    #[serde(rename = "F_mean")]
+    pub f_mean: f64,
+    /// RMS error of x (mm).
+    pub rms_x_mm: f64,
+    /// RMS error of y (mm).
+    pub rms_y_mm: f64,
+    /// RMS error of z (mm).
+    pub rms_z_mm: f64,
+    /// RMS error of ε₁.
+    pub rms_e1: f64,
+    /// RMS error of ε₂.
+    pub rms_e2: f64,
+    /// RMS error of ε₃.
+    pub rms_e3: f64,
+    /// Frames.
+    pub frames: usize,
+}
+
+impl Accuracy {
+    /// Computes the summary of a trace.
+    pub fn of(rows: &[TraceRow]) -> Self {
+        let n = rows.len().max(1) as f64;
+        let mut sq = [0.0f64; 6];
+        let mut f = 0.0;
+        for r in rows {
+            f += f64::from(r.fitness);
+            for (acc, (e, t)) in sq.iter_mut().zip(r.estimate.0.iter().zip(r.truth.0.iter())) {
+                let d = f64::from(*e) - f64::from(*t);
+                *acc += d * d;
+            }
+        }
+        let rms = sq.map(|s| (s / n).sqrt());
+        Self {
+            f_mean: f / n,
+            rms_x_mm: rms[0] * 1e3,
+            rms_y_mm: rms[1] * 1e3,
+            rms_z_mm: rms[2] * 1e3,
+            rms_e1: rms[3],
+            rms_e2: rms[4],
+            rms_e3: rms[5],
+            frames: rows.len(),
+        }
+    }
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// The accuracy figures, flattened into the top level.
+    #[serde(flatten)]
+    pub accuracy: Accuracy,
+    /// Frames refused by the tracker (should be 0).
+    pub rejected: u32,
+    /// The scenario, echoed.
+    pub scenario: Scenario,
+    /// Version of the simulator that produced the run.
+    pub evorec_version: &'static str,
+}
+
+/// The outcome of a run.
+#[derive(Debug, Clone)]
+pub struct RunOutput {
+    /// One row per frame.
+    pub rows: Vec<TraceRow>,
+    /// The summary.
+    pub summary: Summary,
+}
+
+/// Runs a scenario through the simulated board. `on_frame` is called after every frame (for
+/// progress bars).
+///
+/// # Errors
+/// If the world or the tracker cannot be built.
+pub fn run(s: &Scenario, mut on_frame: impl FnMut()) -> Result<RunOutput> {
+    let world = World::new(s)?;
+    let truth0 = world.truth();
+    let mut tracker = SimTracker::new(tracker_config(s)?).map_err(|e| anyhow::anyhow!("tracker: {e}"))?;
+    tracker.reset_around(&truth0, &INITIAL_SPREAD).map_err(|e| anyhow::anyhow!("initial pose: {e}"))?;
+    let mut board = ProgressBoard { inner: SimBoard::new(world), on_frame: &mut on_frame };
+    let n = usize::from(s.camera.width) * usize::from(s.camera.height);
+    let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
+    let stats = board::run(&mut board, &mut tracker, feedforward(s.method), &mut left, &mut right, u32::MAX)
+        .map_err(|e| anyhow::anyhow!("simulated board: {e:?}"))?;
+    let rows = board.inner.into_rows();
+    let summary = Summary {
+        accuracy: Accuracy::of(&rows),
+        rejected: stats.rejected,
+        scenario: *s,
+        evorec_version: env!("CARGO_PKG_VERSION"),
+    };
+    Ok(RunOutput { rows, summary })
+}
+
+/// Wraps the board to report each delivered frame.
+struct ProgressBoard<'a, F: FnMut()> {
+    inner: SimBoard,
+    on_frame: &'a mut F,
+}
+
+impl<F: FnMut()> board::ErrorType for ProgressBoard<'_, F> {
+    type Error = sim::SimError;
+}
+
+impl<F: FnMut()> board::CameraController<PA10_DOF> for ProgressBoard<'_, F> {
+    fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<board::FrameInfo, sim::SimError> {
+        let r = self.inner.next_frame(left, right);
+        if r.is_ok() {
+            (self.on_frame)();
+        }
+        r
+    }
+    fn joint_sample(&mut self) -> Result<evorec_core::JointSample<PA10_DOF>, sim::SimError> {
+        self.inner.joint_sample()
+    }
+    fn publish(&mut self, frame: &board::FrameInfo, estimate: &evorec_core::Estimate) -> Result<(), sim::SimError> {
+        self.inner.publish(frame, estimate)
+    }
+}
+
+/// Writes `trace.csv`, `summary.json` and the plots of a run into `dir`.
+///
+/// # Errors
+/// I/O errors.
+pub fn write_outputs(out: &RunOutput, dir: &Path, title: &str) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let trace = dir.join("trace.csv");
+    crate::io::write_trace(&trace, &out.rows)?;
+    crate::io::write_json(&dir.join("summary.json"), &out.summary)?;
+    crate::plot::plot_trace(&trace, dir, title)?;
+    Ok(())
+}

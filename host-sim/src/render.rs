@@ -1,0 +1,779 @@
+//! Stereo renderer for the simulator: an RGB picture of the coloured block, then its hue image
+//! through the core's own [`rgb_to_hue`].
+//!
+//! Unlike the core's exact pixel-centre rasterizer ([`evorec_core::synth::render_block`]) this
+//! one aims at what a camera delivers:
+//!
+//! - each face is its fully saturated hue, Lambert-shaded by a fixed light in the camera frame
+//!   plus ambient light, so faces of equal hue differ in brightness but not in hue;
+//! - the background is a neutral grey with a mild low-frequency brightness variation (it has
+//!   no hue);
+//! - edges are anti-aliased (exact area coverage or `n × n` supersampling), so a sub-pixel
+//!   change of the pose changes the image; pixels whose whole square lies inside one face or
+//!   outside every face take a fast path;
+//! - optional per-channel noise (a sum of four uniform 4-bit values, scaled to the requested
+//!   standard deviation: close to Gaussian, truncated at ±3.25σ), clamped to `0..=255`.
+//!
+//! Only faces turned towards the camera are drawn; the block is convex, so their projections
+//! do not overlap and no z-buffer is needed. Faces with a corner closer than
+//! [`MIN_DEPTH_M`] to the camera plane (or behind it) are skipped.
+//!
+//! Pixel conventions are the core's (OpenCV's): pixel `(i, j)` covers `[i, i+1) × [j, j+1)`.
+
+use evorec_core::camera::{Pinhole, StereoRig};
+use evorec_core::config::MIN_DEPTH_M;
+use evorec_core::hue::rgb_to_hue;
+use evorec_core::model::{Block, FACES};
+use image::{Rgb, RgbImage};
+use nalgebra::{Isometry3, Point2, Vector3};
+use rand_core::Rng;
+
+/// Half the diagonal of a pixel: a pixel whose centre is farther than this from a line lies
+/// entirely on one side of it.
+const HALF_DIAGONAL: f32 = 0.707_2;
+
+/// How edge pixels are anti-aliased.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AntiAlias {
+    /// One sample at the pixel centre (aliased, like the core's `synth` rasterizer).
+    Off,
+    /// A regular `n × n` grid of samples in each edge pixel (`n` is clamped to `1..=16`).
+    Supersample(u8),
+    /// Exact area of each face inside the pixel square (analytic polygon clipping).
+    Exact,
+}
+
+/// Rendering options.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RenderOptions {
+    /// Anti-aliasing of edge pixels.
+    pub antialias: AntiAlias,
+    /// Standard deviation of the per-channel noise in 8-bit levels (`0` = none).
+    pub noise_std: f32,
+    /// Direction from the surface **towards** the light, in the camera frame (need not be
+    /// normalised). The default comes from the upper left, in front of the block.
+    pub light_dir_cam: [f32; 3],
+    /// Ambient brightness (0..=1) a face has when the light does not reach it. Keep it above
+    /// about 0.16 so that unlit faces stay bright enough to have a hue.
+    pub ambient: f32,
+    /// Diffuse (Lambert) brightness added for a face turned straight at the light.
+    pub diffuse: f32,
+    /// Mean grey level of the background (8-bit).
+    pub background_level: f32,
+    /// Amplitude (8-bit levels) of the background's low-frequency brightness variation.
+    pub background_variation: f32,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            antialias: AntiAlias::Exact,
+            noise_std: 0.0,
+            light_dir_cam: [-0.4, -0.6, -1.0],
+            ambient: 0.35,
+            diffuse: 0.65,
+            background_level: 140.0,
+            background_variation: 12.0,
+        }
+    }
+}
+
+impl RenderOptions {
+    /// These options with per-channel noise of standard deviation `std` (8-bit levels).
+    pub fn with_noise(self, std: f32) -> Self {
+        Self { noise_std: std, ..self }
+    }
+
+    /// These options with the given anti-aliasing.
+    pub fn with_antialias(self, antialias: AntiAlias) -> Self {
+        Self { antialias, ..self }
+    }
+}
+
+/// A pair of RGB frames from a stereo rig.
+#[derive(Debug, Clone)]
+pub struct StereoImages {
+    /// Left camera image.
+    pub left: RgbImage,
+    /// Right camera image (its frame `Σ_CR` is the one poses are given in).
+    pub right: RgbImage,
+}
+
+/// The projection of one visible face: four edge lines with unit normals, positive inside.
+#[derive(Debug, Clone, Copy)]
+struct ScreenFace {
+    /// `[a, b, c]` with `a·u + b·v + c` the signed distance (pixels) of `(u, v)` from the edge.
+    edges: [[f32; 3]; 4],
+    /// Bounding box `[u0, v0, u1, v1]` (continuous pixel coordinates).
+    bbox: [f32; 4],
+    /// Shaded face colour, 8-bit scale.
+    colour: [f32; 3],
+}
+
+impl ScreenFace {
+    /// The pixel columns `[lo, hi)` (clamped to `0..width`) of the row whose centres lie at
+    /// height `v` and whose centres are at least `t` (signed) from every edge.
+    fn row_span(&self, v: f32, t: f32, width: usize) -> (usize, usize) {
+        let (mut lo, mut hi) = (f32::NEG_INFINITY, f32::INFINITY);
+        for &[a, b, c] in &self.edges {
+            let need = t - (b * v + c); // a·u ≥ need
+            if a > 0.0 {
+                lo = lo.max(need / a);
+            } else if a < 0.0 {
+                hi = hi.min(need / a);
+            } else if need > 0.0 {
+                return (0, 0);
+            }
+        }
+        // Column x has its centre at x + ½.
+        let wf = width as f32;
+        let first = (lo - 0.5).ceil().clamp(0.0, wf) as usize;
+        let end = ((hi - 0.5).floor() + 1.0).clamp(0.0, wf) as usize;
+        (first, end.max(first))
+    }
+
+    /// Signed distances of the point `(u, v)` from the four edges.
+    #[inline(always)]
+    fn distances(&self, u: f32, v: f32) -> [f32; 4] {
+        self.edges.map(|[a, b, c]| a * u + b * v + c)
+    }
+}
+
+/// Fully saturated, full-value RGB (0..=1) of a hue in degrees.
+fn hue_rgb(deg: f32) -> [f32; 3] {
+    let h = deg.rem_euclid(360.0) / 60.0;
+    // `rem_euclid` can round a tiny negative angle up to exactly 360°.
+    let h = if h >= 6.0 { 0.0 } else { h };
+    let f = h - h.floor();
+    match h as u32 {
+        0 => [1.0, f, 0.0],
+        1 => [1.0 - f, 1.0, 0.0],
+        2 => [0.0, 1.0, f],
+        3 => [0.0, 1.0 - f, 1.0],
+        4 => [f, 0.0, 1.0],
+        _ => [1.0, 0.0, 1.0 - f],
+    }
+}
+
+/// Projects the camera-facing faces of `block` at `cam_from_model` into the image of `cam`.
+fn screen_faces(
+    cam: &Pinhole,
+    cam_from_model: &Isometry3<f32>,
+    block: &Block,
+    opts: &RenderOptions,
+) -> Vec<ScreenFace> {
+    let light = Vector3::from(opts.light_dir_cam);
+    let light = if light.norm() > 0.0 && light.iter().all(|c| c.is_finite()) {
+        light.normalize()
+    } else {
+        Vector3::new(0.0, 0.0, -1.0)
+    };
+    let mut faces = Vec::with_capacity(3);
+    for k in 0..FACES {
+        let normal = cam_from_model.rotation * Block::normal(k);
+        let corners = block.face_corners(k).map(|c| cam_from_model * c);
+        let too_close = corners.iter().any(|c| c.z.is_nan() || c.z < MIN_DEPTH_M);
+        if too_close || normal.dot(&corners[0].coords) >= 0.0 {
+            continue; // back-facing (or NaN), or too close to / behind the camera plane
+        }
+        let mut quad = [Point2::origin(); 4];
+        let mut ok = true;
+        for (q, c) in quad.iter_mut().zip(&corners) {
+            match cam.project_unbounded(c) {
+                Ok(p) => *q = p,
+                Err(_) => ok = false,
+            }
+        }
+        if !ok {
+            continue;
+        }
+        // Twice the signed area: its sign tells which side of each edge is inside.
+        let area2: f32 = (0..4)
+            .map(|i| {
+                let (p, q) = (quad[i], quad[(i + 1) % 4]);
+                p.x * q.y - q.x * p.y
+            })
+            .sum();
+        if !area2.is_finite() || area2.abs() <= 1e-6 {
+            continue; // seen edge-on, or absurdly far off-screen
+        }
+        let s = area2.signum();
+        let mut edges = [[0.0, 0.0, 1.0e9]; 4];
+        for (i, e) in edges.iter_mut().enumerate() {
+            let (p, q) = (quad[i], quad[(i + 1) % 4]);
+            let d = q - p;
+            let len = d.norm();
+            if len > 1e-9 {
+                let (a, b) = (-d.y * s / len, d.x * s / len);
+                *e = [a, b, -(a * p.x + b * p.y)];
+            }
+        }
+        let mut bbox = [f32::MAX, f32::MAX, f32::MIN, f32::MIN];
+        for p in &quad {
+            bbox = [bbox[0].min(p.x), bbox[1].min(p.y), bbox[2].max(p.x), bbox[3].max(p.y)];
+        }
+        let lambert = normal.dot(&light).max(0.0);
+        let shade = (opts.ambient + opts.diffuse * lambert).clamp(0.0, 1.0) * 255.0;
+        let base = hue_rgb(block.face_hues_deg[k]);
+        faces.push(ScreenFace { edges, bbox, colour: base.map(|c| c * shade) });
+    }
+    faces
+}
+
+/// Area of the part of the pixel square `[-½, ½]²` (pixel-local coordinates) on the positive
+/// side of all `lines` (`[a, b, e]`: `a·u + b·v + e ≥ 0`).
+fn clipped_square_area(lines: &[[f32; 3]; 4]) -> f32 {
+    let mut poly = [(0.0f32, 0.0f32); 10];
+    let mut next = [(0.0f32, 0.0f32); 10];
+    poly[..4].copy_from_slice(&[(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)]);
+    let mut n = 4usize;
+    for &[a, b, e] in lines {
+        if e >= HALF_DIAGONAL {
+            continue; // the whole square is inside this edge
+        }
+        if e <= -HALF_DIAGONAL {
+            return 0.0;
+        }
+        let mut m = 0usize;
+        for i in 0..n {
+            let (p, q) = (poly[i], poly[(i + 1) % n]);
+            let dp = a * p.0 + b * p.1 + e;
+            let dq = a * q.0 + b * q.1 + e;
+            if dp >= 0.0 && m < next.len() {
+                next[m] = p;
+                m += 1;
+            }
+            if (dp >= 0.0) != (dq >= 0.0) && m < next.len() {
+                let t = dp / (dp - dq);
+                next[m] = (p.0 + t * (q.0 - p.0), p.1 + t * (q.1 - p.1));
+                m += 1;
+            }
+        }
+        if m < 3 {
+            return 0.0;
+        }
+        poly[..m].copy_from_slice(&next[..m]);
+        n = m;
+    }
+    let mut area2 = 0.0;
+    for i in 0..n {
+        let (p, q) = (poly[i], poly[(i + 1) % n]);
+        area2 += p.0 * q.1 - q.0 * p.1;
+    }
+    (0.5 * area2).abs()
+}
+
+/// Per-column and per-row offsets of the background grey (a smooth, separable variation).
+fn background_tables(width: u32, height: u32, opts: &RenderOptions) -> (Vec<f32>, Vec<f32>) {
+    use std::f32::consts::TAU;
+    let amp = if opts.background_variation.is_finite() { opts.background_variation } else { 0.0 };
+    let level = if opts.background_level.is_finite() { opts.background_level } else { 140.0 };
+    let (w, h) = (width.max(1) as f32, height.max(1) as f32);
+    let cols = (0..width).map(|x| level + 0.6 * amp * (TAU * 0.8 * (x as f32 + 0.5) / w + 0.7).sin()).collect();
+    let rows = (0..height).map(|y| 0.4 * amp * (TAU * 0.6 * (y as f32 + 0.5) / h + 0.3).cos()).collect();
+    (cols, rows)
+}
+
+#[inline(always)]
+fn to_u8(v: f32) -> u8 {
+    // `as` saturates and maps NaN to 0.
+    (v + 0.5) as u8
+}
+
+/// Renders the block as seen by `cam`.
+///
+/// `cam_from_model` is the block's pose in this camera's frame; `rng` drives the noise only
+/// (it is not touched when `opts.noise_std` is 0). Never panics: a pose with non-finite
+/// values, or a block behind the camera, gives the background alone.
+pub fn render<R: Rng + ?Sized>(
+    cam: &Pinhole,
+    cam_from_model: &Isometry3<f32>,
+    block: &Block,
+    opts: &RenderOptions,
+    rng: &mut R,
+) -> RgbImage {
+    let (width, height) = (u32::from(cam.width()), u32::from(cam.height()));
+    let (w, h) = (width as usize, height as usize);
+    let (cols, rows) = background_tables(width, height, opts);
+    let mut buf = vec![0u8; w * h * 3];
+    for (row, &dy) in buf.chunks_exact_mut(w * 3).zip(&rows) {
+        for (px, &cx) in row.chunks_exact_mut(3).zip(&cols) {
+            px.fill(to_u8(cx + dy));
+        }
+    }
+
+    let faces = screen_faces(cam, cam_from_model, block, opts);
+    if !faces.is_empty() {
+        let mut bbox = [f32::MAX, f32::MAX, f32::MIN, f32::MIN];
+        for f in &faces {
+            bbox = [bbox[0].min(f.bbox[0]), bbox[1].min(f.bbox[1]), bbox[2].max(f.bbox[2]), bbox[3].max(f.bbox[3])];
+        }
+        let clamp_to = |v: f32, hi: usize| v.clamp(0.0, hi as f32) as usize;
+        let (x0, x1) = (clamp_to(bbox[0].floor() - 1.0, w), clamp_to(bbox[2].ceil() + 1.0, w));
+        let (y0, y1) = (clamp_to(bbox[1].floor() - 1.0, h), clamp_to(bbox[3].ceil() + 1.0, h));
+        let colours: Vec<[u8; 3]> = faces.iter().map(|f| f.colour.map(to_u8)).collect();
+        let n_faces = faces.len().min(3);
+        let lines = buf.chunks_exact_mut(w * 3).zip(&rows).enumerate().take(y1).skip(y0);
+        for (y, (line, &row_off)) in lines {
+            let v = y as f32 + 0.5;
+            // Per face: the columns fully inside it, and those not fully outside it.
+            let (mut inner, mut touched) = ([(0usize, 0usize); 3], [(0usize, 0usize); 3]);
+            let (mut lo, mut hi) = (x1, x0);
+            for (k, f) in faces.iter().enumerate().take(3) {
+                inner[k] = f.row_span(v, HALF_DIAGONAL, w);
+                touched[k] = f.row_span(v, -HALF_DIAGONAL, w);
+                if touched[k].0 < touched[k].1 {
+                    lo = lo.min(touched[k].0);
+                    hi = hi.max(touched[k].1);
+                }
+            }
+            let within = |x: usize, (a, b): (usize, usize)| a <= x && x < b;
+            for (x, (px, &col)) in line.chunks_exact_mut(3).zip(&cols).enumerate().take(hi).skip(lo) {
+                if let Some(k) = (0..n_faces).find(|&k| within(x, inner[k])) {
+                    px.copy_from_slice(&colours[k]);
+                } else if (0..n_faces).any(|k| within(x, touched[k])) {
+                    shade_pixel(&faces, &colours, x as f32 + 0.5, v, col + row_off, opts.antialias, px);
+                }
+            }
+        }
+    }
+
+    if opts.noise_std.is_finite() && opts.noise_std > 0.0 {
+        add_noise(&mut buf, opts.noise_std, rng);
+    }
+    // The buffer has exactly width·height·3 bytes, so this cannot fail; fall back to a blank
+    // image rather than panicking.
+    RgbImage::from_raw(width, height, buf).unwrap_or_else(|| RgbImage::new(width, height))
+}
+
+/// Colours one pixel (centre `(u, v)`, background grey `bg`) inside the silhouette's box.
+#[inline(always)]
+fn shade_pixel(faces: &[ScreenFace], colours: &[[u8; 3]], u: f32, v: f32, bg: f32, aa: AntiAlias, px: &mut [u8]) {
+    let mut dist = [[0.0f32; 4]; 3];
+    let mut any_edge = false;
+    for (k, f) in faces.iter().enumerate().take(3) {
+        let d = f.distances(u, v);
+        let dmin = d[0].min(d[1]).min(d[2]).min(d[3]);
+        if dmin >= HALF_DIAGONAL {
+            px.copy_from_slice(&colours[k]);
+            return; // fully inside face k
+        }
+        any_edge |= dmin > -HALF_DIAGONAL;
+        dist[k] = d;
+    }
+    if !any_edge {
+        return; // fully outside every face: background stays
+    }
+    let n_faces = faces.len().min(3);
+    let mut cover = [0.0f32; 3];
+    match aa {
+        AntiAlias::Off => {
+            if let Some(k) = (0..n_faces).find(|&k| dist[k].iter().all(|&d| d >= 0.0)) {
+                cover[k] = 1.0;
+            }
+        }
+        AntiAlias::Supersample(n) => {
+            let n = n.clamp(1, 16);
+            let step = 1.0 / f32::from(n);
+            let weight = step * step;
+            for sy in 0..n {
+                let dv = (f32::from(sy) + 0.5) * step - 0.5;
+                for sx in 0..n {
+                    let du = (f32::from(sx) + 0.5) * step - 0.5;
+                    for k in 0..n_faces {
+                        let inside =
+                            faces[k].edges.iter().zip(&dist[k]).all(|(&[a, b, _], &d)| d + a * du + b * dv >= 0.0);
+                        if inside {
+                            cover[k] += weight;
+                            break;
+                        }
+                    }
+                }
+            }
+        }
+        AntiAlias::Exact => {
+            for k in 0..n_faces {
+                let [a0, a1, a2, a3] = faces[k].edges;
+                let [d0, d1, d2, d3] = dist[k];
+                let lines = [[a0[0], a0[1], d0], [a1[0], a1[1], d1], [a2[0], a2[1], d2], [a3[0], a3[1], d3]];
+                cover[k] = clipped_square_area(&lines);
+            }
+        }
+    }
+    let total: f32 = cover.iter().sum();
+    let scale = if total > 1.0 { 1.0 / total } else { 1.0 };
+    let bg_weight = (1.0 - total * scale).max(0.0);
+    for (c, out) in px.iter_mut().enumerate() {
+        let mut acc = bg * bg_weight;
+        for k in 0..n_faces {
+            acc += cover[k] * scale * faces[k].colour[c];
+        }
+        *out = to_u8(acc);
+    }
+}
+
+/// Adds per-channel noise of standard deviation `std` (8-bit levels), clamped.
+///
+/// Each sample is a sum of four uniform random 4-bit values (Irwin–Hall: mean 30, variance
+/// 4·255/12 = 85), mapped through a table to `round(std · z)`, so one `u64` gives four samples
+/// (the generator is the main cost). The shape is close to Gaussian, truncated at ±3.25σ.
+fn add_noise<R: Rng + ?Sized>(buf: &mut [u8], std: f32, rng: &mut R) {
+    const SUM_MEAN: f32 = 30.0;
+    const SUM_STD: f32 = 9.219_544; // √85
+    const NIBBLES: u64 = 0x0F0F_0F0F_0F0F_0F0F;
+    const BYTES: u64 = 0x00FF_00FF_00FF_00FF;
+    let mut table = [0i16; 64];
+    for (s, t) in table.iter_mut().enumerate().take(61) {
+        let z = (s as f32 - SUM_MEAN) / SUM_STD;
+        *t = (std * z).round().clamp(-512.0, 512.0) as i16;
+    }
+    // Noise is drawn into a block buffer first, so that adding it vectorises.
+    let mut noise = [0i16; 2048];
+    for chunk in buf.chunks_mut(noise.len()) {
+        for quad in noise[..chunk.len().next_multiple_of(4)].chunks_exact_mut(4) {
+            let x = rng.next_u64();
+            // Eight byte lanes of two nibbles each, then four 16-bit lanes of four nibbles.
+            let s8 = (x & NIBBLES) + ((x >> 4) & NIBBLES);
+            let s16 = (s8 & BYTES) + ((s8 >> 8) & BYTES);
+            for (i, n) in quad.iter_mut().enumerate() {
+                // Each lane sum is ≤ 60, so the mask keeps it inside the table.
+                *n = table[((s16 >> (16 * i)) & 0x3F) as usize];
+            }
+        }
+        for (b, &n) in chunk.iter_mut().zip(&noise) {
+            *b = (i16::from(*b) + n).clamp(0, 255) as u8;
+        }
+    }
+}
+
+/// Renders both images of a stereo rig; `cr_from_model` is the block's pose in the right
+/// camera frame `Σ_CR`. The right image is rendered first, then the left, from the same `rng`.
+pub fn render_stereo<R: Rng + ?Sized>(
+    rig: &StereoRig,
+    cr_from_model: &Isometry3<f32>,
+    block: &Block,
+    opts: &RenderOptions,
+    rng: &mut R,
+) -> StereoImages {
+    let right = render(&rig.right, cr_from_model, block, opts, rng);
+    let left = render(&rig.left, &(rig.left_from_right * cr_from_model), block, opts, rng);
+    StereoImages { left, right }
+}
+
+/// The hue image of `img` (row-major, one byte per pixel), converted pixel by pixel with the
+/// core's [`rgb_to_hue`], so the simulator sees exactly what the board would compute.
+pub fn hue_image(img: &RgbImage) -> Vec<u8> {
+    img.as_raw().chunks_exact(3).map(|p| rgb_to_hue(p[0], p[1], p[2])).collect()
+}
+
+/// Draws a small `+` mark (3 × 3 pixels) of `colour` at each point given in continuous pixel
+/// coordinates (pixel `(i, j)` covers `[i, i+1) × [j, j+1)`); points outside the image or not
+/// finite are skipped, marks are clipped at the border. Used to overlay the projected search
+/// model on a frame (the paper's Fig. 4).
+pub fn draw_points(img: &mut RgbImage, points: &[(f32, f32)], colour: [u8; 3]) {
+    let (w, h) = (img.width() as f32, img.height() as f32);
+    for &(u, v) in points {
+        if !((0.0..w).contains(&u) && (0.0..h).contains(&v)) {
+            continue;
+        }
+        let (x, y) = (u as i64, v as i64);
+        for (dx, dy) in [(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)] {
+            let (Ok(px), Ok(py)) = (u32::try_from(x + dx), u32::try_from(y + dy)) else { continue };
+            if px < img.width() && py < img.height() {
+                img.put_pixel(px, py, Rgb(colour));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+mod tests {
+    use super::*;
+    use evorec_core::config::NO_HUE;
+    use evorec_core::hue::{degrees_to_units, hue_distance};
+    use evorec_core::synth;
+    use rand_core::SeedableRng;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+
+    fn cam() -> Pinhole {
+        Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, 640, 480).unwrap()
+    }
+
+    fn pose() -> Isometry3<f32> {
+        // Three faces visible, ~0.7 m ahead.
+        Isometry3::new(Vector3::new(0.02, -0.01, 0.7), Vector3::new(0.5, -0.6, 0.3))
+    }
+
+    fn rng() -> Xoshiro256PlusPlus {
+        Xoshiro256PlusPlus::seed_from_u64(7)
+    }
+
+    /// Smallest signed distance of pixel `(x, y)`'s centre to face `k`'s edges.
+    fn dmin(f: &ScreenFace, x: u32, y: u32) -> f32 {
+        let d = f.distances(x as f32 + 0.5, y as f32 + 0.5);
+        d[0].min(d[1]).min(d[2]).min(d[3])
+    }
+
+    #[test]
+    fn ideal_image_has_face_hues_inside_and_no_hue_outside() {
+        let odd = Block { face_hues_deg: [30.0, 200.0, 300.0, 30.0, 200.0, 300.0], ..Block::PAPER };
+        for (block, tol) in [(Block::PAPER, 0u8), (odd, 1u8)] {
+            for aa in [AntiAlias::Exact, AntiAlias::Supersample(4), AntiAlias::Off] {
+                let opts = RenderOptions::default().with_antialias(aa);
+                let img = render(&cam(), &pose(), &block, &opts, &mut rng());
+                let hue = hue_image(&img);
+                let faces = screen_faces(&cam(), &pose(), &block, &opts);
+                // The model faces behind the screen faces, in the same order.
+                let p = pose();
+                let visible: Vec<usize> = (0..FACES)
+                    .filter(|&k| (p.rotation * Block::normal(k)).dot(&(p * block.face_corners(k)[0]).coords) < 0.0)
+                    .collect();
+                assert_eq!((faces.len(), visible.len()), (3, 3));
+                let (mut inside, mut outside) = (0, 0);
+                for y in 0..480 {
+                    for x in 0..640 {
+                        let hv = hue[(y * 640 + x) as usize];
+                        let d: Vec<f32> = faces.iter().map(|f| dmin(f, x, y)).collect();
+                        if let Some(k) = d.iter().position(|&d| d >= 1.5) {
+                            let deg = block.face_hues_deg[visible[k]];
+                            assert!(
+                                hv != NO_HUE && hue_distance(hv, degrees_to_units(deg)) <= tol,
+                                "{aa:?} pixel {x},{y}: hue {hv}, face {deg}°"
+                            );
+                            inside += 1;
+                        } else if d.iter().all(|&d| d <= -1.0) {
+                            assert_eq!(hv, NO_HUE, "{aa:?} background pixel {x},{y}");
+                            outside += 1;
+                        }
+                    }
+                }
+                assert!(inside > 20_000 && outside > 200_000, "{inside} {outside}");
+            }
+        }
+    }
+
+    #[test]
+    fn hue_colours_round_trip() {
+        for deg in [-1e-6f32, 0.0, 30.0, 59.9, 60.0, 120.0, 180.0, 240.0, 300.0, 359.0, 360.0, 720.0 + 200.0] {
+            let c = hue_rgb(deg).map(|v| to_u8(v * 200.0));
+            let h = rgb_to_hue(c[0], c[1], c[2]);
+            assert!(hue_distance(h, degrees_to_units(deg)) <= 1, "{deg}° -> {c:?} -> {h}");
+        }
+    }
+
+    #[test]
+    fn faces_of_equal_hue_differ_in_brightness() {
+        let faces = screen_faces(&cam(), &pose(), &Block::PAPER, &RenderOptions::default());
+        let max: Vec<f32> = faces.iter().map(|f| f.colour.iter().copied().fold(0.0, f32::max)).collect();
+        assert!(max.iter().all(|&m| m >= 60.0), "{max:?}");
+        assert!((max[0] - max[1]).abs() > 1.0 || (max[1] - max[2]).abs() > 1.0);
+    }
+
+    /// Pixels whose 3 × 3 neighbourhood in `img` is uniform.
+    fn interior(img: &[u8], w: usize, h: usize) -> Vec<usize> {
+        let mut out = Vec::new();
+        for y in 1..h - 1 {
+            for x in 1..w - 1 {
+                let c = img[y * w + x];
+                if (0..9).all(|n| img[(y + n / 3 - 1) * w + x + n % 3 - 1] == c) {
+                    out.push(y * w + x);
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn agrees_with_the_core_rasterizer_away_from_edges() {
+        let poses = [
+            pose(),
+            Isometry3::new(Vector3::new(-0.05, 0.03, 0.9), Vector3::new(-0.3, 0.2, 1.2)),
+            Isometry3::new(Vector3::new(0.0, 0.0, 0.5), Vector3::new(0.0, 0.0, 0.0)),
+        ];
+        for p in &poses {
+            let mut exact = vec![NO_HUE; 640 * 480];
+            synth::render_block(&Block::PAPER, &cam(), p, &mut exact).unwrap();
+            let idx = interior(&exact, 640, 480);
+            let face_px = idx.iter().filter(|&&i| exact[i] != NO_HUE).count();
+            assert!(face_px > 10_000);
+            for (noise, tol) in [(0.0, 0u8), (3.0, 5u8)] {
+                let opts = RenderOptions::default().with_noise(noise);
+                let ours = hue_image(&render(&cam(), p, &Block::PAPER, &opts, &mut rng()));
+                let agree = idx
+                    .iter()
+                    .filter(|&&i| {
+                        let (a, b) = (exact[i], ours[i]);
+                        a == b || (a != NO_HUE && b != NO_HUE && hue_distance(a, b) <= tol)
+                    })
+                    .count();
+                let frac = agree as f64 / idx.len() as f64;
+                assert!(frac >= 0.99, "noise {noise}: {frac}");
+            }
+        }
+    }
+
+    #[test]
+    fn sub_pixel_motion_changes_edge_pixels_only() {
+        let p = pose();
+        let shift = 0.2 * p.translation.vector.z / cam().fx();
+        let moved = Isometry3::from_parts((p.translation.vector + Vector3::new(shift, 0.0, 0.0)).into(), p.rotation);
+        for aa in [AntiAlias::Exact, AntiAlias::Supersample(4)] {
+            let opts = RenderOptions::default().with_antialias(aa);
+            let a = render(&cam(), &p, &Block::PAPER, &opts, &mut rng());
+            let b = render(&cam(), &moved, &Block::PAPER, &opts, &mut rng());
+            let faces = screen_faces(&cam(), &p, &Block::PAPER, &opts);
+            let mut changed = 0;
+            for (x, y, pa) in a.enumerate_pixels() {
+                if pa != b.get_pixel(x, y) {
+                    changed += 1;
+                    // Only pixels near an edge may change.
+                    assert!(faces.iter().any(|f| dmin(f, x, y).abs() < 1.5), "{aa:?} {x},{y}");
+                }
+            }
+            assert!(changed > 200, "{aa:?}: only {changed} pixels changed");
+        }
+    }
+
+    #[test]
+    fn block_behind_or_through_the_camera_is_not_drawn() {
+        let opts = RenderOptions::default();
+        // Far off axis: the block projects far outside the image.
+        let nothing = render(&cam(), &Isometry3::translation(100.0, 0.0, 1.0), &Block::PAPER, &opts, &mut rng());
+        assert!(hue_image(&nothing).iter().all(|&h| h == NO_HUE));
+        let behind = render(&cam(), &Isometry3::translation(0.0, 0.0, -0.7), &Block::PAPER, &opts, &mut rng());
+        assert_eq!(behind, nothing);
+        assert!(hue_image(&behind).iter().all(|&h| h == NO_HUE));
+        // Straddling the camera plane, at the camera centre, or not finite: no panic.
+        for t in [[0.0, 0.0, 0.03], [0.0, 0.0, 0.0], [0.0, 0.0, 0.12], [f32::NAN, 0.0, 0.7], [0.0, f32::INFINITY, 0.7]]
+        {
+            let p = Isometry3::new(Vector3::from(t), Vector3::new(0.3, 0.2, 0.1));
+            let _ = render(&cam(), &p, &Block::PAPER, &opts.with_noise(4.0), &mut rng());
+        }
+    }
+
+    #[test]
+    fn noise_has_the_requested_spread_and_keeps_the_background_grey() {
+        let opts = RenderOptions::default().with_noise(5.0);
+        let far = Isometry3::translation(100.0, 0.0, 1.0);
+        let clean = render(&cam(), &far, &Block::PAPER, &RenderOptions::default(), &mut rng());
+        let noisy = render(&cam(), &far, &Block::PAPER, &opts, &mut rng());
+        let diffs: Vec<f64> =
+            clean.as_raw().iter().zip(noisy.as_raw()).map(|(&a, &b)| f64::from(b) - f64::from(a)).collect();
+        let n = diffs.len() as f64;
+        let mean = diffs.iter().sum::<f64>() / n;
+        let std = (diffs.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / n).sqrt();
+        assert!(mean.abs() < 0.05 && (std - 5.0).abs() < 0.15, "mean {mean} std {std}");
+        let hued = hue_image(&noisy).iter().filter(|&&h| h != NO_HUE).count();
+        assert_eq!(hued, 0);
+        // Deterministic for a seed, different for another.
+        assert_eq!(noisy, render(&cam(), &far, &Block::PAPER, &opts, &mut rng()));
+        let other = render(&cam(), &far, &Block::PAPER, &opts, &mut Xoshiro256PlusPlus::seed_from_u64(8));
+        assert_ne!(noisy, other);
+    }
+
+    #[test]
+    fn row_spans_match_the_per_pixel_path() {
+        let poses = [
+            pose(),
+            Isometry3::new(Vector3::new(-0.05, 0.03, 0.9), Vector3::new(-0.3, 0.2, 1.2)),
+            Isometry3::new(Vector3::new(0.0, 0.0, 0.5), Vector3::new(0.0, 0.0, 0.0)),
+            Isometry3::new(Vector3::new(0.25, 0.1, 0.4), Vector3::new(1.0, 0.4, -0.2)), // clipped at the border
+        ];
+        for p in &poses {
+            for aa in [AntiAlias::Exact, AntiAlias::Supersample(3), AntiAlias::Off] {
+                let opts = RenderOptions::default().with_antialias(aa);
+                let fast = render(&cam(), p, &Block::PAPER, &opts, &mut rng());
+                // Reference: the full per-pixel path everywhere.
+                let faces = screen_faces(&cam(), p, &Block::PAPER, &opts);
+                let colours: Vec<[u8; 3]> = faces.iter().map(|f| f.colour.map(to_u8)).collect();
+                let (cols, rows) = background_tables(640, 480, &opts);
+                let mut slow = RgbImage::new(640, 480);
+                for (x, y, px) in slow.enumerate_pixels_mut() {
+                    let bg = cols[x as usize] + rows[y as usize];
+                    px.0 = [to_u8(bg); 3];
+                    shade_pixel(&faces, &colours, x as f32 + 0.5, y as f32 + 0.5, bg, aa, &mut px.0);
+                }
+                let worst = fast.as_raw().iter().zip(slow.as_raw()).map(|(a, b)| a.abs_diff(*b)).max();
+                assert!(worst <= Some(1), "{aa:?}: {worst:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn exact_coverage_of_a_half_plane() {
+        // Vertical edge through the pixel centre: half the square.
+        let all_in = [0.0, 0.0, 1.0];
+        let half = clipped_square_area(&[[1.0, 0.0, 0.0], all_in, all_in, all_in]);
+        assert!((half - 0.5).abs() < 1e-6);
+        // Diagonal through the centre: half; shifted by 0.25 px: 1 − 0.5·(0.5 − 0.25·√2)²·2 …
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        assert!((clipped_square_area(&[[s, s, 0.0], all_in, all_in, all_in]) - 0.5).abs() < 1e-6);
+        let quarter = clipped_square_area(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], all_in, all_in]);
+        assert!((quarter - 0.25).abs() < 1e-6);
+        assert_eq!(clipped_square_area(&[[1.0, 0.0, -0.8], all_in, all_in, all_in]), 0.0);
+        assert_eq!(clipped_square_area(&[all_in; 4]), 1.0);
+    }
+
+    #[test]
+    fn stereo_pair_shows_disparity() {
+        let rig = StereoRig::parallel(cam(), 0.1).unwrap();
+        // Midway between the cameras: each sees the −z face only (the ±x faces edge-on).
+        let p = Isometry3::translation(-0.05, 0.0, 0.8);
+        let pair = render_stereo(&rig, &p, &Block::PAPER, &RenderOptions::default(), &mut rng());
+        // Centroid weighted by blueness (b − r: 0 on the grey background), i.e. by coverage.
+        let centroid = |img: &RgbImage| {
+            let (mut sx, mut n) = (0.0, 0.0);
+            for (x, _, p) in img.enumerate_pixels() {
+                let wgt = f64::from(p.0[2]) - f64::from(p.0[0]);
+                sx += wgt * (f64::from(x) + 0.5);
+                n += wgt;
+            }
+            sx / n
+        };
+        // The blue −z face is 0.7 m away: disparity f·b/z = 800·0.1/0.7 px, left image further
+        // right.
+        let d = centroid(&pair.left) - centroid(&pair.right);
+        assert!((d - 80.0 / 0.7).abs() < 0.5, "{d}");
+    }
+
+    #[test]
+    fn points_are_drawn_and_clipped() {
+        let mut img = RgbImage::new(10, 8);
+        draw_points(
+            &mut img,
+            &[(5.5, 4.2), (0.0, 0.0), (-0.5, 3.0), (10.0, 2.0), (f32::NAN, 1.0), (9.9, 7.9)],
+            [255, 0, 0],
+        );
+        let red = img.pixels().filter(|p| p.0 == [255, 0, 0]).count();
+        assert_eq!(red, 5 + 3 + 3);
+        assert_eq!(img.get_pixel(5, 4).0, [255, 0, 0]);
+        assert_eq!(img.get_pixel(6, 4).0, [255, 0, 0]);
+        assert_eq!(img.get_pixel(6, 5).0, [0, 0, 0]);
+    }
+
+    /// Timing of one 640×480 frame (render + noise + hue). Run with
+    /// `cargo test --release -p evorec-sim --lib render::tests::timing -- --ignored --nocapture`.
+    #[test]
+    #[ignore = "timing; run in release"]
+    fn timing() {
+        let opts = RenderOptions::default().with_noise(3.0);
+        let mut r = rng();
+        let n = 300;
+        for aa in [AntiAlias::Exact, AntiAlias::Supersample(4)] {
+            let opts = opts.with_antialias(aa);
+            let start = std::time::Instant::now();
+            let mut sum = 0u64;
+            for i in 0..n {
+                let p = Isometry3::new(
+                    Vector3::new(0.001 * (i % 10) as f32, 0.0, 0.7),
+                    Vector3::new(0.5, -0.6, 0.3 + 0.001 * i as f32),
+                );
+                let img = render(&cam(), &p, &Block::PAPER, &opts, &mut r);
+                sum += u64::from(hue_image(&img)[240 * 640 + 320]);
+            }
+            let per = start.elapsed().as_secs_f64() / f64::from(n) * 1e3;
+            println!("{aa:?}: {per:.3} ms per 640x480 frame (render + noise + hue), checksum {sum}");
+        }
+    }
+}

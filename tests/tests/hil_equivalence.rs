@@ -1,0 +1,254 @@
+//! Host tracker vs. firmware on QEMU: the same frames and setup give bit-identical estimates.
+//!
+//! 120 frames (160×120, 30 frames/s) of the paper's block, rendered with
+//! `evorec_core::synth::render_block`: the block moves in the world while the PA-10 carries
+//! the cameras along a sinusoidal joint trajectory (`q̇ ≠ 0`), with feedforward on. One frame
+//! is dropped (a 2-period time step) and one has the wrong size (both sides must refuse it).
+//! The host runs the core's `board::run` over the recorded frames; the firmware runs the
+//! same loop under QEMU, fed through `evorec_firmware::host::HilSession`. Every estimate must
+//! match in the bits of ψ and F and in the generation number.
+//!
+//! The firmware is not built here: build it first (`cd hil-stubs && cargo build --release`),
+//! or point `EVOREC_FIRMWARE_ELF` at it. A missing ELF or QEMU fails the test with the
+//! command that fixes it; `EVOREC_SKIP_HIL=1` skips the test instead.
+
+use std::fmt;
+use std::path::Path;
+use std::time::Instant;
+
+use evorec_core::board::{self, CameraController, ErrorKind, ErrorType, FrameInfo};
+use evorec_core::camera::{Pinhole, StereoRig};
+use evorec_core::config::NO_HUE;
+use evorec_core::ga::SearchSpace;
+use evorec_core::kinematics::PA10;
+use evorec_core::model::Block;
+use evorec_core::pose::Psi;
+use evorec_core::tracker::{Estimate, Feedforward, JointSample, Tracker, TrackerConfig};
+use evorec_core::{quat, synth};
+use evorec_firmware::host::{HilSession, Reply, default_firmware_path};
+use evorec_firmware::protocol::{Frame, Setup};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+
+const WIDTH: u16 = 160;
+const HEIGHT: u16 = 120;
+const FRAMES: u32 = 120;
+const PERIOD_US: u64 = 33_333;
+/// This frame is never captured (the next one comes two periods later).
+const DROPPED: u32 = 40;
+/// This frame has the wrong size; the tracker on both sides refuses it.
+const WRONG_SIZE: u32 = 70;
+
+/// A test failure that prints its message as is (with the build or install hint).
+struct Failure(String);
+
+impl fmt::Debug for Failure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl<E: fmt::Display> From<E> for Failure {
+    fn from(e: E) -> Self {
+        Self(e.to_string())
+    }
+}
+
+fn fail(msg: impl Into<String>) -> Failure {
+    Failure(msg.into())
+}
+
+/// One recorded frame pair with its joint sample.
+struct Recorded {
+    info: FrameInfo,
+    left: Vec<u8>,
+    right: Vec<u8>,
+    joints: JointSample<7>,
+}
+
+fn joints_at(t: f32) -> JointSample<7> {
+    let q0 = [0.0, 0.5, 0.0, 1.3, 0.0, 0.9, 0.0];
+    let amp = [0.03, -0.02, 0.025, 0.03, -0.02, 0.025, 0.04];
+    let w = 1.7;
+    let (s, c) = (libm_sin(w * t), libm_cos(w * t));
+    JointSample {
+        q: std::array::from_fn(|i| q0[i] + amp[i] * s),
+        qd: std::array::from_fn(|i| amp[i] * w * c),
+        time_us: (f64::from(t) * 1e6) as u64,
+    }
+}
+
+fn libm_sin(x: f32) -> f32 {
+    evorec_core::math::sin(x)
+}
+
+fn libm_cos(x: f32) -> f32 {
+    evorec_core::math::cos(x)
+}
+
+/// The tracker configuration, the setup sent to the firmware and the recorded frames.
+fn scenario() -> Result<(TrackerConfig<7>, Setup, Vec<Recorded>), Failure> {
+    let cam = Pinhole::new_checked(200.0, 200.0, 80.0, 60.0, WIDTH, HEIGHT)?;
+    let rig = StereoRig::parallel(cam, 0.1)?;
+    let space = SearchSpace::new_checked([-0.25, -0.25, 0.3], [0.25, 0.25, 1.1])?;
+    let ft_rot = quat::from_angle_axis(0.08, &Vector3::new(1.0, 0.2, 0.0))?;
+    let flange_to_camera = Isometry3::from_parts(Translation3::new(0.0, 0.06, 0.1), ft_rot);
+    let config = TrackerConfig::pa10(rig, Block::PAPER, flange_to_camera, space).with_seed(2024);
+
+    // The block's pose in the cameras' frame at t = 0: 0.65 m ahead, a corner turned towards
+    // the cameras; from it, its pose in the world.
+    let start_rot = quat::from_angle_axis(0.7, &Vector3::new(0.4, 1.0, 0.2))?;
+    let block_in_cam0 = Isometry3::from_parts(Translation3::new(-0.04, 0.01, 0.65), start_rot);
+    let world_from_cam = |q: &[f32; 7]| PA10.forward(q) * flange_to_camera;
+    let world_from_block0 = world_from_cam(&joints_at(0.0).q) * block_in_cam0;
+
+    let n = usize::from(WIDTH) * usize::from(HEIGHT);
+    let mut frames = Vec::new();
+    for k in 0..FRAMES {
+        if k == DROPPED {
+            continue;
+        }
+        let t = k as f32 * (PERIOD_US as f32 * 1e-6);
+        let joints = joints_at(t);
+        // The block slides and turns slowly in the world.
+        let drift = Isometry3::from_parts(
+            Translation3::new(0.03 * libm_sin(1.1 * t), 0.02 * libm_sin(0.7 * t), 0.0),
+            UnitQuaternion::from_scaled_axis(Vector3::new(0.0, 0.0, 0.15 * t)),
+        );
+        let block_in_cam = world_from_cam(&joints.q).inverse() * world_from_block0 * drift;
+        let (w, h) = if k == WRONG_SIZE { (80, 60) } else { (WIDTH, HEIGHT) };
+        let (mut left, mut right) = (vec![NO_HUE; n], vec![NO_HUE; n]);
+        if k != WRONG_SIZE {
+            synth::render_block(&Block::PAPER, &rig.right, &block_in_cam, &mut right)?;
+            synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * block_in_cam), &mut left)?;
+        } else {
+            left.truncate(usize::from(w) * usize::from(h));
+            right.truncate(usize::from(w) * usize::from(h));
+        }
+        let info = FrameInfo { sequence: k, capture_time_us: u64::from(k) * PERIOD_US, width: w, height: h };
+        frames.push(Recorded { info, left, right, joints });
+    }
+
+    let initial = Psi::from_isometry(&block_in_cam0);
+    let setup = Setup::from_tracker_config(&config, Feedforward::On, &initial, &[0.01, 0.01, 0.01, 0.02, 0.02, 0.02])?;
+    Ok((config, setup, frames))
+}
+
+/// Replays recorded frames to the core's loop on the host and keeps what it publishes.
+struct ReplayBoard<'a> {
+    frames: std::slice::Iter<'a, Recorded>,
+    current: Option<&'a Recorded>,
+    published: Vec<(u32, Estimate)>,
+}
+
+impl ErrorType for ReplayBoard<'_> {
+    type Error = ErrorKind;
+}
+
+impl CameraController<7> for ReplayBoard<'_> {
+    fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, ErrorKind> {
+        let f = self.frames.next().ok_or(ErrorKind::EndOfStream)?;
+        left.get_mut(..f.left.len()).ok_or(ErrorKind::Other)?.copy_from_slice(&f.left);
+        right.get_mut(..f.right.len()).ok_or(ErrorKind::Other)?.copy_from_slice(&f.right);
+        self.current = Some(f);
+        Ok(f.info)
+    }
+
+    fn joint_sample(&mut self) -> Result<JointSample<7>, ErrorKind> {
+        self.current.map(|f| f.joints).ok_or(ErrorKind::Other)
+    }
+
+    fn publish(&mut self, frame: &FrameInfo, estimate: &Estimate) -> Result<(), ErrorKind> {
+        self.published.push((frame.sequence, *estimate));
+        Ok(())
+    }
+}
+
+/// The estimate bits compared: ψ, F, generation.
+fn bits(e: &Estimate) -> ([u32; 6], u32, u32) {
+    (e.psi.0.map(f32::to_bits), e.fitness.to_bits(), e.generation)
+}
+
+#[test]
+fn firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
+    if std::env::var_os("EVOREC_SKIP_HIL").is_some_and(|v| v == "1") {
+        println!("hil_equivalence skipped: EVOREC_SKIP_HIL=1");
+        return Ok(());
+    }
+    let (config, setup, frames) = scenario()?;
+    if setup.tracker_config()? != config {
+        return Err(fail("Setup does not reproduce the tracker configuration"));
+    }
+
+    // Host reference: the core's loop over the recorded frames.
+    let t_host = Instant::now();
+    let mut host: Tracker = setup.build_tracker()?;
+    let n = usize::from(WIDTH) * usize::from(HEIGHT);
+    let (mut lb, mut rb) = (vec![0u8; n], vec![0u8; n]);
+    let mut replay = ReplayBoard { frames: frames.iter(), current: None, published: Vec::new() };
+    let stats = board::run(&mut replay, &mut host, setup.feedforward, &mut lb, &mut rb, u32::MAX)
+        .map_err(|e| fail(format!("host loop: {e:?}")))?;
+    let host_time = t_host.elapsed();
+    if stats.rejected != 1 || stats.published as usize != frames.len() - 1 {
+        return Err(fail(format!("host loop: unexpected counts {stats:?}")));
+    }
+
+    // The firmware under QEMU.
+    let elf = default_firmware_path();
+    let workdir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hil_equivalence");
+    let t_hil = Instant::now();
+    let mut hil = HilSession::start(&elf, &workdir, &setup)?;
+    let mut fw: Vec<(u32, Estimate)> = Vec::new();
+    let mut fw_rejected = Vec::new();
+    for f in &frames {
+        let frame =
+            Frame { width: f.info.width, height: f.info.height, joints: f.joints, left: &f.left, right: &f.right };
+        match hil.step(f.info.sequence, f.info.capture_time_us, &frame)? {
+            Reply::Estimate(e) => fw.push((f.info.sequence, e)),
+            Reply::Rejected => fw_rejected.push(f.info.sequence),
+        }
+    }
+    let summary = hil.finish()?;
+    let hil_time = t_hil.elapsed();
+
+    println!(
+        "hil_equivalence: {} frames; host loop {:.3} s, firmware on QEMU {:.3} s ({:.1} ms/frame incl. link)",
+        frames.len(),
+        host_time.as_secs_f64(),
+        hil_time.as_secs_f64(),
+        hil_time.as_secs_f64() * 1e3 / frames.len() as f64
+    );
+    println!(
+        "firmware DONE: {} frames, {} estimates, {} rejected; stack high-water mark {} of {} bytes (log: {})",
+        summary.done.frames,
+        summary.done.published,
+        summary.done.rejected,
+        summary.done.stack_used_bytes,
+        summary.done.stack_size_bytes,
+        summary.log_path.display()
+    );
+    if let Some((_, last)) = fw.last() {
+        println!("last estimate: ψ = {:?}, F = {}", last.psi.0, last.fitness);
+    }
+
+    // The painted stack must never have been used up (an overflow would run into .bss).
+    let headroom = summary.done.stack_size_bytes.saturating_sub(summary.done.stack_used_bytes);
+    assert!(headroom >= 4096, "stack headroom only {headroom} bytes: {:?}", summary.done);
+    assert_eq!(fw_rejected, [WRONG_SIZE], "the firmware must refuse exactly the wrong-size frame");
+    assert_eq!(fw.len(), replay.published.len(), "estimate counts differ");
+    assert_eq!(
+        (summary.done.frames, summary.done.published, summary.done.rejected),
+        (stats.frames, stats.published, stats.rejected)
+    );
+    let mut first_mismatch = None;
+    for ((seq_fw, e_fw), (seq_host, e_host)) in fw.iter().zip(replay.published.iter()) {
+        if seq_fw != seq_host || bits(e_fw) != bits(e_host) {
+            first_mismatch.get_or_insert((*seq_fw, *e_fw, *seq_host, *e_host));
+        }
+    }
+    assert!(first_mismatch.is_none(), "first differing estimate (firmware, host): {first_mismatch:?}");
+    // Sanity: the tracker actually tracked (so the comparison is not of degenerate output).
+    let good = fw.iter().filter(|(_, e)| e.fitness > 0.5).count();
+    println!("{good} of {} estimates have F > 0.5", fw.len());
+    assert!(good * 4 > fw.len(), "only {good} of {} estimates have F > 0.5", fw.len());
+    Ok(())
+}

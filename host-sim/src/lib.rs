@@ -5,11 +5,13 @@
 //! the simulated camera-controller board ([`sim`]) through which the core's tracker sees the
 //! world — the same trait and loop as on the firmware —, runs and their summaries
 //! ([`experiment`]), the paper's experiment grid ([`paper`]), single-frame rendering
-//! ([`frame`]), output files ([`io`]) and plots ([`plot`]).
+//! ([`frame`]), the same runs with the tracker in the firmware on QEMU ([`hil`]), output
+//! files ([`io`]) and plots ([`plot`]).
 
 pub mod arm;
 pub mod experiment;
 pub mod frame;
+pub mod hil;
 pub mod io;
 pub mod motion;
 pub mod paper;

@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use evorec_sim::scenario::{Method, Scenario};
-use evorec_sim::{experiment, frame, paper};
+use evorec_sim::{experiment, frame, hil, paper};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -40,6 +40,20 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Run one scenario with the tracker in the firmware under QEMU (the scenario must render
+    /// the firmware's 160x120 frames); writes the same files as `run`. Builds nothing: build
+    /// the firmware first (`cd hil-stubs && cargo build --release`).
+    Hil {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Output directory (also holds QEMU's FIFOs and log).
+        #[arg(long)]
+        out: PathBuf,
+        /// Firmware ELF (default: $EVOREC_FIRMWARE_ELF, else the workspace's
+        /// target/thumbv7em-none-eabihf/release/evorec-firmware).
+        #[arg(long)]
+        firmware: Option<PathBuf>,
+    },
     /// Render one frame of a scenario: left/right PNGs, the same with the projected search
     /// model at the true pose drawn over them, and frame.json with the geometry.
     Render {
@@ -58,6 +72,21 @@ fn load(path: &Path) -> Result<Scenario> {
     Ok(Scenario::load(path)?)
 }
 
+fn report(a: &experiment::Accuracy, t0: Instant) {
+    println!(
+        "{} frames in {:.1} s: F_mean {:.4}, RMS x/y/z {:.2}/{:.2}/{:.2} mm, RMS e1/e2/e3 {:.4}/{:.4}/{:.4}",
+        a.frames,
+        t0.elapsed().as_secs_f64(),
+        a.f_mean,
+        a.rms_x_mm,
+        a.rms_y_mm,
+        a.rms_z_mm,
+        a.rms_e1,
+        a.rms_e2,
+        a.rms_e3
+    );
+}
+
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
@@ -67,19 +96,7 @@ fn main() -> Result<()> {
             let output = experiment::run(&s, || {})?;
             let title = format!("{} ({})", scenario.display(), s.method.as_str());
             experiment::write_outputs(&output, &out, &title)?;
-            let a = &output.summary.accuracy;
-            println!(
-                "{} frames in {:.1} s: F_mean {:.4}, RMS x/y/z {:.2}/{:.2}/{:.2} mm, RMS e1/e2/e3 {:.4}/{:.4}/{:.4}",
-                a.frames,
-                t0.elapsed().as_secs_f64(),
-                a.f_mean,
-                a.rms_x_mm,
-                a.rms_y_mm,
-                a.rms_z_mm,
-                a.rms_e1,
-                a.rms_e2,
-                a.rms_e3
-            );
+            report(&output.summary.accuracy, t0);
             println!("wrote {}", out.display());
         }
         Command::Paper { out, base, quiet } => {
@@ -91,6 +108,16 @@ fn main() -> Result<()> {
             let results = paper::run_grid(&base, &out, !quiet)?;
             println!("{}", paper::markdown(&results));
             println!("{} runs in {:.1} s; wrote {}", results.len(), t0.elapsed().as_secs_f64(), out.display());
+        }
+        Command::Hil { scenario, out, firmware } => {
+            let s = load(&scenario)?;
+            let firmware = firmware.unwrap_or_else(evorec_firmware::host::default_firmware_path);
+            let t0 = Instant::now();
+            let output = hil::run(&s, &firmware, &out.join("qemu"), || {})?;
+            let title = format!("{} ({}, firmware on QEMU)", scenario.display(), s.method.as_str());
+            experiment::write_outputs(&output, &out, &title)?;
+            report(&output.summary.accuracy, t0);
+            println!("wrote {}", out.display());
         }
         Command::Render { scenario, frame: n, out } => {
             let s = load(&scenario)?;

@@ -9,15 +9,17 @@
 //! - At `t = 0` the flange is at [`FLANGE_START_M`] with orientation
 //!   [`initial_camera_rotation`]: the optical axis looks along world `+x`, tilted down by
 //!   [`CAMERA_TILT_DEG`].
-//! - The target centre is `c = p_cam0 + d·z_c` ([`target_centre`]): `d` metres along the right
-//!   camera's optical axis at `t = 0`.
+//! - The target centre is `c = p_mid0 + d·z_c` ([`target_centre`]): `d` metres along the stereo
+//!   rig's eye-line (the optical axis of a camera midway between the two) at `t = 0`.
 //!
 //! ## Motions
 //! - [`MotionKind::Static`]: the flange stays at its initial pose `e0`.
 //! - [`MotionKind::A`] (paper eq. 39): `y_d(t) = y_e0 + a·sin(ωt)`, all else constant.
 //! - [`MotionKind::B`] (paper eq. 42–47): `θ(t) = a·sin(ωt)`; the flange orbits the vertical
 //!   world axis through `c`: `p_d = c + Rz(θ)(p_e0 − c)`, `R_d = Rz(θ)·R_e0`, so the camera
-//!   keeps its distance to `c` and its optical axis keeps passing through `c`.
+//!   keeps its distance to `c` and the rig's eye-line keeps passing through `c` (the paper
+//!   says the eye-line of `Σ_CR`; with a parallel stereo pair we aim the pair's midline, so
+//!   that both cameras keep the target in view).
 //! - The target (paper eq. 37–38): `R_WM(t) = Rz(θ_o(t))·Rz(yaw0)·M0`, `θ_o = a_o·sin(ω_o t)`,
 //!   where [`target_rest_rotation`] `M0` stands the block upright with its axes along the
 //!   untilted camera's (so its pose in `Σ_CR` is a small rotation, as in the paper, and ε
@@ -60,11 +62,13 @@ pub fn initial_camera_pose(baseline_m: f64) -> Isometry3<f64> {
     initial_flange_pose() * flange_to_camera_f64(baseline_m)
 }
 
-/// The target centre `c = p_cam0 + d·z_c` for a stereo baseline and a viewing distance `d`.
+/// The target centre `c = p_mid0 + d·z_c`: `d` metres ahead of the midpoint between the two
+/// cameras at `t = 0` (the stereo rig's eye-line), so each camera sees it half a baseline off
+/// its optical axis and the lateral sway of motion A keeps it inside both images.
 pub fn target_centre(baseline_m: f64, distance_m: f64) -> Point3<f64> {
     let cam = initial_camera_pose(baseline_m);
-    let z_c = cam.rotation * Vector3::z();
-    Point3::from(cam.translation.vector + z_c * distance_m)
+    let (x_c, z_c) = (cam.rotation * Vector3::x(), cam.rotation * Vector3::z());
+    Point3::from(cam.translation.vector - x_c * (0.5 * baseline_m) + z_c * distance_m)
 }
 
 /// A velocity screw in world coordinates.
@@ -257,11 +261,11 @@ mod tests {
     }
 
     #[test]
-    fn target_centre_is_on_the_initial_optical_axis() {
+    fn target_centre_is_on_the_initial_eye_line() {
         let cam = initial_camera_pose(0.1);
         let c = target_centre(0.1, 0.7);
         let in_cam = cam.inverse_transform_point(&c);
-        assert!(in_cam.x.abs() < 1e-12 && in_cam.y.abs() < 1e-12);
+        assert!((in_cam.x + 0.05).abs() < 1e-12 && in_cam.y.abs() < 1e-12);
         assert!((in_cam.z - 0.7).abs() < 1e-12);
         // Right camera origin: p_e0 + b/2·x_c + 0.05·z_c.
         let p = cam.translation.vector;
@@ -303,7 +307,7 @@ mod tests {
     }
 
     #[test]
-    fn motion_b_keeps_the_optical_axis_on_the_target_centre() {
+    fn motion_b_keeps_the_eye_line_on_the_target_centre() {
         let tr = traj(MotionKind::B, 1.0);
         let c = target_centre(0.1, 0.7);
         let mount = flange_to_camera_f64(0.1);
@@ -312,7 +316,7 @@ mod tests {
             let t = 0.05 * k as f64;
             let cam = tr.setpoint(t).pose * mount;
             let in_cam = cam.inverse_transform_point(&c);
-            assert!(in_cam.x.abs() < 1e-12 && in_cam.y.abs() < 1e-12, "t={t}: {in_cam}");
+            assert!((in_cam.x + 0.05).abs() < 1e-12 && in_cam.y.abs() < 1e-12, "t={t}: {in_cam}");
             assert!((in_cam.z - 0.7).abs() < 1e-12);
             let yaw = (cam.rotation * initial_camera_pose(0.1).rotation.inverse()).angle();
             max_theta = max_theta.max(yaw);

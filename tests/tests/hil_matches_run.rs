@@ -1,0 +1,32 @@
+//! `evorec hil` equals `evorec run`: the same scenario at the firmware's 160x120 frames gives
+//! bit-identical traces whether the tracker runs on the host or in the firmware under QEMU.
+//!
+//! Needs the firmware built (`cd hil-stubs && cargo build --release`) and qemu-system-arm;
+//! `EVOREC_SKIP_HIL=1` skips the test.
+
+use evorec_firmware::host::default_firmware_path;
+use evorec_sim::{experiment, hil, scenario::Scenario};
+
+#[test]
+fn hil_trace_equals_host_trace() {
+    if std::env::var_os("EVOREC_SKIP_HIL").is_some() {
+        println!("EVOREC_SKIP_HIL is set: skipped");
+        return;
+    }
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_b_ff.toml");
+    let text = std::fs::read_to_string(path).expect("scenario");
+    let mut s = Scenario::from_toml_str(&text).expect("valid scenario");
+    s.duration_s = 6.0;
+    let firmware = default_firmware_path();
+    let work = std::env::temp_dir().join(format!("evorec-hil-matches-run-{}", std::process::id()));
+    let on_board = hil::run(&s, &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    let on_host = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(on_board.rows.len(), 183);
+    assert_eq!(on_board.rows.len(), on_host.rows.len());
+    for (b, h) in on_board.rows.iter().zip(on_host.rows.iter()) {
+        assert_eq!(b.estimate.0.map(f32::to_bits), h.estimate.0.map(f32::to_bits), "t = {}", b.t);
+        assert_eq!(b.fitness.to_bits(), h.fitness.to_bits(), "t = {}", b.t);
+    }
+    assert_eq!(on_board.summary.accuracy, on_host.summary.accuracy);
+    let _ = std::fs::remove_dir_all(&work);
+}

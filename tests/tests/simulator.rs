@@ -1,0 +1,127 @@
+//! Simulator checks spanning the core and the simulator: feedforward accuracy on short runs,
+//! ground truth (the model at the true pose fits the rendered frames; the arm's forward
+//! kinematics is the camera pose the renderer used), and scenario validation.
+
+use evorec_core::board::CameraController;
+use evorec_core::config::DEFAULT_GRID;
+use evorec_core::fitness::Evaluator;
+use evorec_core::hue::{HueImage, HueLut};
+use evorec_core::kinematics::PA10;
+use evorec_core::model::SurfaceStrips;
+use evorec_sim::experiment::{self, Accuracy};
+use evorec_sim::motion::MotionKind;
+use evorec_sim::scenario::{Method, Scenario};
+use evorec_sim::sim::{self, SimBoard, World};
+use nalgebra::Isometry3;
+
+/// 5 s of a motion at ω = 0.5 rad/s (4× the paper's base speed), default camera and target.
+fn short(motion: MotionKind, method: Method) -> Scenario {
+    let mut s = Scenario::new(1, 5.0, method);
+    s.robot.motion = motion;
+    s.robot.omega_rad_s = 0.5;
+    s
+}
+
+fn run(s: &Scenario) -> Accuracy {
+    experiment::run(s, || {}).unwrap_or_else(|e| panic!("run failed: {e:#}")).summary.accuracy
+}
+
+#[test]
+fn feedforward_tracks_motion_a_and_b_accurately() {
+    for motion in [MotionKind::A, MotionKind::B] {
+        let a = run(&short(motion, Method::Ff));
+        println!("{motion:?} ff: {a:?}");
+        assert_eq!(a.frames, 153);
+        assert!(a.f_mean >= 0.9, "{motion:?}: F_mean {}", a.f_mean);
+        for (name, v) in [("x", a.rms_x_mm), ("y", a.rms_y_mm), ("z", a.rms_z_mm)] {
+            assert!(v <= 3.0, "{motion:?}: RMS {name} = {v} mm");
+        }
+        for (name, v) in [("e1", a.rms_e1), ("e2", a.rms_e2), ("e3", a.rms_e3)] {
+            assert!(v <= 0.005, "{motion:?}: RMS {name} = {v}");
+        }
+    }
+}
+
+#[test]
+fn feedforward_is_not_worse_than_the_plain_ga() {
+    for motion in [MotionKind::A, MotionKind::B] {
+        let ff = run(&short(motion, Method::Ff));
+        let ga = run(&short(motion, Method::Ga));
+        let pos = |a: &Accuracy| a.rms_x_mm + a.rms_y_mm + a.rms_z_mm;
+        let eps = |a: &Accuracy| a.rms_e1 + a.rms_e2 + a.rms_e3;
+        println!("{motion:?}: ff {ff:?}\n   ga {ga:?}");
+        assert!(ff.f_mean >= ga.f_mean, "{motion:?}: F_mean ff {} < ga {}", ff.f_mean, ga.f_mean);
+        assert!(pos(&ff) <= pos(&ga), "{motion:?}: position RMS ff {} > ga {}", pos(&ff), pos(&ga));
+        assert!(eps(&ff) <= eps(&ga), "{motion:?}: ε RMS ff {} > ga {}", eps(&ff), eps(&ga));
+    }
+}
+
+#[test]
+fn model_at_the_true_pose_fits_clean_rendered_frames() {
+    for motion in [MotionKind::A, MotionKind::B] {
+        let mut s = short(motion, Method::Ff);
+        s.camera.noise_std = 0.0;
+        s.duration_s = 2.0;
+        let rig = sim::rig(&s).expect("rig");
+        let model = SurfaceStrips::<DEFAULT_GRID>::new(&sim::block(&s)).expect("model");
+        let lut = HueLut::new(&model.faces().map(|f| f.hue), evorec_core::config::DEFAULT_HUE_TOLERANCE);
+        let eval = Evaluator::new(&model, &lut, &rig);
+        let mut board = SimBoard::new(World::new(&s).expect("world"));
+        let n = usize::from(s.camera.width) * usize::from(s.camera.height);
+        let (mut l, mut r) = (vec![0u8; n], vec![0u8; n]);
+        let mut worst = 1.0f32;
+        for _ in 0..board.frames() {
+            board.next_frame(&mut l, &mut r).expect("frame");
+            let truth = board.world().truth();
+            let (w, h) = (s.camera.width, s.camera.height);
+            let left = HueImage::new_checked(&l[..], w, h).expect("image");
+            let right = HueImage::new_checked(&r[..], w, h).expect("image");
+            let f = eval.evaluate_psi(&truth, &left, &right);
+            if f.total < 0.95 {
+                println!("t={:.3} {:?} {:?} truth {:?}", board.world().time(), f.left, f.right, truth);
+            }
+            worst = worst.min(f.total);
+        }
+        println!("{motion:?}: worst F at the true pose {worst}");
+        assert!(worst >= 0.95, "{motion:?}: F at the true pose dropped to {worst}");
+    }
+}
+
+#[test]
+fn arm_forward_kinematics_is_the_rendered_camera_pose() {
+    let s = short(MotionKind::B, Method::Ff);
+    let mut world = World::new(&s).expect("world");
+    for k in 1..=10 {
+        world.advance_to(0.4 * f64::from(k));
+        let q = world.arm().joint_sample().q;
+        // Independent path: the core's f32 DH chain and the scenario's camera mount.
+        let camera: Isometry3<f32> = PA10.forward(&q) * sim::flange_to_camera(&s);
+        let used: Isometry3<f32> = world.camera_pose().cast();
+        let dp = (camera.translation.vector - used.translation.vector).norm();
+        let dr = camera.rotation.angle_to(&used.rotation);
+        assert!(dp < 1e-5 && dr < 1e-5, "t = {}: {dp} m, {dr} rad", world.time());
+        // And the true pose is the target seen from that camera.
+        let truth = world.truth().try_to_isometry().expect("pose");
+        let target: Isometry3<f32> = world.target_pose().cast();
+        let from_fk = camera.inverse() * target;
+        assert!((from_fk.translation.vector - truth.translation.vector).norm() < 1e-5);
+    }
+}
+
+#[test]
+fn scenario_errors_name_the_field() {
+    let ok = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/smoke.toml")).expect("smoke");
+    for (from, to, field) in [
+        ("width = 640", "width = 0", "camera.width"),
+        ("motion = \"A\"", "motion = \"C\"", "robot.motion"),
+        ("method = \"ff\"", "method = \"fast\"", "method"),
+        ("population = 40", "population = 7", "ga.population"),
+        ("size_m = [0.1, 0.15, 0.2]", "size_m = [0.1, 0.15]", "target.size_m"),
+    ] {
+        assert!(ok.contains(from), "{from}");
+        let err = Scenario::from_toml_str(&ok.replacen(from, to, 1)).expect_err(to);
+        let msg = err.to_string();
+        assert!(msg.starts_with(&format!("{field}:")), "{to}: {msg}");
+    }
+    assert!(Scenario::from_toml_str(&ok).is_ok());
+}

@@ -15,7 +15,7 @@
 //! ## Motions
 //! - [`MotionKind::Static`]: the flange stays at its initial pose `e0`.
 //! - [`MotionKind::A`] (paper eq. 39): `y_d(t) = y_e0 + a·sin(ωt)`, all else constant.
-//! - [`MotionKind::B`] (paper eq. 42–47): `θ(t) = a·sin(ωt)`; the flange orbits the vertical
+//! - [`MotionKind::B`] (paper eq. 42–47): `θ(t) = −a·sin(ωt)`; the flange orbits the vertical
 //!   world axis through `c`: `p_d = c + Rz(θ)(p_e0 − c)`, `R_d = Rz(θ)·R_e0`, so the camera
 //!   keeps its distance to `c` and the rig's eye-line keeps passing through `c` (the paper
 //!   says the eye-line of `Σ_CR`; with a parallel stereo pair we aim the pair's midline, so
@@ -166,8 +166,11 @@ impl FlangeTrajectory {
                 FlangeSetpoint { pose, twist: Twist { v, w: Vector3::zeros() } }
             }
             MotionKind::B => {
-                let theta = self.amplitude_rad * s;
-                let theta_dot = self.amplitude_rad * w * c;
+                // Clockwise seen from above while the target's own yaw (eq. 37) starts
+                // counter-clockwise: with the same sign and ω = ω_o the two would cancel and the
+                // target would stand still in Σ_CR (the paper's results show it does not).
+                let theta = -self.amplitude_rad * s;
+                let theta_dot = -self.amplitude_rad * w * c;
                 let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), theta);
                 let arm = rz * (self.start.translation.vector - self.orbit_centre.coords);
                 let pose =

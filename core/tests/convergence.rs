@@ -1,4 +1,11 @@
-//! The tracker converges over frames on a static synthetic stereo pair.
+//! The tracker converges over frames on a static synthetic stereo pair, from a start 48 mm and
+//! ~6° off.
+//!
+//! Acquisition from that far needs rows of 8 points: with the default 5 (the most that fits the
+//! Cortex-M4 budget of 1.0 M instructions per generation at population 40) the GA stalls on a
+//! plateau in about half of the seeds (`seed_sweep`: mean 17 mm after 300 frames, against 4.6 mm
+//! with 8). Tracking from a known start, the paper's setting, is as accurate with 5 (see the
+//! simulator tests and `evorec paper`). So these tests use `Tracker<7, 40, 8>`.
 
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::NO_HUE;
@@ -9,6 +16,9 @@ use evorec_core::pose::Psi;
 use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
 use evorec_core::{quat, synth};
 use nalgebra::{Isometry3, Vector3};
+
+/// The tracker of these tests: PA-10, population 40, rows of 8 points.
+type Acquiring = Tracker<7, 40, 8>;
 
 fn render(rig: &StereoRig, truth: &Psi) -> (Vec<u8>, Vec<u8>) {
     let (w, h) = (usize::from(rig.right.width()), usize::from(rig.right.height()));
@@ -28,7 +38,7 @@ fn run_with(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: 
     let rig = StereoRig::parallel(cam, 0.1).unwrap();
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
     let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_ga(ga);
-    let mut tracker: Tracker = Tracker::new(config).unwrap();
+    let mut tracker: Acquiring = Tracker::new(config).unwrap();
     let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
     let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
     let (l, r) = render(&rig, &truth);
@@ -132,7 +142,7 @@ fn landscape_probe() {
     let rig = StereoRig::parallel(cam, 0.1).unwrap();
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
     let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space);
-    let tracker: Tracker = Tracker::new(config).unwrap();
+    let tracker: Acquiring = Tracker::new(config).unwrap();
     let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
     let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
     let (l, r) = render(&rig, &truth);

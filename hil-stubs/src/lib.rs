@@ -68,6 +68,7 @@ pub mod link_board;
 pub mod protocol;
 pub mod selftest;
 pub mod setup;
+pub mod timing;
 
 #[cfg(feature = "host")]
 pub mod host;
@@ -77,6 +78,10 @@ pub mod rt;
 #[cfg(target_os = "none")]
 #[allow(unsafe_code)]
 pub mod sys;
+// The timing firmware's TIMER0 driver and stack re-painting (src/bin/evorec-timing.rs).
+#[cfg(target_os = "none")]
+#[allow(unsafe_code)]
+pub mod cmsdk_timer;
 
 /// Width of the on-board hue frames (pixels).
 pub const FRAME_WIDTH: u16 = 160;

@@ -19,3 +19,4 @@ pub mod plot;
 pub mod render;
 pub mod scenario;
 pub mod sim;
+pub mod timing;

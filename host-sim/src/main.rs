@@ -54,6 +54,14 @@ enum Command {
         #[arg(long)]
         firmware: Option<PathBuf>,
     },
+    /// Worst-case timing and memory per GA generation on the Cortex-M4: runs the timing
+    /// firmware under QEMU with -icount and writes DIR/timing.json and DIR/timing.md. Builds
+    /// nothing: build the firmware first (`cd hil-stubs && cargo build --release`).
+    Timing {
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Render one frame of a scenario: left/right PNGs, the same with the projected search
     /// model at the true pose drawn over them, and frame.json with the geometry.
     Render {
@@ -118,6 +126,9 @@ fn main() -> Result<()> {
             experiment::write_outputs(&output, &out, &title)?;
             report(&output.summary.accuracy, t0);
             println!("wrote {}", out.display());
+        }
+        Command::Timing { out } => {
+            evorec_sim::timing::run(&out)?;
         }
         Command::Render { scenario, frame: n, out } => {
             let s = load(&scenario)?;

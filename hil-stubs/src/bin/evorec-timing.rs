@@ -1,0 +1,201 @@
+//! The timing firmware (thumbv7em-none-eabihf, QEMU `mps2-an386` with `-icount shift=10`):
+//! counts the instructions of every phase of one GA generation with TIMER0 (see
+//! `evorec_firmware::timing`) and prints one `GEN` line per generation through semihosting.
+//!
+//! Runs, in order: the default configuration (population 40, 5 points per row) on
+//! `timing::FULL_FRAMES` frames of every kind, then the sweep (populations 20/40/60 × rows of
+//! 4/8/12 points, `Tracker<7, P, G>` monomorphised for each) on `timing::SWEEP_FRAMES` frames
+//! each. Every frame is made on the board before its generation, so the measured window
+//! holds only `Tracker::step_probed` (feedforward on). Before each generation the free stack
+//! is painted again, and its high-water mark after the generation is printed too.
+//!
+//! `evorec timing --out DIR` (host) runs this image and writes the report. Build it with
+//! `cd hil-stubs && cargo build --release` (→ `target/thumbv7em-none-eabihf/release/evorec-timing`).
+//!
+//! Built for the host, this binary only explains how to build the real one.
+#![cfg_attr(target_os = "none", no_std)]
+#![cfg_attr(target_os = "none", no_main)]
+#![deny(unsafe_code)]
+
+#[cfg(target_os = "none")]
+mod firmware {
+    use cortex_m_rt::entry;
+    use cortex_m_semihosting::hprintln;
+    use evorec_core::hue::HueImage;
+    use evorec_core::model::SurfaceStrips;
+    use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker};
+    use evorec_firmware::cmsdk_timer::{self, Timer0};
+    use evorec_firmware::protocol::Setup;
+    use evorec_firmware::timing::{
+        BANNER, CaseGen, DownCounter, FRAME_PERIOD_US, FULL_FRAMES, GenLine, PhaseTicks, PhaseTimer, SWEEP_FRAMES,
+        schedule,
+    };
+    use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, rt, selftest, sys};
+    use static_cell::ConstStaticCell;
+
+    /// Seed of the frames' noise generator.
+    const FRAME_SEED: u32 = 0x00C0_FFEE;
+
+    /// One configuration of the sweep: its tracker type and its timed generation.
+    ///
+    /// Each configuration is a marker type, so every `generation` has its own symbol
+    /// (`<evorec_timing::firmware::P40G5 as evorec_timing::firmware::Timed>::generation`): the
+    /// static stack analysis (`evorec timing`) uses it as the root of "one generation".
+    trait Timed<const P: usize, const G: usize> {
+        /// One generation, timed: ticks of the whole `step_probed` call, of each phase, and
+        /// the fitness; `None` if the tracker refused the input.
+        fn generation(
+            tracker: &mut Tracker<7, P, G>,
+            frame: &StereoFrame<'_>,
+            joints: &JointSample<7>,
+            dt_s: f32,
+            timer: &Timer0,
+        ) -> Option<(u32, PhaseTicks, f32)>;
+    }
+
+    macro_rules! configs {
+        ($($marker:ident / $slot:ident: $p:literal x $g:literal),* $(,)?) => {
+            $(
+                /// Marker of one configuration.
+                struct $marker;
+
+                impl Timed<$p, $g> for $marker {
+                    #[inline(never)]
+                    fn generation(
+                        tracker: &mut Tracker<7, $p, $g>,
+                        frame: &StereoFrame<'_>,
+                        joints: &JointSample<7>,
+                        dt_s: f32,
+                        timer: &Timer0,
+                    ) -> Option<(u32, PhaseTicks, f32)> {
+                        timed_generation(tracker, frame, joints, dt_s, timer)
+                    }
+                }
+
+                /// The tracker of this configuration (a static, as in the firmware).
+                static $slot: ConstStaticCell<Option<Tracker<7, $p, $g>>> = ConstStaticCell::new(None);
+            )*
+        };
+    }
+
+    configs!(
+        P20G4 / P20_G4: 20 x 4, P20G8 / P20_G8: 20 x 8, P20G12 / P20_G12: 20 x 12,
+        P40G4 / P40_G4: 40 x 4, P40G5 / P40_G5: 40 x 5, P40G8 / P40_G8: 40 x 8, P40G12 / P40_G12: 40 x 12,
+        P60G4 / P60_G4: 60 x 4, P60G8 / P60_G8: 60 x 8, P60G12 / P60_G12: 60 x 12,
+    );
+
+    /// The body of every [`Timed::generation`]: TIMER0 read before and after
+    /// `Tracker::step_probed` (feedforward on), and at each phase boundary by the probe.
+    #[inline(always)]
+    fn timed_generation<const P: usize, const G: usize>(
+        tracker: &mut Tracker<7, P, G>,
+        frame: &StereoFrame<'_>,
+        joints: &JointSample<7>,
+        dt_s: f32,
+        timer: &Timer0,
+    ) -> Option<(u32, PhaseTicks, f32)> {
+        let mut probe = PhaseTimer::new(timer);
+        let t0 = timer.read();
+        let result = tracker.step_probed(frame, joints, dt_s, Feedforward::On, &mut probe);
+        let t1 = timer.read();
+        let estimate = result.ok()?;
+        Some((t0.wrapping_sub(t1), probe.phases()?, estimate.fitness))
+    }
+
+    /// Runs `frames` generations of a fresh `Tracker<7, P, G>` built into `slot`; false on
+    /// any failure (printed).
+    fn run_config<C: Timed<P, G>, const P: usize, const G: usize>(
+        name: &str,
+        slot: &mut Option<Tracker<7, P, G>>,
+        frames: u32,
+        timer: &Timer0,
+        left: &mut [u8],
+        right: &mut [u8],
+    ) -> bool {
+        let Ok(config) = selftest::tracker_config() else { return false };
+        let Ok(mut cases) = CaseGen::new(config.rig, config.flange_to_camera, FRAME_SEED) else { return false };
+        let start = cases.truth(0, false);
+        let Ok(setup) = Setup::from_tracker_config(&config, Feedforward::On, &start, &selftest::SPREAD) else {
+            return false;
+        };
+        let Ok(tracker) = setup.build_tracker_in(slot) else {
+            hprintln!("ERROR tracker {}x{} refused", P, G);
+            return false;
+        };
+        hprintln!(
+            "RUN name={} p={} g={} frames={} points_per_camera={} width={} height={}",
+            name,
+            P,
+            G,
+            frames,
+            SurfaceStrips::<G>::POINTS_PER_CAMERA,
+            FRAME_WIDTH,
+            FRAME_HEIGHT
+        );
+        for k in 0..frames {
+            let kind = schedule(k, frames);
+            let Ok(joints) = cases.frame(k, kind, left, right) else {
+                hprintln!("ERROR frame {} not made", k);
+                return false;
+            };
+            let (Ok(l), Ok(r)) = (
+                HueImage::new_checked(&*left, FRAME_WIDTH, FRAME_HEIGHT),
+                HueImage::new_checked(&*right, FRAME_WIDTH, FRAME_HEIGHT),
+            ) else {
+                return false;
+            };
+            let frame = StereoFrame { left: l, right: r };
+            let dt_s = if k == 0 { 0.0 } else { FRAME_PERIOD_US as f32 * 1e-6 };
+            cmsdk_timer::repaint_free_stack();
+            let measured = C::generation(tracker, &frame, &joints, dt_s, timer);
+            let stack = sys::stack_usage().used_bytes;
+            let Some((call, phases, fitness)) = measured else {
+                hprintln!("ERROR generation {} refused", k);
+                return false;
+            };
+            let line = GenLine { population: P as u32, grid: G as u32, frame: k, kind, call, phases, stack, fitness };
+            hprintln!("{}", line);
+        }
+        true
+    }
+
+    #[entry]
+    fn main() -> ! {
+        hprintln!("{}", BANNER);
+        let Some([left, right]) = rt::frame_buffers() else { rt::exit(false) };
+        let timer = Timer0::start();
+        // Ticks of two back-to-back reads: the cost of one read, as seen by the counter.
+        let (a, b) = (timer.read(), timer.read());
+        hprintln!("CALIBRATION read_pair={}", a.wrapping_sub(b));
+
+        // The "full" run is the core's default configuration; fail to build if it moves.
+        const {
+            assert!(evorec_core::config::DEFAULT_POPULATION == 40 && evorec_core::config::DEFAULT_GRID == 5);
+        };
+        let default = P40_G5.take();
+        let ok = run_config::<P40G5, 40, 5>("full", default, FULL_FRAMES, &timer, left, right)
+            && run_config::<P20G4, 20, 4>("sweep", P20_G4.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P20G8, 20, 8>("sweep", P20_G8.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P20G12, 20, 12>("sweep", P20_G12.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G4, 40, 4>("sweep", P40_G4.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G5, 40, 5>("sweep", default, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G8, 40, 8>("sweep", P40_G8.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G12, 40, 12>("sweep", P40_G12.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P60G4, 60, 4>("sweep", P60_G4.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P60G8, 60, 8>("sweep", P60_G8.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P60G12, 60, 12>("sweep", P60_G12.take(), SWEEP_FRAMES, &timer, left, right);
+        hprintln!("END {}", if ok { "ok" } else { "failed" });
+        rt::exit(ok)
+    }
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    println!(
+        "evorec-timing runs on a Cortex-M4F (thumbv7em-none-eabihf) under QEMU, not on the host.\n\
+         Build it:   cd hil-stubs && cargo build --release\n\
+         Measure:    cargo run --release -p evorec-sim -- timing --out out/timing\n\
+         (needs `rustup target add thumbv7em-none-eabihf` and \
+         `apt-get update && apt-get install -y qemu-system-arm`)"
+    );
+}

@@ -1,0 +1,547 @@
+//! Worst-case timing of one GA generation on the Cortex-M4 (the `evorec-timing` firmware) —
+//! the portable half: the phase probe, the test frames, and the report lines the host parses.
+//!
+//! The timing firmware (`src/bin/evorec-timing.rs`) runs under QEMU with `-icount shift=10`,
+//! where every guest instruction advances virtual time by 2¹⁰ ns and the CMSDK TIMER0
+//! (25 MHz SYSCLK, 40 ns a tick) counts down on that virtual time, so
+//! `instructions = ticks · 40 / 2¹⁰` ([`ticks_to_instructions`]), identically run after run.
+//! [`PhaseTimer`] is the core's [`PhaseProbe`] reading such a down-counter at each phase
+//! boundary of [`Tracker::step_probed`](evorec_core::tracker::Tracker::step_probed).
+//!
+//! Frames are made on the board ([`CaseGen`]: the core's `synth` rasterizer plus a xorshift
+//! noise generator), not streamed: the measured window contains nothing but the tracker's
+//! code. [`schedule`] lists the kinds of frames of a run: normal frames with the target
+//! tracked or at random poses, blank frames, target absent (distractor patches only), target
+//! filling the image, pure noise, target under noise, and fast arm motion (large
+//! feedforward shifts that push individuals into the search-space clamps).
+//!
+//! Every measured generation is printed as one line ([`GenLine`], `GEN key=value …`), which
+//! `evorec timing` (host) parses with [`GenLine::parse`].
+
+use core::fmt;
+
+use evorec_core::camera::StereoRig;
+use evorec_core::config::NO_HUE;
+use evorec_core::hue;
+use evorec_core::kinematics::PA10;
+use evorec_core::model::Block;
+use evorec_core::pose::Psi;
+use evorec_core::synth;
+use evorec_core::tracker::{JointSample, Phase, PhaseProbe};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+
+/// `-icount` shift the numbers assume (2^10 ns of virtual time per instruction).
+pub const ICOUNT_SHIFT: u32 = 10;
+/// Nanoseconds per TIMER0 tick (mps2-an386 SYSCLK = 25 MHz).
+pub const NS_PER_TICK: u64 = 40;
+/// First line the timing firmware prints (format version).
+pub const BANNER: &str = "EVOREC-TIMING v1";
+/// Frame period of the timing runs (µs, 30 frames/s).
+pub const FRAME_PERIOD_US: u64 = 33_333;
+
+/// Instructions executed in `ticks` TIMER0 ticks under `-icount shift=`[`ICOUNT_SHIFT`].
+pub fn ticks_to_instructions(ticks: u64) -> f64 {
+    (ticks * NS_PER_TICK) as f64 / f64::from(1u32 << ICOUNT_SHIFT)
+}
+
+/// A free-running 32-bit down-counter (TIMER0 on the board, a fake one in tests).
+pub trait DownCounter {
+    /// The current count.
+    fn read(&self) -> u32;
+}
+
+/// Ticks spent in each phase of one generation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PhaseTicks {
+    /// Feedforward shift of the population ([`Phase::Feedforward`] → [`Phase::Evaluate`]).
+    pub feedforward: u32,
+    /// Projection + fitness of every individual ([`Phase::Evaluate`] → [`Phase::Breed`]).
+    pub evaluate: u32,
+    /// Selection, crossover, mutation ([`Phase::Breed`] → [`Phase::Done`]).
+    pub breed: u32,
+}
+
+/// A [`PhaseProbe`] that reads a [`DownCounter`] when each phase begins.
+#[derive(Debug)]
+pub struct PhaseTimer<'c, C> {
+    clock: &'c C,
+    marks: [u32; 4],
+    seen: u8,
+}
+
+impl<'c, C: DownCounter> PhaseTimer<'c, C> {
+    /// A probe on `clock`.
+    pub fn new(clock: &'c C) -> Self {
+        Self { clock, marks: [0; 4], seen: 0 }
+    }
+
+    /// The ticks of each phase, or `None` unless all four marks were seen.
+    pub fn phases(&self) -> Option<PhaseTicks> {
+        let [ff, ev, br, done] = self.marks;
+        // A down-counter: earlier minus later (wrapping, TIMER0 reloads at 0).
+        (self.seen == 0b1111).then(|| PhaseTicks {
+            feedforward: ff.wrapping_sub(ev),
+            evaluate: ev.wrapping_sub(br),
+            breed: br.wrapping_sub(done),
+        })
+    }
+}
+
+impl<C: DownCounter> PhaseProbe for PhaseTimer<'_, C> {
+    #[inline(always)]
+    fn mark(&mut self, phase: Phase) {
+        let now = self.clock.read();
+        let i = match phase {
+            Phase::Feedforward => 0,
+            Phase::Evaluate => 1,
+            Phase::Breed => 2,
+            Phase::Done => 3,
+        };
+        if let Some(m) = self.marks.get_mut(i) {
+            *m = now;
+        }
+        self.seen |= 1 << i;
+    }
+}
+
+/// The kinds of test frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CaseKind {
+    /// The target on a smooth path, tracked (the normal case).
+    Tracking,
+    /// The target at a fresh random pose every frame.
+    RandomPose,
+    /// Every pixel `NO_HUE`.
+    Blank,
+    /// No target; patches of hues that match no face.
+    Absent,
+    /// The target so close that its faces fill the image.
+    Filling,
+    /// Every pixel the hue of one face.
+    UniformHue,
+    /// Every pixel a random byte (all hues, matching or not).
+    Noise,
+    /// The target with a quarter of the pixels replaced by random bytes.
+    NoisyTarget,
+    /// The target tracked while the arm moves fast (large feedforward shifts, clamping).
+    FastArm,
+}
+
+impl CaseKind {
+    /// Every kind, in schedule order.
+    pub const ALL: [CaseKind; 9] = [
+        Self::Tracking,
+        Self::Blank,
+        Self::Absent,
+        Self::Filling,
+        Self::UniformHue,
+        Self::Noise,
+        Self::NoisyTarget,
+        Self::RandomPose,
+        Self::FastArm,
+    ];
+
+    /// The name printed in [`GenLine`]s.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Tracking => "tracking",
+            Self::RandomPose => "random_pose",
+            Self::Blank => "blank",
+            Self::Absent => "absent",
+            Self::Filling => "filling",
+            Self::UniformHue => "uniform_hue",
+            Self::Noise => "noise",
+            Self::NoisyTarget => "noisy_target",
+            Self::FastArm => "fast_arm",
+        }
+    }
+
+    /// The kind printed as `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
+/// Frames of the default configuration's run.
+pub const FULL_FRAMES: u32 = 126;
+/// Frames of each configuration of the sweep (every kind at least twice).
+pub const SWEEP_FRAMES: u32 = 27;
+
+/// The kind of frame `k` of a run of `frames` frames: blocks of consecutive frames of one
+/// kind (so the tracker's state evolves as in operation: it loses the target on blank
+/// frames and re-acquires it), every kind in equal share, tracking first and last.
+pub fn schedule(k: u32, frames: u32) -> CaseKind {
+    let kinds = CaseKind::ALL.len() as u32;
+    let block = frames.div_ceil(kinds).max(1);
+    let i = (k / block).min(kinds - 1);
+    CaseKind::ALL.get(i as usize).copied().unwrap_or(CaseKind::Tracking)
+}
+
+/// xorshift32: the noise generator of the frames (not the GA's generator).
+#[derive(Debug, Clone, Copy)]
+pub struct XorShift32(u32);
+
+impl XorShift32 {
+    /// A generator; a zero seed is replaced by 1.
+    pub fn new(seed: u32) -> Self {
+        Self(if seed == 0 { 1 } else { seed })
+    }
+
+    /// The next number.
+    pub fn next_u32(&mut self) -> u32 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        self.0 = x;
+        x
+    }
+
+    /// A uniform number in `[lo, hi)`.
+    pub fn uniform(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * ((self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0))
+    }
+}
+
+/// Why a frame could not be made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameError;
+
+/// Makes the frames and joint samples of a run on the board.
+///
+/// The target is fixed in the world (slowly drifting) while the PA-10 carries the cameras
+/// along [`CaseGen::joints`], so the feedforward of the arm's motion is the right one, as in
+/// operation.
+#[derive(Debug, Clone)]
+pub struct CaseGen {
+    rig: StereoRig,
+    flange_to_camera: Isometry3<f32>,
+    world_from_block: Isometry3<f32>,
+    width: usize,
+    height: usize,
+    rng: XorShift32,
+}
+
+impl CaseGen {
+    /// The target's pose in `Σ_CR` at frame 0.
+    pub const START: Psi = Psi::new([-0.05, 0.01, 0.6], [0.0, 0.0, 0.5]);
+
+    /// A generator for `rig` (both cameras of one size) on a PA-10 flange at
+    /// `flange_to_camera`; the same `seed` gives the same frames.
+    ///
+    /// # Errors
+    /// [`FrameError`] if [`CaseGen::START`] is not a valid pose (never).
+    pub fn new(rig: StereoRig, flange_to_camera: Isometry3<f32>, seed: u32) -> Result<Self, FrameError> {
+        let (width, height) = (usize::from(rig.right.width()), usize::from(rig.right.height()));
+        let cam0 = PA10.forward(&Self::joints(0, false).q) * flange_to_camera;
+        let start = Self::START.try_to_isometry().map_err(|_| FrameError)?;
+        Ok(Self { rig, flange_to_camera, world_from_block: cam0 * start, width, height, rng: XorShift32::new(seed) })
+    }
+
+    /// The target's true pose in `Σ_CR` at frame `k` (arm at [`CaseGen::joints`]`(k, fast)`):
+    /// fixed in the world but for a slow drift (a few cm, a few degrees).
+    pub fn truth(&self, k: u32, fast: bool) -> Psi {
+        let t = k as f32 * (FRAME_PERIOD_US as f32 * 1e-6);
+        let s = |w: f32| evorec_core::math::sin(w * t);
+        let drift = Isometry3::from_parts(
+            Translation3::new(0.03 * s(1.1), 0.02 * s(0.7), 0.05 * s(0.5)),
+            UnitQuaternion::from_scaled_axis(Vector3::new(0.1 * s(0.9), 0.15 * s(0.6), 0.2 * s(0.4))),
+        );
+        let cam = PA10.forward(&Self::joints(k, fast).q) * self.flange_to_camera;
+        Psi::from_isometry(&(cam.inverse() * self.world_from_block * drift))
+    }
+
+    /// Joint sample of frame `k`: a sinusoid about a bent PA-10 pose, `q̇ ≠ 0`; `fast`
+    /// multiplies the joint amplitudes and speeds by 4 (joint speeds up to about 0.5 rad/s).
+    pub fn joints(k: u32, fast: bool) -> JointSample<7> {
+        let t = k as f32 * (FRAME_PERIOD_US as f32 * 1e-6);
+        let q0 = [0.1, 0.4, -0.1, 1.2, 0.05, 0.6, 0.0];
+        let amp = [0.05, -0.04, 0.03, 0.05, -0.03, 0.04, 0.06];
+        let (w, gain) = if fast { (2.0, 4.0) } else { (2.0, 1.0) };
+        let (s, c) = evorec_core::math::sin_cos(w * t);
+        JointSample {
+            q: core::array::from_fn(|i| q0[i] + amp[i] * s * gain),
+            qd: core::array::from_fn(|i| amp[i] * w * c * gain),
+            time_us: u64::from(k) * FRAME_PERIOD_US,
+        }
+    }
+
+    fn render(&self, psi: &Psi, left: &mut [u8], right: &mut [u8]) -> Result<(), FrameError> {
+        let iso = psi.try_to_isometry().map_err(|_| FrameError)?;
+        synth::render_block(&Block::PAPER, &self.rig.right, &iso, right).map_err(|_| FrameError)?;
+        synth::render_block(&Block::PAPER, &self.rig.left, &(self.rig.left_from_right * iso), left)
+            .map_err(|_| FrameError)
+    }
+
+    fn random_pose(&mut self) -> Psi {
+        let r = &mut self.rng;
+        let mut p = Psi::new(
+            [r.uniform(-0.12, 0.12), r.uniform(-0.09, 0.09), r.uniform(0.45, 0.95)],
+            [r.uniform(-0.7, 0.7), r.uniform(-0.7, 0.7), r.uniform(-0.7, 0.7)],
+        );
+        p.project_to_ball();
+        p
+    }
+
+    fn noise(&mut self, img: &mut [u8], every: u32) {
+        for px in img.iter_mut() {
+            let x = self.rng.next_u32();
+            if x.is_multiple_of(every) {
+                *px = (x >> 8) as u8;
+            }
+        }
+    }
+
+    fn patches(&mut self, img: &mut [u8]) {
+        // Hue units 30, 90, 150 (60°, 180°, 300°): half-way between the faces' 0°, 120°, 240°.
+        const DISTRACTORS: [u8; 3] = [30, 90, 150];
+        for i in 0..6u32 {
+            let w = 8 + (self.rng.next_u32() as usize % (self.width / 3));
+            let h = 8 + (self.rng.next_u32() as usize % (self.height / 3));
+            let x0 = self.rng.next_u32() as usize % (self.width - w);
+            let y0 = self.rng.next_u32() as usize % (self.height - h);
+            let hue = DISTRACTORS.get(i as usize % 3).copied().unwrap_or(NO_HUE);
+            for row in img.chunks_exact_mut(self.width).skip(y0).take(h) {
+                if let Some(span) = row.get_mut(x0..x0 + w) {
+                    span.fill(hue);
+                }
+            }
+        }
+    }
+
+    /// Writes frame `k` of `kind` into `left`/`right` (each `width · height` bytes) and returns
+    /// its joint sample.
+    ///
+    /// # Errors
+    /// [`FrameError`] if a buffer is too small.
+    pub fn frame(
+        &mut self,
+        k: u32,
+        kind: CaseKind,
+        left: &mut [u8],
+        right: &mut [u8],
+    ) -> Result<JointSample<7>, FrameError> {
+        let n = self.width * self.height;
+        let (left, right) = (left.get_mut(..n).ok_or(FrameError)?, right.get_mut(..n).ok_or(FrameError)?);
+        left.fill(NO_HUE);
+        right.fill(NO_HUE);
+        match kind {
+            CaseKind::Tracking | CaseKind::FastArm => {
+                let p = self.truth(k, kind == CaseKind::FastArm);
+                self.render(&p, left, right)?;
+            }
+            CaseKind::RandomPose => {
+                let p = self.random_pose();
+                self.render(&p, left, right)?;
+            }
+            CaseKind::Blank => {}
+            CaseKind::Absent => {
+                self.patches(left);
+                self.patches(right);
+            }
+            CaseKind::Filling => {
+                // Turned 90° about y, the 0.2 × 0.15 m side faces the cameras from 0.11 m:
+                // about 360 × 270 px at f = 200 px, more than either 160×120 image.
+                let x = -0.05 + self.rng.uniform(-0.005, 0.005);
+                let p = Psi::new([x, 0.0, 0.16], [0.0, core::f32::consts::FRAC_1_SQRT_2, 0.0]);
+                self.render(&p, left, right)?;
+            }
+            CaseKind::UniformHue => {
+                let face = (self.rng.next_u32() % 3) as usize;
+                let hue = hue::degrees_to_units(Block::PAPER.face_hues_deg.get(face).copied().unwrap_or(0.0));
+                left.fill(hue);
+                right.fill(hue);
+            }
+            CaseKind::Noise => {
+                self.noise(left, 1);
+                self.noise(right, 1);
+            }
+            CaseKind::NoisyTarget => {
+                let p = self.truth(k, false);
+                self.render(&p, left, right)?;
+                self.noise(left, 4);
+                self.noise(right, 4);
+            }
+        }
+        Ok(Self::joints(k, kind == CaseKind::FastArm))
+    }
+}
+
+/// One measured generation, as printed by the firmware and parsed by the host.
+///
+/// `GEN p=40 g=8 k=3 kind=blank call=… ff=… eval=… breed=… stack=… fitness=…`: ticks of the
+/// whole `step_probed` call and of its three phases, the painted stack high-water mark of
+/// the generation (bytes below the top of RAM) and the estimate's fitness.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GenLine {
+    /// Population size.
+    pub population: u32,
+    /// Points per row.
+    pub grid: u32,
+    /// Frame index in the run.
+    pub frame: u32,
+    /// Kind of frame.
+    pub kind: CaseKind,
+    /// Ticks of the whole `step_probed` call (input checks included).
+    pub call: u32,
+    /// Ticks of each phase.
+    pub phases: PhaseTicks,
+    /// Stack high-water mark of this generation (bytes from the top of RAM).
+    pub stack: u32,
+    /// Fitness of the estimate.
+    pub fitness: f32,
+}
+
+impl fmt::Display for GenLine {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "GEN p={} g={} k={} kind={} call={} ff={} eval={} breed={} stack={} fitness={}",
+            self.population,
+            self.grid,
+            self.frame,
+            self.kind.name(),
+            self.call,
+            self.phases.feedforward,
+            self.phases.evaluate,
+            self.phases.breed,
+            self.stack,
+            self.fitness
+        )
+    }
+}
+
+impl GenLine {
+    /// Parses a line printed by [`GenLine`]'s `Display`; `None` for any other line.
+    pub fn parse(line: &str) -> Option<Self> {
+        let mut words = line.split_whitespace();
+        if words.next()? != "GEN" {
+            return None;
+        }
+        let mut g = GenLine {
+            population: 0,
+            grid: 0,
+            frame: 0,
+            kind: CaseKind::Tracking,
+            call: 0,
+            phases: PhaseTicks::default(),
+            stack: 0,
+            fitness: 0.0,
+        };
+        let mut seen = 0u16;
+        for word in words {
+            let (key, value) = word.split_once('=')?;
+            let (slot, bit) = match key {
+                "p" => (&mut g.population, 0),
+                "g" => (&mut g.grid, 1),
+                "k" => (&mut g.frame, 2),
+                "call" => (&mut g.call, 3),
+                "ff" => (&mut g.phases.feedforward, 4),
+                "eval" => (&mut g.phases.evaluate, 5),
+                "breed" => (&mut g.phases.breed, 6),
+                "stack" => (&mut g.stack, 7),
+                "kind" => {
+                    g.kind = CaseKind::from_name(value)?;
+                    seen |= 1 << 8;
+                    continue;
+                }
+                "fitness" => {
+                    g.fitness = value.parse().ok()?;
+                    seen |= 1 << 9;
+                    continue;
+                }
+                _ => continue,
+            };
+            *slot = value.parse().ok()?;
+            seen |= 1 << bit;
+        }
+        (seen == 0x3ff).then_some(g)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use core::cell::Cell;
+    use std::format;
+    use std::vec;
+
+    struct Fake(Cell<u32>);
+
+    impl DownCounter for Fake {
+        fn read(&self) -> u32 {
+            let v = self.0.get();
+            self.0.set(v.wrapping_sub(7));
+            v
+        }
+    }
+
+    #[test]
+    fn probe_measures_each_phase_across_a_wrap() {
+        let clock = Fake(Cell::new(10));
+        let mut p = PhaseTimer::new(&clock);
+        assert_eq!(p.phases(), None);
+        for ph in [Phase::Feedforward, Phase::Evaluate, Phase::Breed, Phase::Done] {
+            p.mark(ph);
+        }
+        assert_eq!(p.phases(), Some(PhaseTicks { feedforward: 7, evaluate: 7, breed: 7 }));
+    }
+
+    #[test]
+    fn ticks_convert_at_shift_10() {
+        // 1024 ns per instruction, 40 ns per tick: 128 ticks = 5 instructions.
+        assert_eq!(ticks_to_instructions(128), 5.0);
+    }
+
+    #[test]
+    fn schedule_covers_every_kind_evenly() {
+        for frames in [FULL_FRAMES, SWEEP_FRAMES] {
+            for kind in CaseKind::ALL {
+                let n = (0..frames).filter(|&k| schedule(k, frames) == kind).count() as u32;
+                assert!(n >= frames / 9 - 1 && n >= 2, "{kind:?}: {n} of {frames}");
+            }
+        }
+        assert_eq!(schedule(0, FULL_FRAMES), CaseKind::Tracking);
+        assert_eq!(schedule(FULL_FRAMES - 1, FULL_FRAMES), CaseKind::FastArm);
+    }
+
+    #[test]
+    fn gen_lines_round_trip() {
+        let g = GenLine {
+            population: 40,
+            grid: 8,
+            frame: 3,
+            kind: CaseKind::NoisyTarget,
+            call: 123_456,
+            phases: PhaseTicks { feedforward: 1, evaluate: 2, breed: 3 },
+            stack: 2048,
+            fitness: 0.8125,
+        };
+        assert_eq!(GenLine::parse(&format!("{g}")), Some(g));
+        assert_eq!(GenLine::parse("GEN p=40 g=8"), None);
+        assert_eq!(GenLine::parse("[INFO ] hello"), None);
+    }
+
+    #[test]
+    fn frames_of_every_kind_are_made() {
+        let config = crate::selftest::tracker_config().unwrap();
+        let mut cases = CaseGen::new(config.rig, config.flange_to_camera, 5).unwrap();
+        let (mut l, mut r) = (vec![0u8; 160 * 120], vec![0u8; 160 * 120]);
+        for (k, kind) in CaseKind::ALL.into_iter().enumerate() {
+            let k = 14 * k as u32 + 13;
+            let j = cases.frame(k, kind, &mut l, &mut r).unwrap();
+            let painted = l.iter().filter(|&&h| h != NO_HUE).count();
+            match kind {
+                CaseKind::Blank => assert_eq!(painted, 0),
+                CaseKind::Filling | CaseKind::UniformHue | CaseKind::Noise => {
+                    assert!(painted > 150 * 110, "{kind:?}: {painted}")
+                }
+                // Fast arm motion may carry the target out of view: only the speed is checked.
+                CaseKind::FastArm => assert!(j.qd.iter().any(|v| v.abs() > 0.2), "{:?}", j.qd),
+                _ => assert!(painted > 100, "{kind:?}: {painted}"),
+            }
+            assert!(j.qd.iter().any(|v| *v != 0.0));
+        }
+        assert!(cases.frame(0, CaseKind::Blank, &mut l[..10], &mut r).is_err());
+    }
+}

@@ -1,0 +1,96 @@
+//! The default configuration's instructions per GA generation stay under the budget on the
+//! Cortex-M4: counted under QEMU `-icount shift=10` with TIMER0 by the timing firmware
+//! (`hil-stubs/src/bin/evorec-timing.rs`, run through `evorec_sim::timing::measure`), so the
+//! count is deterministic — never wall time.
+//!
+//! Population 40, 5 points per row (the core's defaults), feedforward on, ≥ 100 frames of every kind (blank, target
+//! absent, target filling the image, noise, target under noise, tracked, random poses, fast
+//! arm): the worst generation must take at most [`GENERATION_BUDGET`] instructions, and the
+//! spread between frames of a scene must stay within [`RATIO_TARGET`] (bounded, data-independent
+//! work; adversarial one-hue and noise frames may only cost less, see the test).
+//!
+//! The firmware is not built here: build it first (`cd hil-stubs && cargo build --release`),
+//! or point `EVOREC_TIMING_ELF` at it. A missing ELF or QEMU fails the test with the command
+//! that fixes it; `EVOREC_SKIP_HIL=1` skips the test instead.
+
+use std::fmt;
+use std::path::Path;
+
+use evorec_firmware::timing::CaseKind;
+use evorec_sim::timing::{self, GENERATION_BUDGET, RATIO_TARGET};
+
+/// A test failure that prints its message as is (with the build or install hint).
+struct Failure(String);
+
+impl fmt::Debug for Failure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl<E: fmt::Display> From<E> for Failure {
+    fn from(e: E) -> Self {
+        Self(e.to_string())
+    }
+}
+
+#[test]
+fn default_generation_stays_within_the_instruction_budget() -> Result<(), Failure> {
+    if std::env::var_os("EVOREC_SKIP_HIL").is_some_and(|v| v == "1") {
+        println!("timing_budget skipped: EVOREC_SKIP_HIL=1");
+        return Ok(());
+    }
+    let elf = timing::find_image(timing::TIMING_IMAGE)?;
+    let qemu = timing::find_qemu()?;
+    let workdir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("timing_budget");
+    let m = timing::measure(&qemu, &elf, &workdir)?;
+    let full = m.runs.iter().find(|r| r.name == "full").ok_or_else(|| Failure("no full run".into()))?;
+    let s = full.stats();
+    println!(
+        "timing_budget: P = {}, G = {}, {} generations: {:.0}..{:.0} instructions (max/min {:.4}), \
+         feedforward ≤ {:.0}, evaluate ≤ {:.0}, breed ≤ {:.0}, {:.2} per point; budget {:.0}",
+        s.population,
+        s.grid,
+        s.generations,
+        s.call.min,
+        s.call.max,
+        s.call.ratio(),
+        s.feedforward.max,
+        s.evaluate.max,
+        s.breed.max,
+        s.per_point.max,
+        GENERATION_BUDGET
+    );
+    assert_eq!(
+        (s.population, s.grid),
+        (evorec_core::config::DEFAULT_POPULATION as u32, evorec_core::config::DEFAULT_GRID as u32),
+        "the full run is not the default configuration"
+    );
+    assert!(s.generations >= 100, "only {} generations measured", s.generations);
+    // Data independence. On frames of a scene (the target tracked, at random poses, filling the
+    // image, behind noise, under a fast arm; or no target at all) the work stays within
+    // RATIO_TARGET of the worst case. The adversarial frames (every pixel one face's hue, or
+    // pure noise) make the GA spread individuals out of the image, whose points skip the pixel
+    // load and cost less: they may lower the minimum, never raise the maximum, which is checked
+    // against the budget below over every frame.
+    let scene = |k: &CaseKind| !matches!(k, CaseKind::UniformHue | CaseKind::Noise);
+    let calls: Vec<f64> = full
+        .generations
+        .iter()
+        .filter(|g| scene(&g.kind))
+        .map(|g| evorec_firmware::timing::ticks_to_instructions(u64::from(g.call)))
+        .collect();
+    let (lo, hi) = calls.iter().fold((f64::MAX, 0.0f64), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+    assert!(calls.len() >= 90, "only {} scene frames", calls.len());
+    assert!(hi / lo <= RATIO_TARGET, "work depends on the scene: max/min = {:.4} > {RATIO_TARGET}", hi / lo);
+    assert!(
+        s.call.max <= GENERATION_BUDGET,
+        "worst generation takes {:.0} instructions, {:.1} % over the budget of {GENERATION_BUDGET:.0} \
+         (evaluate {:.0} = {:.2} per sample point)",
+        s.call.max,
+        (s.call.max / GENERATION_BUDGET - 1.0) * 100.0,
+        s.evaluate.max,
+        s.per_point.max
+    );
+    Ok(())
+}

@@ -1,5 +1,6 @@
 //! Host benchmarks: one fitness evaluation and one GA generation at the default
-//! configuration (640×480 stereo pair, population 40, 6 points per row).
+//! configuration (640×480 stereo pair, population 40, `DEFAULT_GRID` points per row), and the
+//! fitness with rows of 4 and 16 points (for the marginal cost of a point).
 //!
 //! `cargo bench -p evorec-core --bench generation`. ns per sample-point evaluation =
 //! time of `fitness/one_pose` / `2 · POINTS_PER_CAMERA`.

@@ -155,22 +155,23 @@ impl<const DOF: usize> Chain<DOF> {
     }
 }
 
+/// PA-10 reference values for the tests of this crate.
 #[cfg(test)]
-#[allow(clippy::excessive_precision, clippy::approx_constant)] // reference values are copied verbatim
-mod tests {
-    use super::*;
-
+#[allow(clippy::excessive_precision, clippy::approx_constant)] // copied verbatim
+pub(crate) mod reference {
     /// Reference values from a third-party robotics toolbox
     /// (shared/reference/pa10_fk_vectors.json): q, flange position, rotation (row-major),
     /// Jacobian (6 rows of 7).
-    struct Case {
-        q: [f32; 7],
-        p: [f32; 3],
-        r: [f32; 9],
-        j: [[f32; 7]; 6],
+    pub(crate) struct Case {
+        pub q: [f32; 7],
+        pub p: [f32; 3],
+        pub r: [f32; 9],
+        pub j: [[f32; 7]; 6],
+        /// Flange quaternion `[x, y, z, w]`, `w ≥ 0`.
+        pub quat_xyzw: [f32; 4],
     }
 
-    const CASES: [Case; 4] = [
+    pub(crate) const CASES: [Case; 4] = [
         Case {
             q: [0.0; 7],
             p: [0.0, 0.0, 1.345],
@@ -183,6 +184,7 @@ mod tests {
                 [0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0],
                 [1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0],
             ],
+            quat_xyzw: [0.0, 0.0, 0.0, 1.0],
         },
         Case {
             q: [0.1, -0.4, 0.3, 1.2, -0.5, 0.7, 0.2],
@@ -206,6 +208,7 @@ mod tests {
                 [0.0, 0.9950041653, -0.0388769636, 0.9233899151, 0.3418486399, 0.8940660165, 0.0749868191],
                 [1.0, 0.0, 0.9210609940, -0.1150809890, 0.6804959489, -0.4479334369, 0.1468919009],
             ],
+            quat_xyzw: [-0.1123728197, 0.6433711207, -0.0733666052, 0.7536997358],
         },
         Case {
             q: [-1.0, 0.6, -0.8, -1.4, 2.0, -1.1, 3.0],
@@ -229,6 +232,7 @@ mod tests {
                 [0.0, 0.5403023059, -0.4751302582, -0.1217686745, 0.7780128008, 0.6111052123, 0.2229996032],
                 [1.0, 0.0, 0.8253356149, -0.4050497175, 0.5279462024, -0.5101970453, 0.8445587204],
             ],
+            quat_xyzw: [0.1991366536, -0.1951031342, -0.9035645174, 0.3253467735],
         },
         Case {
             q: [0.7853981634, 0.5235987756, 0.0, 1.0471975512, 0.0, 0.7853981634, 0.0],
@@ -242,8 +246,15 @@ mod tests {
                 [0.0, 0.7071067812, 0.3535533906, 0.7071067812, 0.7071067812, 0.7071067812, 0.5],
                 [1.0, 0.0, 0.8660254038, 0.0, 0.0, 0.0, -0.7071067812],
             ],
+            quat_xyzw: [-0.3535533906, 0.8535533906, 0.1464466094, 0.3535533906],
         },
     ];
+}
+
+#[cfg(test)]
+mod tests {
+    use super::reference::CASES;
+    use super::*;
 
     const TOL: f32 = 1e-5;
 

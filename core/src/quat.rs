@@ -166,7 +166,6 @@ pub fn propagation(q: &UnitQuaternion<f32>, omega: &Vector3<f32>) -> (f32, Vecto
 }
 
 #[cfg(test)]
-#[allow(clippy::excessive_precision, clippy::approx_constant)] // reference values are copied verbatim
 mod tests {
     use super::*;
     use core::f32::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
@@ -208,45 +207,11 @@ mod tests {
 
     #[test]
     fn pa10_reference_quaternions_from_matrices() {
-        // Flange rotations of the PA-10 at q_A, q_B and Choreonoid's standard pose, and their quaternions ([x, y, z, w], w ≥ 0),
-        // computed by a third-party toolbox (shared/reference/pa10_fk_vectors.json).
-        let cases: [([f32; 9], [f32; 4]); 3] = [
-            (
-                [
-                    0.1613818846,
-                    -0.0340020721,
-                    0.9863061119,
-                    -0.2551876358,
-                    0.9639793813,
-                    0.0749868191,
-                    -0.9533284627,
-                    -0.2637946391,
-                    0.1468919009,
-                ],
-                [-0.1123728197, 0.6433711207, -0.0733666052, 0.7536997358],
-            ),
-            (
-                [
-                    -0.7089881402,
-                    0.5102392303,
-                    -0.4868179791,
-                    -0.6656479714,
-                    -0.7121684879,
-                    0.2229996032,
-                    -0.2329132782,
-                    0.4821534742,
-                    0.8445587204,
-                ],
-                [0.1991366536, -0.1951031342, -0.9035645174, 0.3253467735],
-            ),
-            (
-                [-0.5, -0.7071067812, 0.5, -0.5, 0.7071067812, 0.5, -0.7071067812, 0.0, -0.7071067812],
-                [-0.3535533906, 0.8535533906, 0.1464466094, 0.3535533906],
-            ),
-        ];
-        for (m, xyzw) in cases {
-            let r = Matrix3::from_row_slice(&m);
-            let q = from_rotation_matrix(&r).unwrap();
+        // Flange rotations of the PA-10 and their quaternions ([x, y, z, w], w ≥ 0), computed by
+        // a third-party toolbox (the values shared with the kinematics tests).
+        for case in &crate::kinematics::reference::CASES {
+            let q = from_rotation_matrix(&Matrix3::from_row_slice(&case.r)).unwrap();
+            let xyzw = case.quat_xyzw;
             assert!((q.i - xyzw[0]).abs() < 1e-5, "{q:?}");
             assert!((q.j - xyzw[1]).abs() < 1e-5);
             assert!((q.k - xyzw[2]).abs() < 1e-5);

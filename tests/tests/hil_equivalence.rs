@@ -12,7 +12,6 @@
 //! or point `EVOREC_FIRMWARE_ELF` at it. A missing ELF or QEMU fails the test with the
 //! command that fixes it; `EVOREC_SKIP_HIL=1` skips the test instead.
 
-use std::fmt;
 use std::path::Path;
 use std::time::Instant;
 
@@ -27,6 +26,7 @@ use evorec_core::tracker::{Estimate, Feedforward, JointSample, Tracker, TrackerC
 use evorec_core::{quat, synth};
 use evorec_firmware::host::{HilSession, Reply, default_firmware_path};
 use evorec_firmware::protocol::{Frame, Setup};
+use evorec_tests::{Failure, fail};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
 const WIDTH: u16 = 160;
@@ -37,25 +37,6 @@ const PERIOD_US: u64 = 33_333;
 const DROPPED: u32 = 40;
 /// This frame has the wrong size; the tracker on both sides refuses it.
 const WRONG_SIZE: u32 = 70;
-
-/// A test failure that prints its message as is (with the build or install hint).
-struct Failure(String);
-
-impl fmt::Debug for Failure {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl<E: fmt::Display> From<E> for Failure {
-    fn from(e: E) -> Self {
-        Self(e.to_string())
-    }
-}
-
-fn fail(msg: impl Into<String>) -> Failure {
-    Failure(msg.into())
-}
 
 /// One recorded frame pair with its joint sample.
 struct Recorded {

@@ -13,26 +13,11 @@
 //! or point `EVOREC_TIMING_ELF` at it. A missing ELF or QEMU fails the test with the command
 //! that fixes it; `EVOREC_SKIP_HIL=1` skips the test instead.
 
-use std::fmt;
 use std::path::Path;
 
 use evorec_firmware::timing::CaseKind;
 use evorec_sim::timing::{self, GENERATION_BUDGET, RATIO_TARGET};
-
-/// A test failure that prints its message as is (with the build or install hint).
-struct Failure(String);
-
-impl fmt::Debug for Failure {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl<E: fmt::Display> From<E> for Failure {
-    fn from(e: E) -> Self {
-        Self(e.to_string())
-    }
-}
+use evorec_tests::Failure;
 
 #[test]
 fn default_generation_stays_within_the_instruction_budget() -> Result<(), Failure> {

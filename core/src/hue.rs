@@ -149,8 +149,8 @@ pub fn degrees_to_units(deg: f32) -> u8 {
     let mut u = deg / 2.0;
     // Bounded wrap: a finite f32 angle beyond ±1e6° is nonsense input; clamp it first.
     u = crate::math::clamp(u, -1.0e6, 1.0e6);
-    let r = u - units * libm::floorf(u / units);
-    let n = libm::roundf(r) as i32;
+    let r = u - units * crate::math::floor(u / units);
+    let n = crate::math::round(r) as i32;
     u8::try_from(n.rem_euclid(i32::from(HUE_UNITS))).unwrap_or(0)
 }
 

@@ -30,6 +30,18 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     libm::atan2f(y, x)
 }
 
+/// Largest integer not above `x`.
+#[inline(always)]
+pub fn floor(x: f32) -> f32 {
+    libm::floorf(x)
+}
+
+/// Nearest integer, halves away from zero.
+#[inline(always)]
+pub fn round(x: f32) -> f32 {
+    libm::roundf(x)
+}
+
 /// Sine and cosine of the same angle.
 #[inline(always)]
 pub fn sin_cos(x: f32) -> (f32, f32) {

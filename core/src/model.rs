@@ -238,11 +238,7 @@ impl<const G: usize> SurfaceStrips<G> {
     }
 
     fn rows(&self, k: usize, inner: bool) -> impl Iterator<Item = Point3<f32>> + '_ {
-        let edges = self.faces.get(k).map(|f| f.edges).unwrap_or(
-            [Edge { base: Vector3::zeros(), step: Vector3::zeros(), inward: Vector3::zeros(), neighbour: 0 }; 4],
-        );
-        let n = if self.faces.get(k).is_some() { 4 } else { 0 };
-        edges.into_iter().take(n).flat_map(move |e| {
+        self.faces.get(k).into_iter().flat_map(|f| f.edges).flat_map(move |e| {
             ROW_DISTANCES_M
                 .iter()
                 .filter(move |d| (**d > 0.0) == inner)

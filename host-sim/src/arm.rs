@@ -398,14 +398,7 @@ mod tests {
     }
 
     fn max_tracking_error(kind: MotionKind, omega: f64, seconds: f64) -> (f64, f64) {
-        let traj = FlangeTrajectory {
-            kind,
-            start: initial_flange_pose(),
-            orbit_centre: target_centre(0.1, 0.7),
-            omega_rad_s: omega,
-            amplitude_m: 0.1,
-            amplitude_rad: 15f64.to_radians(),
-        };
+        let traj = crate::motion::test_trajectory(kind, omega);
         let mut sim = ArmSim::new(q0());
         let (mut ep, mut er) = (0.0f64, 0.0f64);
         let steps = (seconds / CONTROL_PERIOD_S).round() as usize;

@@ -106,6 +106,13 @@ pub struct Summary {
     pub evorec_version: &'static str,
 }
 
+impl Summary {
+    /// The summary of a run's trace.
+    pub fn of(rows: &[TraceRow], rejected: u32, scenario: &Scenario) -> Self {
+        Self { accuracy: Accuracy::of(rows), rejected, scenario: *scenario, evorec_version: env!("CARGO_PKG_VERSION") }
+    }
+}
+
 /// The outcome of a run.
 #[derive(Debug, Clone)]
 pub struct RunOutput {
@@ -131,12 +138,7 @@ pub fn run(s: &Scenario, mut on_frame: impl FnMut()) -> Result<RunOutput> {
     let stats = board::run(&mut board, &mut tracker, feedforward(s.method), &mut left, &mut right, u32::MAX)
         .map_err(|e| anyhow::anyhow!("simulated board: {e:?}"))?;
     let rows = board.inner.into_rows();
-    let summary = Summary {
-        accuracy: Accuracy::of(&rows),
-        rejected: stats.rejected,
-        scenario: *s,
-        evorec_version: env!("CARGO_PKG_VERSION"),
-    };
+    let summary = Summary::of(&rows, stats.rejected, s);
     Ok(RunOutput { rows, summary })
 }
 

@@ -15,7 +15,7 @@ use evorec_firmware::host::{HilSession, Reply};
 use evorec_firmware::protocol::{Frame, Setup};
 use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH};
 
-use crate::experiment::{self, Accuracy, INITIAL_SPREAD, RunOutput, Summary};
+use crate::experiment::{self, INITIAL_SPREAD, RunOutput, Summary};
 use crate::scenario::Scenario;
 use crate::sim::{SimBoard, World};
 
@@ -63,7 +63,6 @@ pub fn run(s: &Scenario, firmware: &Path, workdir: &Path, mut on_frame: impl FnM
     let done = session.finish().map_err(|e| anyhow::anyhow!("{e}")).context("finishing the firmware run")?;
     log::info!("firmware: {:?}, log in {}", done.done, done.log_path.display());
     let rows = board.into_rows();
-    let summary =
-        Summary { accuracy: Accuracy::of(&rows), rejected, scenario: *s, evorec_version: env!("CARGO_PKG_VERSION") };
+    let summary = Summary::of(&rows, rejected, s);
     Ok(RunOutput { rows, summary })
 }

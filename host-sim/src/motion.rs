@@ -238,19 +238,25 @@ impl TargetMotion {
     }
 }
 
+/// The default geometry's trajectory (baseline 0.1 m, 0.7 m, ±0.1 m, ±15°) for tests.
+#[cfg(test)]
+pub(crate) fn test_trajectory(kind: MotionKind, omega: f64) -> FlangeTrajectory {
+    FlangeTrajectory {
+        kind,
+        start: initial_flange_pose(),
+        orbit_centre: target_centre(0.1, 0.7),
+        omega_rad_s: omega,
+        amplitude_m: 0.1,
+        amplitude_rad: 15f64.to_radians(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn traj(kind: MotionKind, omega: f64) -> FlangeTrajectory {
-        FlangeTrajectory {
-            kind,
-            start: initial_flange_pose(),
-            orbit_centre: target_centre(0.1, 0.7),
-            omega_rad_s: omega,
-            amplitude_m: 0.1,
-            amplitude_rad: 15f64.to_radians(),
-        }
+        test_trajectory(kind, omega)
     }
 
     #[test]

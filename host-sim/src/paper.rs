@@ -132,9 +132,9 @@ pub type GridResults = Vec<(Cell, Accuracy)>;
 /// Any run's or any file's error.
 pub fn run_grid(base: &Scenario, out: &Path, show_progress: bool) -> Result<GridResults> {
     let cells = grid();
-    let frames_per_run = (DURATION_S / base.frame_period_s).round() as u64 + 1;
+    let frames: u64 = cells.iter().map(|c| u64::from(crate::sim::frame_total(&scenario_of(base, c)))).sum();
     let bar = if show_progress {
-        let b = ProgressBar::new(frames_per_run * cells.len() as u64);
+        let b = ProgressBar::new(frames);
         b.set_style(
             ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {percent:>3}% {pos}/{len} frames, eta {eta}")
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),

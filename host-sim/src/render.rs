@@ -463,7 +463,17 @@ pub fn render_stereo<R: Rng + ?Sized>(
 /// The hue image of `img` (row-major, one byte per pixel), converted pixel by pixel with the
 /// core's [`rgb_to_hue`], so the simulator sees exactly what the board would compute.
 pub fn hue_image(img: &RgbImage) -> Vec<u8> {
-    img.as_raw().chunks_exact(3).map(|p| rgb_to_hue(p[0], p[1], p[2])).collect()
+    let mut out = vec![0u8; (img.width() * img.height()) as usize];
+    hue_into(img, &mut out);
+    out
+}
+
+/// [`hue_image`] into a caller's buffer (the first `width·height` bytes; a shorter buffer gets
+/// as many pixels as it holds).
+pub fn hue_into(img: &RgbImage, out: &mut [u8]) {
+    for (d, p) in out.iter_mut().zip(img.as_raw().chunks_exact(3)) {
+        *d = rgb_to_hue(p[0], p[1], p[2]);
+    }
 }
 
 /// Draws a small `+` mark (3 × 3 pixels) of `colour` at each point given in continuous pixel

@@ -177,10 +177,9 @@ pub struct SimBoard {
 }
 
 impl SimBoard {
-    /// A board delivering `round(duration / frame_period) + 1` frames of `world`'s scenario.
+    /// A board delivering [`frame_total`] frames of `world`'s scenario.
     pub fn new(world: World) -> Self {
-        let s = world.scenario();
-        let frames = (s.duration_s / s.frame_period_s).round() as u32 + 1;
+        let frames = frame_total(world.scenario());
         Self { world, frames, next: 0, current: None, rows: Vec::with_capacity(frames as usize) }
     }
 
@@ -222,11 +221,8 @@ impl CameraController<DOF> for SimBoard {
         let t = f64::from(self.next) * self.world.scenario().frame_period_s;
         self.world.advance_to(t);
         let images = self.world.render();
-        for (dst, src) in [(&mut *left, &images.left), (&mut *right, &images.right)] {
-            for (d, p) in dst.iter_mut().zip(src.as_raw().chunks_exact(3)) {
-                *d = evorec_core::hue::rgb_to_hue(p[0], p[1], p[2]);
-            }
-        }
+        render::hue_into(&images.left, left);
+        render::hue_into(&images.right, right);
         let joints = self.world.arm().joint_sample();
         self.current = Some((t, self.world.truth(), joints));
         let info = FrameInfo {
@@ -256,6 +252,11 @@ impl CameraController<DOF> for SimBoard {
         }
         Ok(())
     }
+}
+
+/// Frames of a run: `round(duration / frame_period) + 1` (frames at `t = 0, T, 2T, …`).
+pub fn frame_total(s: &Scenario) -> u32 {
+    (s.duration_s / s.frame_period_s).round() as u32 + 1
 }
 
 /// Checks a frame index against a scenario and returns its capture time.

@@ -16,7 +16,7 @@
 //! - [`camera`]: pinhole cameras and the stereo rig (eq. 26–31).
 //! - [`hue`]: validated hue-image views, RGB→hue, the hue match table.
 //! - [`model`]: the surface-strips block model; [`fitness`]: eq. 34–35.
-//! - [`ga`]: the 1-step GA; [`kinematics`]: DH chains, the PA-10, Jacobians;
+//! - [`ga`]: the 1-step GA; [`kinematics`]: serial chains (from DH or URDF), the PA-10, Jacobians;
 //!   [`feedforward`]: eq. 15–25.
 //! - [`tracker`]: one generation per frame pair; [`board`]: the camera-controller trait and
 //!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.

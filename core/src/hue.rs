@@ -73,6 +73,7 @@ pub fn hue_distance(a: u8, b: u8) -> u8 {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HueLut {
     table: [u8; 256],
+    planes: [[u8; 256]; 8],
 }
 
 impl HueLut {
@@ -87,7 +88,15 @@ impl HueLut {
                 }
             }
         }
-        Self { table }
+        let planes = core::array::from_fn(|k| table.map(|m| (m >> k) & 1));
+        Self { table, planes }
+    }
+
+    /// Bit `k` of every entry, as 0 or 1: `plane(k)[h] == (mask(h) >> k) & 1` (one load and
+    /// one addition per point when counting matches of a single face). `k ≥ 8` gives bit 7's.
+    #[inline(always)]
+    pub fn plane(&self, k: usize) -> &[u8; 256] {
+        &self.planes[k.min(7)]
     }
 
     /// The face bitmask of hue byte `h`.
@@ -152,6 +161,11 @@ mod tests {
         assert_eq!(lut.mask(66), 0);
         assert_eq!(lut.mask(NO_HUE), 0);
         assert_eq!(lut.mask(200), 0);
+        for h in 0..=255u8 {
+            for k in 0..8 {
+                assert_eq!(lut.plane(k)[usize::from(h)], (lut.mask(h) >> k) & 1);
+            }
+        }
     }
 
     #[test]

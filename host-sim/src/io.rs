@@ -7,6 +7,20 @@ use serde::Serialize;
 
 use crate::sim::TraceRow;
 
+/// Creates the output directory `dir` (and its parents) and checks that a file can be created
+/// in it, so a command fails before its work rather than after it.
+///
+/// # Errors
+/// `cannot create output directory DIR: …` or `cannot write into output directory DIR: …`.
+pub fn create_out_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create output directory {}", dir.display()))?;
+    tempfile::Builder::new()
+        .prefix(".evorec-probe")
+        .tempfile_in(dir)
+        .with_context(|| format!("cannot write into output directory {}", dir.display()))?;
+    Ok(())
+}
+
 /// Header of `trace.csv`.
 pub fn trace_header() -> Vec<String> {
     let mut h = vec!["t".to_owned()];

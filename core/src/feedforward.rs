@@ -48,7 +48,8 @@ pub fn camera_twist<const DOF: usize>(
     let (j, r_wc, _) = chain.jacobian_at(q, flange_to_camera);
     let jqd = j * SVector::<f32, DOF>::from(*qd);
     let r_cw = r_wc.transpose();
-    CameraTwist { v: r_cw * Vector3::new(jqd[0], jqd[1], jqd[2]), w: r_cw * Vector3::new(jqd[3], jqd[4], jqd[5]) }
+    let [vx, vy, vz, wx, wy, wz]: [f32; 6] = jqd.into();
+    CameraTwist { v: r_cw * Vector3::new(vx, vy, vz), w: r_cw * Vector3::new(wx, wy, wz) }
 }
 
 /// `^CR ψ̇` of a static target at `psi` seen from a camera moving with `twist` (eq. 24).

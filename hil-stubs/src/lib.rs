@@ -63,10 +63,16 @@
 #[cfg(any(test, feature = "host"))]
 extern crate std;
 
+// The modules that handle link data deny indexing and slicing that can panic (the panic probe,
+// scripts/panic-check.sh, checks the compiled result).
+#[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod crc;
+#[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod link_board;
+#[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod protocol;
 pub mod selftest;
+#[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod setup;
 pub mod timing;
 

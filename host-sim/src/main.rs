@@ -1,12 +1,13 @@
 //! `evorec`: the host simulator's command line.
 
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use evorec_sim::scenario::{Method, Scenario};
-use evorec_sim::{experiment, frame, hil, paper};
+use evorec_sim::{experiment, frame, hil, io, paper};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -95,11 +96,41 @@ fn report(a: &experiment::Accuracy, t0: Instant) {
     );
 }
 
-fn main() -> Result<()> {
-    let cli = Cli::parse();
+/// Runs the command; on failure prints ONE line `error: …` (the error chain, de-duplicated: see
+/// [`error_line`]) to stderr and exits with status 1. No backtrace is printed: `anyhow`'s
+/// `Debug` output (which `fn main() -> Result` would use) is not involved.
+fn main() -> ExitCode {
+    match execute(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", error_line(&e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The error and its causes joined by `": "`, leaving out every cause whose text the line
+/// already holds (a wrapper such as `ScenarioError::InFile` prints its source in its own message).
+fn error_line(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
+}
+
+fn execute(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Run { scenario, out } => {
             let s = load(&scenario)?;
+            io::create_out_dir(&out)?;
             let t0 = Instant::now();
             let output = experiment::run(&s, || {})?;
             let title = format!("{} ({})", scenario.display(), s.method.as_str());
@@ -112,6 +143,7 @@ fn main() -> Result<()> {
                 Some(p) => load(&p)?,
                 None => Scenario::new(1, paper::DURATION_S, Method::Ff),
             };
+            io::create_out_dir(&out)?;
             let t0 = Instant::now();
             let results = paper::run_grid(&base, &out, !quiet)?;
             println!("{}", paper::markdown(&results));
@@ -119,6 +151,7 @@ fn main() -> Result<()> {
         }
         Command::Hil { scenario, out, firmware } => {
             let s = load(&scenario)?;
+            io::create_out_dir(&out)?;
             let firmware = firmware.unwrap_or_else(evorec_firmware::host::default_firmware_path);
             let t0 = Instant::now();
             let output = hil::run(&s, &firmware, &out.join("qemu"), || {})?;
@@ -128,10 +161,12 @@ fn main() -> Result<()> {
             println!("wrote {}", out.display());
         }
         Command::Timing { out } => {
+            io::create_out_dir(&out)?;
             evorec_sim::timing::run(&out)?;
         }
         Command::Render { scenario, frame: n, out } => {
             let s = load(&scenario)?;
+            io::create_out_dir(&out)?;
             let files = frame::render_frame(&s, n, &out).context("rendering")?;
             for f in files {
                 println!("wrote {}", f.display());

@@ -191,7 +191,7 @@ fn render_png(
         root.present().map_err(draw_err)?;
     }
     let img = image::RgbImage::from_raw(size.0, size.1, buf).ok_or_else(|| anyhow!("bad plot buffer size"))?;
-    img.save_with_format(path, image::ImageFormat::Png).with_context(|| format!("cannot write {}", path.display()))
+    crate::io::write_png(path, &img)
 }
 
 /// Three stacked panels of `(truth, estimate, y description)` with a title.

@@ -1172,8 +1172,7 @@ pub fn run(out: &Path) -> Result<()> {
         },
     });
     let json_path = out.join("timing.json");
-    fs::write(&json_path, serde_json::to_string_pretty(&json)? + "\n")
-        .with_context(|| format!("writing {}", json_path.display()))?;
+    crate::io::write_json(&json_path, &json)?;
 
     let md = markdown(
         &fs_,
@@ -1189,7 +1188,7 @@ pub fn run(out: &Path) -> Result<()> {
         read_ins,
     );
     let md_path = out.join("timing.md");
-    fs::write(&md_path, md).with_context(|| format!("writing {}", md_path.display()))?;
+    crate::io::write_bytes(&md_path, md.as_bytes())?;
     println!(
         "instructions per generation (P = {}, G = {}): min {:.0}, max {:.0} (max/min {:.4}); {:.2} per point; stack {} B; \
          flash {} B; static RAM {} B; ESTIMATE {:.0} cycles = {:.0} µs at 168 MHz",

@@ -79,6 +79,8 @@ const fn up(d: f32) -> Frame {
     Frame { rotation: [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]], translation: [0.0, 0.0, d] }
 }
 
+// Only evaluated in the `PA10` constant below: an index out of range fails to compile.
+#[allow(clippy::indexing_slicing)]
 const fn pa10_joint(origin: Frame, i: usize) -> Joint {
     Joint::revolute(origin, PA10_DH[i].q_min, PA10_DH[i].q_max)
 }

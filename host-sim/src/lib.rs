@@ -18,5 +18,7 @@ pub mod paper;
 pub mod plot;
 pub mod render;
 pub mod scenario;
+pub mod sequence;
 pub mod sim;
 pub mod timing;
+pub mod track;

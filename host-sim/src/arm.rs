@@ -53,7 +53,7 @@ pub fn flange_to_camera(baseline_m: f64) -> Isometry3<f32> {
 
 /// Joint limits `(q_min, q_max)` of the PA-10 (rad), from the core's DH table.
 pub fn joint_limits() -> [(f64, f64); DOF] {
-    std::array::from_fn(|i| (f64::from(PA10.links[i].q_min), f64::from(PA10.links[i].q_max)))
+    std::array::from_fn(|i| (f64::from(PA10.joints[i].q_min), f64::from(PA10.joints[i].q_max)))
 }
 
 /// Flange pose `^W T_H(q)` from the core's forward kinematics.

@@ -26,7 +26,7 @@ use indicatif::ProgressBar;
 
 use crate::arm::{self, CONTROL_PERIOD_S};
 use crate::experiment::search_space;
-use crate::robot::{PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF};
+use crate::robot::{ArmModel, PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF};
 use crate::scenario::Scenario;
 use crate::sequence::manifest::{FORMAT, to_rows};
 use crate::sequence::{camera_info, tum};
@@ -86,7 +86,8 @@ fn write_sequence(s: &Scenario, name: &str, dir: &Path, progress: Option<Progres
     std::fs::create_dir_all(dir.join("left"))?;
     std::fs::create_dir_all(dir.join("right"))?;
 
-    let mut joints = joints_header();
+    let arm_model = ArmModel::from_urdf_str(PA10_URDF, PA10_BASE_LINK, PA10_FLANGE_LINK, "robot::PA10_URDF")?;
+    let mut joints = joints_header(&arm_model.joint_names);
     let mut frames = String::from("index,t_s,left,right\n");
     let mut truth = Vec::new();
     let mut samples = 0;
@@ -123,16 +124,18 @@ fn write_sequence(s: &Scenario, name: &str, dir: &Path, progress: Option<Progres
     record(&world, &mut joints);
     write_file(&dir.join("joints.csv"), &joints)?;
     write_file(&dir.join("frames.csv"), &frames)?;
-    let gt = tum::format("t tx ty tz qx qy qz qw: true pose of the block in the right camera frame (^CR T_M), metres", &truth);
+    let gt = tum::format(
+        "t tx ty tz qx qy qz qw: true pose of the block in the right camera frame (^CR T_M), metres",
+        &truth,
+    );
     write_file(&dir.join("groundtruth.tum"), &gt)?;
     Ok(ExportStats { frames: total as usize, joint_samples: samples })
 }
 
-fn joints_header() -> String {
-    let names: Vec<String> = (1..=arm::DOF).map(|i| format!("j{i}")).collect();
+fn joints_header(names: &[String]) -> String {
     let mut h = String::from("t_s");
     for prefix in ["pos_", "vel_"] {
-        for n in &names {
+        for n in names {
             h.push(',');
             h.push_str(prefix);
             h.push_str(n);

@@ -8,7 +8,7 @@ use clap::{Parser, Subcommand};
 use evorec_core::tracker::Feedforward;
 use evorec_sim::scenario::{Method, Scenario};
 use evorec_sim::sequence::Sequence;
-use evorec_sim::{experiment, frame, hil, paper, track};
+use evorec_sim::{experiment, export, frame, hil, paper, track};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -91,6 +91,19 @@ enum Command {
         /// Frame indices (frames.csv `index`) to draw the model at its estimate over, e.g. 0,90.
         #[arg(long, value_delimiter = ',')]
         overlay: Vec<u64>,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Write a simulator scenario as a recorded sequence (`evorec-seq/1`): the PA-10's URDF,
+    /// camera_info YAMLs, PNGs, joints at 1 kHz, ground truth, sequence.toml with the initial
+    /// pose; `evorec track SEQ` then reads it back.
+    Export {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Sequence directory to create (must not exist or be empty).
+        #[arg(long)]
+        out: PathBuf,
         /// Hide the progress bar.
         #[arg(long)]
         quiet: bool,
@@ -199,6 +212,16 @@ fn main() -> Result<()> {
                 progress: !quiet,
             };
             track_sequence(&seq, &out, &opts)?;
+        }
+        Command::Export { scenario, out, quiet } => {
+            let s = load(&scenario)?;
+            let name = scenario.file_stem().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            let bar = (!quiet).then(|| indicatif::ProgressBar::new(u64::from(evorec_sim::sim::frame_total(&s))));
+            let stats = export::export(&s, &name, &out, bar.clone())?;
+            if let Some(b) = bar {
+                b.finish_and_clear();
+            }
+            println!("wrote {} ({} frames, {} joint samples)", out.display(), stats.frames, stats.joint_samples);
         }
         Command::Timing { out } => {
             evorec_sim::timing::run(&out)?;

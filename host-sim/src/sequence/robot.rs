@@ -1,45 +1,34 @@
-//! The arm carrying the cameras, from the sequence's URDF (`base_link` → `flange_link`).
-//!
-//! INTERIM: until the URDF loader (`crate::robot::ArmModel`) lands, this module reads the
-//! chain's movable joint names with `urdf-rs` so that `joints.csv` can be checked, and
-//! [`Robot::chain`] reports that URDF kinematics are not available yet.
+//! The arm carrying the cameras, from the sequence's URDF (`base_link` → `flange_link`),
+//! through [`crate::robot::ArmModel`].
 
 use std::path::Path;
 
 use evorec_core::kinematics::Chain;
 
 use super::error::{Result, SequenceError};
+use crate::robot::ArmModel;
 
 /// The arm of a sequence.
 #[derive(Debug, Clone)]
 pub struct Robot {
-    /// Movable joints on the chain, base to flange.
+    /// Movable joints on the chain, base to flange (the order of `q`).
     pub joint_names: Vec<String>,
+    model: ArmModel,
 }
 
 impl Robot {
-    /// Reads the URDF at `path` and finds the chain from `base` to `flange`.
+    /// Reads the URDF at `path` and extracts the chain from `base` to `flange`.
     ///
     /// # Errors
-    /// Missing or malformed URDF, unknown links, no chain between them.
+    /// Missing or malformed URDF, unknown links, no chain between them, unusable joints.
     pub fn load(path: &Path, base: &str, flange: &str) -> Result<Self> {
-        let robot = urdf_rs::read_file(path).map_err(|e| SequenceError::file(path, format!("bad URDF: {e}")))?;
-        let mut names = Vec::new();
-        let mut link = flange.to_owned();
-        while link != base {
-            let Some(j) = robot.joints.iter().find(|j| j.child.link == link) else {
-                return Err(SequenceError::file(
-                    path,
-                    format!("no chain of joints from link \"{base}\" to \"{flange}\""),
-                ));
-            };
-            if !matches!(j.joint_type, urdf_rs::JointType::Fixed) {
-                names.push(j.name.clone());
-            }
-            link.clone_from(&j.parent.link);
-        }
-        names.reverse();
-        Ok(Self { joint_names: names })
+        let model = ArmModel::from_urdf_file(path, base, flange).map_err(|e| {
+            // The loader's messages start with the file's name; keep it once.
+            let text = e.to_string();
+            let prefix = format!("{}: ", path.display());
+            SequenceError::file(path, text.strip_prefix(&prefix).unwrap_or(&text))
+        })?;
+        Ok(Self { joint_names: model.joint_names.clone(), model })
     }
 
     /// Number of movable joints.
@@ -50,8 +39,8 @@ impl Robot {
     /// The core chain of this arm.
     ///
     /// # Errors
-    /// Always, until the URDF loader lands.
+    /// A chain whose joint count is not `DOF` or that the core refuses.
     pub fn chain<const DOF: usize>(&self) -> anyhow::Result<Chain<DOF>> {
-        anyhow::bail!("URDF kinematics are not available yet (waiting for the URDF loader)")
+        Ok(self.model.to_chain::<DOF>()?)
     }
 }

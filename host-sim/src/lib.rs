@@ -6,7 +6,9 @@
 //! world — the same trait and loop as on the firmware —, runs and their summaries
 //! ([`experiment`]), the paper's experiment grid ([`paper`]), single-frame rendering
 //! ([`frame`]), the same runs with the tracker in the firmware on QEMU ([`hil`]), output
-//! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]).
+//! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]); recorded stereo sequences
+//! (`evorec-seq/1`): the reader ([`sequence`]), tracking them ([`track`]) and writing a
+//! scenario as one ([`export`]).
 
 pub mod arm;
 pub mod experiment;

@@ -164,12 +164,12 @@ impl JointTable {
             let rec = rec.map_err(|e| csv_error(path, &e))?;
             let line = rec.position().map_or(0, csv::Position::line);
             let t = number(path, line, "t_s", &rec[0])?;
-            if let Some(prev) = table.times.last() {
-                if t <= *prev {
-                    return Err(SequenceError::file(path, format!("time {t} s does not increase (previous {prev} s)"))
-                        .at_line(line)
-                        .in_field("t_s"));
-                }
+            if let Some(prev) = table.times.last()
+                && t <= *prev
+            {
+                return Err(SequenceError::file(path, format!("time {t} s does not increase (previous {prev} s)"))
+                    .at_line(line)
+                    .in_field("t_s"));
             }
             table.times.push(t);
             for (i, text) in rec.iter().enumerate().skip(1) {

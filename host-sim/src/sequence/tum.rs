@@ -59,10 +59,10 @@ pub fn parse(text: &str, path: &Path) -> Result<Vec<TumPose>> {
         if (q.norm() - 1.0).abs() > UNIT_TOLERANCE {
             return Err(bad(format!("quaternion is not unit (|q| = {})", q.norm())));
         }
-        if let Some(prev) = out.last() {
-            if v[0] <= prev.t {
-                return Err(bad(format!("time {} s does not increase (previous {} s)", v[0], prev.t)));
-            }
+        if let Some(prev) = out.last()
+            && v[0] <= prev.t
+        {
+            return Err(bad(format!("time {} s does not increase (previous {} s)", v[0], prev.t)));
         }
         let pose = Isometry3::from_parts(Translation3::new(v[1], v[2], v[3]), UnitQuaternion::from_quaternion(q));
         out.push(TumPose { t: v[0], pose, line });

@@ -176,6 +176,8 @@ impl ErrorType for SequenceBoard<'_> {
 }
 
 impl<const DOF: usize> CameraController<DOF> for SequenceBoard<'_> {
+    type Format = evorec_core::image::Hue;
+
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SeqBoardError> {
         if self.next >= self.end {
             return Err(SeqBoardError::EndOfStream);

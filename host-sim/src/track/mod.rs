@@ -86,15 +86,15 @@ pub struct TrackOutput {
 /// checked: the core is compiled for one population and one row size, so only those are
 /// accepted until the sizes can be chosen at run time (then pass them to the config here).
 fn check_sizes(opts: &TrackOptions) -> Result<()> {
-    if let Some(p) = opts.population {
-        if p != DEFAULT_POPULATION {
-            bail!("--population {p}: only {DEFAULT_POPULATION} is supported yet (the size is compiled into the core)");
-        }
+    if let Some(p) = opts.population
+        && p != DEFAULT_POPULATION
+    {
+        bail!("--population {p}: only {DEFAULT_POPULATION} is supported yet (the size is compiled into the core)");
     }
-    if let Some(g) = opts.points_per_row {
-        if g != DEFAULT_GRID {
-            bail!("--points-per-row {g}: only {DEFAULT_GRID} is supported yet (the size is compiled into the core)");
-        }
+    if let Some(g) = opts.points_per_row
+        && g != DEFAULT_GRID
+    {
+        bail!("--points-per-row {g}: only {DEFAULT_GRID} is supported yet (the size is compiled into the core)");
     }
     Ok(())
 }

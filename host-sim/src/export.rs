@@ -24,8 +24,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use indicatif::ProgressBar;
 
-use crate::arm::{self, CONTROL_PERIOD_S};
+use crate::arm::CONTROL_PERIOD_S;
 use crate::experiment::search_space;
+use crate::motion;
 use crate::robot::{ArmModel, PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF};
 use crate::scenario::Scenario;
 use crate::sequence::manifest::{FORMAT, to_rows};
@@ -163,7 +164,7 @@ fn manifest(s: &Scenario, name: &str, world: &World) -> String {
          [target]\nsize_m = {}\nface_hues_deg = {}\ninitial_pose = {{ t_m = {}, q_xyzw = {} }}\n\n\
          [search]\nmin_m = {}\nmax_m = {}\n",
         floats(&to_rows(&rig.left_from_right.cast())),
-        floats(&to_rows(&arm::flange_to_camera_f64(s.camera.baseline_m))),
+        floats(&to_rows(&motion::flange_to_camera_f64(s.camera.baseline_m))),
         floats(&s.target.size_m),
         floats(&s.target.face_hues_deg),
         floats(t.as_slice()),

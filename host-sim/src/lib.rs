@@ -6,10 +6,13 @@
 //! world — the same trait and loop as on the firmware —, runs and their summaries
 //! ([`experiment`]), the paper's experiment grid ([`paper`]), single-frame rendering
 //! ([`frame`]), the same runs with the tracker in the firmware on QEMU ([`hil`]), output
-//! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]).
+//! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]); recorded stereo sequences
+//! (`evorec-seq/1`): the reader ([`sequence`]), tracking them ([`track`]) and writing a
+//! scenario as one ([`export`]).
 
 pub mod arm;
 pub mod experiment;
+pub mod export;
 pub mod frame;
 pub mod hil;
 pub mod io;
@@ -19,5 +22,7 @@ pub mod plot;
 pub mod render;
 pub mod robot;
 pub mod scenario;
+pub mod sequence;
 pub mod sim;
 pub mod timing;
+pub mod track;

@@ -6,8 +6,10 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use evorec_core::tracker::Feedforward;
 use evorec_sim::scenario::{Method, Scenario};
-use evorec_sim::{experiment, frame, hil, io, paper};
+use evorec_sim::sequence::Sequence;
+use evorec_sim::{experiment, export, frame, hil, io, paper, track};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -62,6 +64,50 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
+    },
+    /// Track a recorded stereo sequence (`evorec-seq/1` directory): writes DIR/trace.csv,
+    /// DIR/estimate.tum (TUM format), DIR/summary.json, plots and DIR/overlay_<N>.png. Nothing is
+    /// written unless the whole sequence was tracked.
+    Track {
+        /// Sequence directory (holds sequence.toml).
+        seq: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Plain 1-step GA (no motion feedforward).
+        #[arg(long)]
+        no_ff: bool,
+        /// Seed of the GA.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// GA population size.
+        #[arg(long)]
+        population: Option<usize>,
+        /// Sample points per row of the surface-strips model.
+        #[arg(long)]
+        points_per_row: Option<usize>,
+        /// Track only the first N frames.
+        #[arg(long)]
+        frames: Option<usize>,
+        /// Frame indices (frames.csv `index`) to draw the model at its estimate over, e.g. 0,90.
+        #[arg(long, value_delimiter = ',')]
+        overlay: Vec<u64>,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Write a simulator scenario as a recorded sequence (`evorec-seq/1`): the PA-10's URDF,
+    /// camera_info YAMLs, PNGs, joints at 1 kHz, ground truth, sequence.toml with the initial
+    /// pose; `evorec track SEQ` then reads it back.
+    Export {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Sequence directory to create (must not exist or be empty).
+        #[arg(long)]
+        out: PathBuf,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
     },
     /// Render one frame of a scenario: left/right PNGs, the same with the projected search
     /// model at the true pose drawn over them, and frame.json with the geometry.
@@ -126,6 +172,34 @@ fn error_line(e: &anyhow::Error) -> String {
     line
 }
 
+fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<()> {
+    let seq = Sequence::load(dir)?;
+    let t0 = Instant::now();
+    let output = track::run(&seq, opts)?;
+    let ev = track::output::evaluate(&seq, &output);
+    track::output::write_all(&seq, &output, &ev, out)?;
+    let s = &ev.summary;
+    print!(
+        "{} frames in {:.1} s ({:.0} frames/s): F_mean {:.4}",
+        s.frames,
+        t0.elapsed().as_secs_f64(),
+        s.frames_per_s,
+        s.f_mean
+    );
+    if let Some(a) = &s.all {
+        print!(
+            ", RMS x/y/z {:.2}/{:.2}/{:.2} mm, RMS rotation {:.2} deg (max {:.2})",
+            a.rms_x_mm, a.rms_y_mm, a.rms_z_mm, a.rms_rot_deg, a.max_rot_deg
+        );
+        match s.within_from_frame {
+            Some(f) => print!(", within 10 mm/5 deg from frame {f}"),
+            None => print!(", never stays within 10 mm/5 deg"),
+        }
+    }
+    println!("\nwrote {}", out.display());
+    Ok(())
+}
+
 fn execute(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Run { scenario, out } => {
@@ -159,6 +233,28 @@ fn execute(cli: Cli) -> Result<()> {
             experiment::write_outputs(&output, &out, &title)?;
             report(&output.summary.accuracy, t0);
             println!("wrote {}", out.display());
+        }
+        Command::Track { seq, out, no_ff, seed, population, points_per_row, frames, overlay, quiet } => {
+            let opts = track::TrackOptions {
+                feedforward: if no_ff { Feedforward::Off } else { Feedforward::On },
+                seed,
+                population,
+                points_per_row,
+                frames,
+                overlay: overlay.into_iter().collect(),
+                progress: !quiet,
+            };
+            track_sequence(&seq, &out, &opts)?;
+        }
+        Command::Export { scenario, out, quiet } => {
+            let s = load(&scenario)?;
+            let name = scenario.file_stem().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            let bar = (!quiet).then(|| indicatif::ProgressBar::new(u64::from(evorec_sim::sim::frame_total(&s))));
+            let stats = export::export(&s, &name, &out, bar.clone())?;
+            if let Some(b) = bar {
+                b.finish_and_clear();
+            }
+            println!("wrote {} ({} frames, {} joint samples)", out.display(), stats.frames, stats.joint_samples);
         }
         Command::Timing { out } => {
             io::create_out_dir(&out)?;

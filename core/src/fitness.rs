@@ -225,8 +225,7 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
     let faces = FacePlan { chosen, visible_mask, front: core::array::from_fn(|k| front(k as u8)) };
     // K' with the principal point moved by +1 pixel for `View::hue`.
     let (fx, fy, cx1, cy1) = (cam.fx(), cam.fy(), cam.cx() + 1.0, cam.cy() + 1.0);
-    let d = cam.distortion();
-    if d.is_none() {
+    if cam.distortion().is_none() {
         let proj = Projector::new([fx, fy, cx1, cy1], r, t);
         count_faces(model, lut, &view, &proj, &faces, |x, y, w| {
             let inv = 1.0 / w;
@@ -236,15 +235,31 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
         // Normalised coordinates, then the lens, then K'. Beyond `r2_max` the plumb_bob
         // polynomial is outside the calibrated field (and may fold back into the image):
         // such points read as outside.
-        let (d, r2_max) = (*d, distortion_field_r2(cam));
-        let proj = Projector::new([1.0, 1.0, 0.0, 0.0], r, t);
-        count_faces(model, lut, &view, &proj, &faces, move |x, y, w| {
-            let inv = 1.0 / w;
-            let (xn, yn) = (x * inv, y * inv);
-            let (xd, yd) = d.apply(xn, yn);
-            if xn * xn + yn * yn <= r2_max { (fx * xd + cx1, fy * yd + cy1) } else { (-1.0, -1.0) }
-        })
+        distorted_counts(model, lut, &view, cam, r, t, &faces)
     }
+}
+
+/// [`count_faces`] through the lens of `cam` (kept out of line so the plain kernel's code and
+/// its unrolling do not change with it).
+#[inline(never)]
+fn distorted_counts<const G: usize, F: PixelFormat>(
+    model: &SurfaceStrips<G>,
+    lut: &HueLut,
+    view: &View<'_, F>,
+    cam: &Pinhole,
+    r: &Matrix3<f32>,
+    t: &Vector3<f32>,
+    faces: &FacePlan,
+) -> Counts {
+    let (fx, fy, cx1, cy1) = (cam.fx(), cam.fy(), cam.cx() + 1.0, cam.cy() + 1.0);
+    let (d, r2_max) = (*cam.distortion(), distortion_field_r2(cam));
+    let proj = Projector::new([1.0, 1.0, 0.0, 0.0], r, t);
+    count_faces(model, lut, view, &proj, faces, move |x, y, w| {
+        let inv = 1.0 / w;
+        let (xn, yn) = (x * inv, y * inv);
+        let (xd, yd) = d.apply(xn, yn);
+        if xn * xn + yn * yn <= r2_max { (fx * xd + cx1, fy * yd + cy1) } else { (-1.0, -1.0) }
+    })
 }
 
 /// The squared normalised radius within which a distorted camera's model is used: twice the

@@ -25,7 +25,8 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::camera::{Pinhole, StereoRig};
 use crate::config::{INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX, MIN_VISIBLE_COS, NO_HUE, OUTER_OFFSETS_M};
-use crate::hue::{HueImage, HueLut};
+use crate::hue::HueLut;
+use crate::image::{Image, PixelFormat};
 use crate::model::SurfaceStrips;
 use crate::pose::Psi;
 
@@ -64,15 +65,15 @@ pub struct Fitness {
     pub right: Counts,
 }
 
-/// A borrowed hue image reduced to what the inner loop needs.
+/// A borrowed image reduced to what the inner loop needs.
 #[derive(Clone, Copy)]
-struct View<'a> {
-    pixels: &'a [u8],
+struct View<'a, F: PixelFormat> {
+    pixels: &'a [F::Pixel],
     width: u32,
 }
 
-impl<'a> View<'a> {
-    fn of<B: AsRef<[u8]>>(img: &'a HueImage<B>) -> Self {
+impl<'a, F: PixelFormat> View<'a, F> {
+    fn of<B: AsRef<[u8]>>(img: &'a Image<B, F>) -> Self {
         Self { pixels: img.pixels(), width: u32::from(img.width()) }
     }
 
@@ -90,7 +91,7 @@ impl<'a> View<'a> {
         // every v outside the image, so only u needs a test of its own.
         let index = if u < self.width { u64::from(v) * u64::from(self.width) + u64::from(u) } else { u64::MAX };
         let h = match usize::try_from(index).ok().and_then(|i| self.pixels.get(i)) {
-            Some(&h) => h,
+            Some(&px) => F::hue(px),
             None => NO_HUE,
         };
         u32::from(lut.mask(h) & want != 0)
@@ -100,7 +101,13 @@ impl<'a> View<'a> {
 /// Counts the points of one row whose hue mask intersects `want`. The row has `G` points
 /// `start + i·step`, walked by adding `step` (three additions per point).
 #[inline(always)]
-fn count_row<const G: usize>(view: &View<'_>, lut: &HueLut, want: u8, start: [f32; 3], step: [f32; 3]) -> u32 {
+fn count_row<const G: usize, F: PixelFormat>(
+    view: &View<'_, F>,
+    lut: &HueLut,
+    want: u8,
+    start: [f32; 3],
+    step: [f32; 3],
+) -> u32 {
     let [mut x, mut y, mut w] = start;
     let mut hits = 0u32;
     for _ in 0..G {
@@ -168,11 +175,11 @@ impl Projector {
 /// Counts of one camera for the model at `(r, t)` in that camera's frame.
 ///
 /// The work is the same for every pose: see the module docs.
-pub fn camera_counts<const G: usize, B: AsRef<[u8]>>(
+pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
     model: &SurfaceStrips<G>,
     lut: &HueLut,
     cam: &Pinhole,
-    image: &HueImage<B>,
+    image: &Image<B, F>,
     r: &Matrix3<f32>,
     t: &Vector3<f32>,
 ) -> Counts {
@@ -232,11 +239,11 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>>(
                 [base[0] + dist * inward[0], base[1] + dist * inward[1], base[2] + dist * inward[2]]
             };
             for &dist in &INNER_INSETS_M {
-                inner += count_row::<G>(&view, lut, bit, row_start(dist), step);
+                inner += count_row::<G, F>(&view, lut, bit, row_start(dist), step);
             }
             let mut hits = 0u32;
             for &dist in &OUTER_OFFSETS_M {
-                hits += count_row::<G>(&view, lut, visible_mask, row_start(-dist), step);
+                hits += count_row::<G, F>(&view, lut, visible_mask, row_start(-dist), step);
             }
             // Outer rows count only on silhouette edges (the face across is hidden).
             if !front(edge.neighbour) {
@@ -270,12 +277,12 @@ impl<'m, const G: usize> Evaluator<'m, G> {
     }
 
     /// `F(ψ)` (eq. 35) for a pose given as rotation `r` and translation `t` in `Σ_CR`.
-    pub fn evaluate<B: AsRef<[u8]>>(
+    pub fn evaluate<B: AsRef<[u8]>, F: PixelFormat>(
         &self,
         r: &Matrix3<f32>,
         t: &Vector3<f32>,
-        left: &HueImage<B>,
-        right: &HueImage<B>,
+        left: &Image<B, F>,
+        right: &Image<B, F>,
     ) -> Fitness {
         let right_counts = camera_counts(self.model, self.lut, &self.rig.right, right, r, t);
         let (r_left, t_left) = (self.left_r * r, self.left_r * t + self.left_t);
@@ -284,7 +291,12 @@ impl<'m, const G: usize> Evaluator<'m, G> {
     }
 
     /// `F(ψ)` for a 6-parameter pose (assumed valid: finite, `|ε| ≤ 1`).
-    pub fn evaluate_psi<B: AsRef<[u8]>>(&self, psi: &Psi, left: &HueImage<B>, right: &HueImage<B>) -> Fitness {
+    pub fn evaluate_psi<B: AsRef<[u8]>, F: PixelFormat>(
+        &self,
+        psi: &Psi,
+        left: &Image<B, F>,
+        right: &Image<B, F>,
+    ) -> Fitness {
         self.evaluate(&psi.rotation_unchecked(), &psi.translation(), left, right)
     }
 }
@@ -294,6 +306,7 @@ mod tests {
     use super::*;
     use crate::camera::Pinhole;
     use crate::config::DEFAULT_HUE_TOLERANCE;
+    use crate::hue::HueImage;
     use crate::model::Block;
     use crate::synth;
     use std::vec;
@@ -348,6 +361,46 @@ mod tests {
         // A pose behind the camera scores 0 without reading out of bounds.
         let behind = Psi::new([0.0, 0.0, -0.5], [0.0; 3]);
         assert_eq!(eval.evaluate_psi(&behind, &left, &right).total, 0.0);
+    }
+
+    /// A fully saturated, bright RGB565 colour of hue byte `h` (black for `NO_HUE`).
+    fn hue_to_rgb565(h: u8) -> [u8; 2] {
+        if h == NO_HUE {
+            return [0, 0];
+        }
+        let deg = 2.0 * f32::from(h);
+        let f = |n: f32| {
+            let k = (n + deg / 60.0) % 6.0;
+            (255.0 * (1.0 - k.min(4.0 - k).clamp(0.0, 1.0))) as u8
+        };
+        crate::image::rgb888_to_rgb565(f(5.0), f(3.0), f(1.0)).to_le_bytes()
+    }
+
+    #[test]
+    fn rgb565_frames_score_as_their_hue_frames() {
+        use crate::image::{Rgb565, Rgb565Image};
+        let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
+        let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
+        let rig = rig();
+        let eval = Evaluator::new(&model, &lut, &rig);
+        let q = crate::quat::from_angle_axis(2.0, &Vector3::new(-1.0, 1.0, 0.1)).unwrap();
+        let truth = Psi::from_parts(&Vector3::new(0.02, -0.01, 0.75), &q);
+        let (l, r) = scene(&truth);
+        let to565 = |img: &[u8]| img.iter().flat_map(|&h| hue_to_rgb565(h)).collect::<std::vec::Vec<u8>>();
+        let (l5, r5) = (to565(&l), to565(&r));
+        for (h, px) in l.iter().zip(l5.chunks(2)) {
+            assert_eq!(crate::image::rgb565_to_hue(u16::from_le_bytes([px[0], px[1]])), *h);
+        }
+        let (left, right) =
+            (HueImage::new_checked(&l[..], W, H).unwrap(), HueImage::new_checked(&r[..], W, H).unwrap());
+        let left5: Rgb565Image<&[u8]> = Rgb565Image::new_checked(&l5[..], W, H).unwrap();
+        let right5 = crate::image::Image::<_, Rgb565>::new_checked(&r5[..], W, H).unwrap();
+        for i in 0..12 {
+            let mut p = truth;
+            p.0[i % 6] += if i < 6 { 0.004 } else { -0.02 };
+            assert_eq!(eval.evaluate_psi(&p, &left, &right), eval.evaluate_psi(&p, &left5, &right5), "{i}");
+        }
+        assert_eq!(eval.evaluate_psi(&truth, &left5, &right5).total, 1.0);
     }
 
     #[test]

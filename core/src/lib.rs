@@ -17,7 +17,7 @@
 //! - [`image`]: validated image views in the sensor's pixel format (hue bytes or raw RGB565,
 //!   converted to hue only where the sample points hit); [`hue`]: RGB→hue, the hue match table.
 //! - [`model`]: the surface-strips block model; [`fitness`]: eq. 34–35.
-//! - [`ga`]: the 1-step GA; [`kinematics`]: DH chains, the PA-10, Jacobians;
+//! - [`ga`]: the 1-step GA; [`kinematics`]: serial chains (from DH or URDF), the PA-10, Jacobians;
 //!   [`feedforward`]: eq. 15–25.
 //! - [`tracker`]: one generation per frame pair; [`board`]: the camera-controller trait and
 //!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.

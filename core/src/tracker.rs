@@ -248,6 +248,55 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// # Errors
     /// [`ConfigError`] for an invalid block, GA parameters, tolerance or `max_dt_s`.
     pub fn new(config: TrackerConfig<DOF>) -> Result<Self, ConfigError> {
+        let (model, lut) = Self::checked_parts(&config)?;
+        let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
+        let mut ga = Ga::new(Psi::IDENTITY);
+        ga.reset_uniform(&config.search, &mut rng);
+        Ok(Self { config, model, lut, ga, rng, generation: 0 })
+    }
+
+    /// [`Tracker::new`] built in `slot` (e.g. a board's static), so that no whole tracker is
+    /// assembled on the stack and copied: a tracker already in the slot is re-initialised field
+    /// by field, an empty slot gets the model and hue table moved in and the population filled
+    /// in place. On error the slot is unchanged.
+    ///
+    /// # Errors
+    /// As [`Tracker::new`].
+    #[inline(never)]
+    pub fn new_in(slot: &mut Option<Self>, config: TrackerConfig<DOF>) -> Result<&mut Self, ConfigError> {
+        let (model, lut) = Self::checked_parts(&config)?;
+        let rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
+        let t = match slot {
+            Some(t) => {
+                t.config = config;
+                t.model = model;
+                t.lut = lut;
+                t.rng = rng;
+                t.generation = 0;
+                t
+            }
+            None => Self::fresh_in(slot, config, model, lut, rng),
+        };
+        t.ga.reset_uniform(&t.config.search, &mut t.rng);
+        Ok(t)
+    }
+
+    /// Puts a tracker of these parts into the empty `slot` (kept out of line: its frame holds
+    /// the one tracker-sized temporary of [`Tracker::new_in`]).
+    #[inline(never)]
+    fn fresh_in(
+        slot: &mut Option<Self>,
+        config: TrackerConfig<DOF>,
+        model: SurfaceStrips<G>,
+        lut: HueLut,
+        rng: Xoshiro128PlusPlus,
+    ) -> &mut Self {
+        slot.insert(Self { config, model, lut, ga: Ga::new(Psi::IDENTITY), rng, generation: 0 })
+    }
+
+    /// Validates `config` and builds its model and hue table.
+    #[inline(never)]
+    fn checked_parts(config: &TrackerConfig<DOF>) -> Result<(SurfaceStrips<G>, HueLut), ConfigError> {
         let model = SurfaceStrips::<G>::new(&config.block)?;
         config.ga.validate(P)?;
         if config.hue_tolerance >= HUE_UNITS / 2 {
@@ -262,10 +311,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
         let hues: [u8; FACES] = model.faces().map(|f| f.hue);
         let lut = HueLut::new(&hues, config.hue_tolerance);
-        let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
-        let mut ga = Ga::new(Psi::IDENTITY);
-        ga.reset_uniform(&config.search, &mut rng);
-        Ok(Self { config, model, lut, ga, rng, generation: 0 })
+        Ok((model, lut))
     }
 
     /// The configuration.

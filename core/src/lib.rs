@@ -17,7 +17,8 @@
 //! - [`hue`]: validated hue-image views, RGB→hue, the hue match table.
 //! - [`model`]: the surface-strips block model; [`fitness`]: eq. 34–35.
 //! - [`ga`]: the 1-step GA; [`kinematics`]: DH chains, the PA-10, Jacobians;
-//!   [`feedforward`]: eq. 15–25.
+//!   [`feedforward`]: eq. 15–25; [`target_motion`]: the target's own motion (eq. 23's
+//!   `J_n` term) and the hand-over of a pose to a later time.
 //! - [`tracker`]: one generation per frame pair; [`board`]: the camera-controller trait and
 //!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.
 //!
@@ -83,6 +84,7 @@ pub mod model;
 pub mod pose;
 pub mod quat;
 pub mod synth;
+pub mod target_motion;
 pub mod tracker;
 
 pub use tracker::{Estimate, Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};

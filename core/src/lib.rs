@@ -83,6 +83,7 @@ pub mod math;
 pub mod model;
 pub mod pose;
 pub mod quat;
+pub mod servo;
 pub mod synth;
 pub mod target_motion;
 pub mod tracker;

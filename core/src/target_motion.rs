@@ -19,9 +19,10 @@
 //! [`TargetFilterParams::max_gap_s`], and after [`TargetFilterParams::max_outliers`]
 //! consecutive rejected measurements. A measurement is **rejected** (an outlier) when its
 //! innovation on any axis exceeds [`TargetFilterParams::gate_sigma`] standard deviations. The
-//! velocity is **trusted** only after [`TargetFilterParams::converge_updates`] consecutive
-//! accepted updates with the velocity's standard deviation below
-//! [`TargetFilterParams::trusted_speed_sd_m_s`] and [`TargetFilterParams::trusted_rate_sd_rad_s`].
+//! velocity is **trusted** once [`TargetFilterParams::converge_updates`] consecutive updates
+//! have been accepted with the velocity's standard deviation below
+//! [`TargetFilterParams::trusted_speed_sd_m_s`] and [`TargetFilterParams::trusted_rate_sd_rad_s`],
+//! and stays trusted until the filter restarts or is reset.
 //!
 //! [`TargetFilter::predict`] hands the pose over to a later time `t`: the last accepted
 //! measurement moved by the trusted velocity over `t − t_capture`, seen from the camera at the
@@ -89,8 +90,8 @@ impl TargetFilterParams {
     /// mrad). The dead bands are about one frame's shift at the estimates' own noise floor
     /// (0.01 m/s · 33 ms = 0.33 mm; 0.05 rad/s · 33 ms = 1.7 mrad ≈ 0.0008 in ε).
     pub const DEFAULT: TargetFilterParams = TargetFilterParams {
-        position_noise_m: 0.002,
-        rotation_noise_rad: 0.004,
+        position_noise_m: 0.003,
+        rotation_noise_rad: 0.02,
         acceleration_psd: 0.002,
         angular_acceleration_psd: 0.01,
         initial_speed_sd_m_s: 0.5,
@@ -220,6 +221,8 @@ struct Track {
     last_time_us: u64,
     streak: u16,
     outliers: u16,
+    /// Set once the track has converged; cleared only by a restart.
+    converged: bool,
 }
 
 /// Constant-velocity Kalman filter of the target's world pose (see the module docs).
@@ -227,6 +230,8 @@ struct Track {
 pub struct TargetFilter {
     params: TargetFilterParams,
     track: Option<Track>,
+    last_outcome: Option<UpdateOutcome>,
+    last_innovation: [f32; 6],
 }
 
 /// The pose handed over to a later time by [`TargetFilter::predict`].
@@ -304,12 +309,12 @@ impl TargetFilter {
     /// [`FilterParamsError`] for invalid parameters.
     pub fn new(params: TargetFilterParams) -> Result<Self, FilterParamsError> {
         params.validate()?;
-        Ok(Self { params, track: None })
+        Ok(Self { params, track: None, last_outcome: None, last_innovation: [0.0; 6] })
     }
 
     /// An empty filter with [`TargetFilterParams::DEFAULT`].
     pub const fn with_defaults() -> Self {
-        Self { params: TargetFilterParams::DEFAULT, track: None }
+        Self { params: TargetFilterParams::DEFAULT, track: None, last_outcome: None, last_innovation: [0.0; 6] }
     }
 
     /// The parameters.
@@ -329,6 +334,23 @@ impl TargetFilter {
 
     /// Feeds one estimate `measured = ^W T_M` captured at `time_us` with fitness `fitness`.
     pub fn update(&mut self, measured: &Isometry3<f32>, time_us: u64, fitness: f32) -> UpdateOutcome {
+        let outcome = self.update_inner(measured, time_us, fitness);
+        self.last_outcome = Some(outcome);
+        outcome
+    }
+
+    /// What the last [`TargetFilter::update`] did (`None` before the first).
+    pub fn last_outcome(&self) -> Option<UpdateOutcome> {
+        self.last_outcome
+    }
+
+    /// Innovation of the last update that got as far as the gate: position (m, world) and
+    /// rotation vector (rad, world).
+    pub fn last_innovation(&self) -> [f32; 6] {
+        self.last_innovation
+    }
+
+    fn update_inner(&mut self, measured: &Isometry3<f32>, time_us: u64, fitness: f32) -> UpdateOutcome {
         // TODO(lead): status — reset on the tracker's Lost status once `Estimate::status` lands;
         // until then a fitness drop stands for a lost target.
         let found = fitness >= self.params.lost_fitness; // false for NaN
@@ -358,6 +380,7 @@ impl TargetFilter {
         let t = measured.translation.vector;
         let y_pos = [t.x - predicted.pos[0].x, t.y - predicted.pos[1].x, t.z - predicted.pos[2].x];
         let y_rot = log_rotation(&(measured.rotation * predicted.orientation.inverse()));
+        self.last_innovation = [y_pos[0], y_pos[1], y_pos[2], y_rot.x, y_rot.y, y_rot.z];
         let inlier = predicted.pos.iter().zip(y_pos.iter()).all(|(a, y)| a.inlier(*y, r_pos, p.gate_sigma))
             && predicted.rot.iter().zip(y_rot.iter()).all(|(a, y)| a.inlier(*y, r_rot, p.gate_sigma));
         if !inlier {
@@ -383,6 +406,11 @@ impl TargetFilter {
         predicted.last_time_us = time_us;
         predicted.streak = predicted.streak.saturating_add(1);
         predicted.outliers = 0;
+        let (sv, sw) =
+            (p.trusted_speed_sd_m_s * p.trusted_speed_sd_m_s, p.trusted_rate_sd_rad_s * p.trusted_rate_sd_rad_s);
+        predicted.converged |= predicted.streak >= p.converge_updates
+            && predicted.pos.iter().all(|a| a.p[2] <= sv)
+            && predicted.rot.iter().all(|a| a.p[2] <= sw);
         *track = predicted;
         UpdateOutcome::Accepted
     }
@@ -402,16 +430,14 @@ impl TargetFilter {
             last_time_us: time_us,
             streak: 0,
             outliers: 0,
+            converged: false,
         });
     }
 
     /// Whether the velocity has converged (see the module docs).
+    /// It stays trusted through single outliers until the filter restarts or is reset.
     pub fn is_trusted(&self) -> bool {
-        let Some(t) = &self.track else { return false };
-        let p = &self.params;
-        let (sv, sw) =
-            (p.trusted_speed_sd_m_s * p.trusted_speed_sd_m_s, p.trusted_rate_sd_rad_s * p.trusted_rate_sd_rad_s);
-        t.streak >= p.converge_updates && t.pos.iter().all(|a| a.p[2] <= sv) && t.rot.iter().all(|a| a.p[2] <= sw)
+        self.track.as_ref().is_some_and(|t| t.converged)
     }
 
     /// The estimated `^W ψ̇_M`, whether trusted or not (`None` without a track).
@@ -588,7 +614,7 @@ mod tests {
         wild.rotation = exp_rotation(&Vector3::new(1.57, 0.0, 0.0)) * wild.rotation;
         assert_eq!(f.update(&wild, 60 * DT_US, 0.95), UpdateOutcome::Rejected);
         assert_eq!(f.velocity_estimate().unwrap(), before);
-        assert!(!f.is_trusted(), "streak broken by the outlier");
+        assert!(f.is_trusted(), "a single outlier does not undo convergence");
         // The track resumes.
         for k in 61..80 {
             assert_eq!(f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95), UpdateOutcome::Accepted);

@@ -9,6 +9,7 @@
 //! files ([`io`]) and plots ([`plot`]).
 
 pub mod arm;
+pub mod closed_loop;
 pub mod experiment;
 pub mod frame;
 pub mod hil;

@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use evorec_sim::scenario::{Method, Scenario};
-use evorec_sim::{experiment, frame, hil, paper};
+use evorec_sim::{closed_loop, experiment, frame, hil, paper};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -95,12 +95,36 @@ fn report(a: &experiment::Accuracy, t0: Instant) {
     );
 }
 
+fn report_servo(s: &closed_loop::ServoSummary) {
+    println!(
+        "servo (t >= {:.1} s): RMS error {:.2} mm / {:.3} deg, spread {:.2} mm / {:.3} deg, {} frames not tracking, \
+         max camera speed {:.3} m/s: {}",
+        s.steady_from_s,
+        s.rms_err_mm,
+        s.rms_err_deg,
+        s.spread_mm,
+        s.spread_deg,
+        s.frames_not_tracking,
+        s.max_camera_speed_m_s,
+        s.outcome.as_str()
+    );
+}
+
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Run { scenario, out } => {
             let s = load(&scenario)?;
             let t0 = Instant::now();
+            if s.servo.is_some() {
+                let output = closed_loop::run(&s, &closed_loop::LoopOptions::for_scenario(&s), || {})?;
+                let title = format!("{} ({}, closed loop)", scenario.display(), s.method.as_str());
+                closed_loop::write_outputs(&output, &out, &title)?;
+                report(&output.run.summary.accuracy, t0);
+                report_servo(&output.servo_summary);
+                println!("wrote {}", out.display());
+                return Ok(());
+            }
             let output = experiment::run(&s, || {})?;
             let title = format!("{} ({})", scenario.display(), s.method.as_str());
             experiment::write_outputs(&output, &out, &title)?;

@@ -25,7 +25,7 @@ use evorec_core::kinematics::PA10;
 use evorec_core::pose::Psi;
 use evorec_core::servo::{PoseError, Servo, ServoConfig, ServoInput, ServoLimits};
 use evorec_core::target_motion::{self, TargetFilter};
-use evorec_core::tracker::{Estimate, JointSample, StereoFrame};
+use evorec_core::tracker::{Estimate, Feedforward, JointSample, StereoFrame};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
@@ -70,11 +70,74 @@ impl TrackGate {
     }
 }
 
+/// A conveyor carrying the block along world `y`: it starts at the block's scripted centre
+/// moving at `speed` towards `+y` and reverses at `±travel/2` with deceleration `accel`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Conveyor {
+    /// Belt speed (m/s).
+    pub speed_m_s: f64,
+    /// Length of the shuttle (m).
+    pub travel_m: f64,
+    /// Acceleration of the reversals (m/s²).
+    pub accel_m_s2: f64,
+}
+
+/// The state of a [`Conveyor`] (integrated at the joint-control period).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Belt {
+    conveyor: Conveyor,
+    y: f64,
+    v: f64,
+    dir: f64,
+    t: f64,
+    /// Since when the belt runs at constant speed (∞ while it accelerates).
+    constant_since: f64,
+}
+
+impl Belt {
+    fn new(conveyor: Conveyor) -> Self {
+        Self { conveyor, y: 0.0, v: conveyor.speed_m_s, dir: 1.0, t: 0.0, constant_since: 0.0 }
+    }
+
+    fn advance_to(&mut self, t: f64) {
+        let (c, h) = (self.conveyor, CONTROL_PERIOD_S);
+        while self.t + 0.5 * h < t {
+            let stop = c.speed_m_s * c.speed_m_s / (2.0 * c.accel_m_s2);
+            if self.dir * self.y >= 0.5 * c.travel_m - stop && self.dir * self.v > 0.0 {
+                self.dir = -self.dir;
+            }
+            let want = self.dir * c.speed_m_s;
+            let dv = (want - self.v).clamp(-c.accel_m_s2 * h, c.accel_m_s2 * h);
+            if dv != 0.0 {
+                self.constant_since = f64::INFINITY;
+            } else if self.constant_since == f64::INFINITY {
+                self.constant_since = self.t;
+            }
+            self.v += dv;
+            self.y += self.v * h;
+            self.t += h;
+        }
+    }
+
+    /// Seconds the belt has run at constant speed (0 while it accelerates).
+    fn steady_for(&self) -> f64 {
+        if self.constant_since.is_finite() { self.t - self.constant_since } else { 0.0 }
+    }
+}
+
+/// A frame counts towards the steady state only after the conveyor ran at constant speed for
+/// this long (s).
+pub const STEADY_AFTER_REVERSAL_S: f64 = 1.0;
+
 /// Options of a closed-loop run that scenario files do not carry.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LoopOptions {
     /// Hide the block from `start` for `duration` seconds.
     pub occlusion: Option<(f64, f64)>,
+    /// A conveyor under the block.
+    pub conveyor: Option<Conveyor>,
+    /// The tracker's feedforward, overriding the scenario's method (`None`: the method's).
+    pub feedforward: Option<Feedforward>,
     /// Hand over with the target filter's velocity and feed it forward in the servo law
     /// (the "ff+target" method).
     pub target_velocity: bool,
@@ -84,7 +147,7 @@ impl LoopOptions {
     /// The options a scenario's method implies (no occlusion).
     pub fn for_scenario(_s: &Scenario) -> Self {
         // TODO(servo): `target_velocity: s.method == Method::FfTarget` once that method lands.
-        Self { occlusion: None, target_velocity: false }
+        Self { occlusion: None, conveyor: None, feedforward: None, target_velocity: false }
     }
 }
 
@@ -107,6 +170,9 @@ pub struct ServoRow {
     pub camera_rot_speed_rad_s: f64,
     /// Tracker error `‖t̂ − t‖` of this frame's estimate (m).
     pub tracker_error_m: f64,
+    /// Whether the block's own motion was steady (no conveyor reversal within
+    /// [`STEADY_AFTER_REVERSAL_S`]).
+    pub steady: bool,
 }
 
 /// Header of the servo columns of `trace.csv`.
@@ -183,7 +249,8 @@ pub const DIVERGED_DEG: f64 = 30.0;
 /// Tracker error at the end that counts as a lost block (m).
 pub const LOST_TRACKER_M: f64 = 0.03;
 
-/// Summary of the servo side of a run (steady state = the second half of the run).
+/// Summary of the servo side of a run (steady state = the frames of the second half of the run
+/// whose [`ServoRow::steady`] is set).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ServoSummary {
     /// Start of the steady-state window (s).
@@ -216,7 +283,7 @@ impl ServoSummary {
     /// Summarises the servo rows of a run of `duration_s`.
     pub fn of(rows: &[ServoRow], duration_s: f64) -> Self {
         let from = 0.5 * duration_s;
-        let steady: Vec<&ServoRow> = rows.iter().filter(|r| r.t >= from).collect();
+        let steady: Vec<&ServoRow> = rows.iter().filter(|r| r.t >= from && r.steady).collect();
         let n = steady.len().max(1) as f64;
         let mean_t = steady.iter().fold(Vector3::<f64>::zeros(), |a, r| a + r.error.translation.cast::<f64>()) / n;
         let mean_r = steady.iter().fold(Vector3::<f64>::zeros(), |a, r| a + r.error.rotation.cast::<f64>()) / n;
@@ -417,7 +484,7 @@ pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Resu
         rot_speed: 0.0,
     };
     let mut gate = TrackGate::default();
-    let ff = experiment::feedforward(s.method);
+    let ff = opts.feedforward.unwrap_or_else(|| experiment::feedforward(s.method));
     let (w, h) = (s.camera.width, s.camera.height);
     let n = usize::from(w) * usize::from(h);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
@@ -425,9 +492,16 @@ pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Resu
     let (mut rows, mut servo_rows) = (Vec::with_capacity(frames as usize), Vec::with_capacity(frames as usize));
     let (mut rejected, mut last_us) = (0u32, None::<u64>);
     let delay = f64::from(sec.delay_frames) * s.frame_period_s;
+    let mut belt = opts.conveyor.map(Belt::new);
     for k in 0..frames {
         let t = f64::from(k) * s.frame_period_s;
         world.advance_with(t, |arm| ctl.control(arm));
+        let mut steady = true;
+        if let Some(b) = belt.as_mut() {
+            b.advance_to(t);
+            world.set_target_offset(Vector3::new(0.0, b.y, 0.0));
+            steady = b.steady_for() >= STEADY_AFTER_REVERSAL_S;
+        }
         let occluded = opts.occlusion.is_some_and(|(a, d)| t >= a && t < a + d);
         world.set_target_hidden(occluded);
         let images = world.render();
@@ -462,6 +536,7 @@ pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Resu
             camera_speed_m_s: std::mem::take(&mut ctl.speed),
             camera_rot_speed_rad_s: std::mem::take(&mut ctl.rot_speed),
             tracker_error_m: norm(&(est.psi.translation() - truth.translation())),
+            steady,
         });
         rows.push(TraceRow { t, q: joints.q, qd: joints.qd, truth, estimate: est.psi, fitness: est.fitness });
         on_frame();
@@ -485,4 +560,90 @@ pub fn write_outputs(out: &ClosedLoopOutput, dir: &std::path::Path, title: &str)
     crate::io::write_json(&dir.join("summary.json"), &summary)?;
     crate::plot::plot_trace(&trace, dir, title)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::Method;
+
+    /// A still block, the camera brought 0.1 m closer, 320×240.
+    fn scenario(duration_s: f64) -> Scenario {
+        let mut s = Scenario::new(1, duration_s, Method::Ff);
+        s.camera.width = 320;
+        s.camera.height = 240;
+        s.camera.fx = 400.0;
+        s.camera.fy = 400.0;
+        s.camera.cx = 160.0;
+        s.camera.cy = 120.0;
+        s.camera.supersample = 1;
+        s.target.omega_rad_s = 0.0;
+        s.servo = Some(ServoSection::new([-0.05, 0.0, 0.6]));
+        s
+    }
+
+    #[test]
+    fn converges_on_a_still_block_within_the_speed_limit() {
+        let s = scenario(6.0);
+        let out = run(&s, &LoopOptions::for_scenario(&s), || {}).unwrap_or_else(|e| unreachable!("{e}"));
+        let sum = out.servo_summary;
+        assert_eq!(sum.outcome, Outcome::Converged, "{sum:?}");
+        assert!(sum.rms_err_mm < 5.0 && sum.rms_err_deg < 1.0, "{sum:?}");
+        let first = out.servo[0].error.translation_norm();
+        assert!((first - 0.1).abs() < 1e-3, "starts 0.1 m from the desired pose: {first}");
+        let limit = ServoSection::new([0.0; 3]).max_speed_m_s;
+        assert!(sum.max_camera_speed_m_s <= limit * 1.02, "{sum:?}");
+    }
+
+    #[test]
+    fn occlusion_stops_the_arm_within_its_limits_and_the_loop_recovers() {
+        let s = scenario(6.0);
+        let sec = s.servo.unwrap_or_else(|| unreachable!());
+        let (start, duration) = (0.6, 1.0);
+        let opts = LoopOptions { occlusion: Some((start, duration)), ..LoopOptions::for_scenario(&s) };
+        let out = run(&s, &opts, || {}).unwrap_or_else(|e| unreachable!("{e}"));
+        let rows = &out.servo;
+        // Moving towards the block when the occluder comes.
+        let before = rows.iter().filter(|r| r.t < start).map(|r| r.camera_speed_m_s).fold(0.0, f64::max);
+        assert!(before > 0.05, "{before}");
+        // Stopped within: one frame for the gate + the delay + max_speed / max_accel (+ a frame).
+        let stop_by =
+            start + (2.0 + f64::from(sec.delay_frames)) * s.frame_period_s + sec.max_speed_m_s / sec.max_accel_m_s2;
+        for r in rows.iter().filter(|r| r.t > stop_by && r.t < start + duration) {
+            assert!(r.camera_speed_m_s < 1e-3, "still moving at t = {}: {} m/s", r.t, r.camera_speed_m_s);
+            assert!(!r.tracking);
+        }
+        // Never above the speed limit, also when it resumes.
+        for r in rows {
+            assert!(r.camera_speed_m_s <= sec.max_speed_m_s * 1.02, "t = {}: {} m/s", r.t, r.camera_speed_m_s);
+        }
+        // Tracking again within 0.5 s of reappearance, and converged at the end.
+        let back = rows.iter().find(|r| r.t >= start + duration && r.tracking).map(|r| r.t);
+        assert!(back.is_some_and(|t| t < start + duration + 0.5), "{back:?}");
+        let last = rows.last().map(|r| r.error.translation_norm()).unwrap_or(1.0);
+        assert!(last < 0.005, "{last}");
+    }
+
+    #[test]
+    fn conveyor_reverses_within_its_travel() {
+        let mut b = Belt::new(Conveyor { speed_m_s: 0.2, travel_m: 0.4, accel_m_s2: 0.5 });
+        let mut max_y: f64 = 0.0;
+        for k in 1..=400 {
+            b.advance_to(f64::from(k) * 0.01);
+            max_y = max_y.max(b.y.abs());
+            assert!(b.v.abs() <= 0.2 + 1e-12);
+        }
+        assert!(max_y <= 0.2 + 1e-3 && max_y > 0.19, "{max_y}");
+    }
+
+    #[test]
+    fn gate_needs_good_frames_to_start_and_one_bad_to_stop() {
+        let est = |fitness| Estimate { psi: Psi::IDENTITY, fitness, generation: 1, capture_time_us: 0 };
+        let mut g = TrackGate::default();
+        assert!(!g.update(&est(0.9)) && !g.update(&est(0.9)));
+        assert!(g.update(&est(0.9)));
+        assert!(g.update(&est(0.55)));
+        assert!(!g.update(&est(0.4)));
+        assert!(!g.update(&est(0.9)));
+    }
 }

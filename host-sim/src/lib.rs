@@ -19,5 +19,6 @@ pub mod paper;
 pub mod plot;
 pub mod render;
 pub mod scenario;
+pub mod servo;
 pub mod sim;
 pub mod timing;

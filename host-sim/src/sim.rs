@@ -48,6 +48,7 @@ pub struct World {
     render: RenderOptions,
     rng: Xoshiro256PlusPlus,
     hidden: bool,
+    target_offset: nalgebra::Vector3<f64>,
 }
 
 impl World {
@@ -71,6 +72,7 @@ impl World {
             render: RenderOptions::default().with_antialias(antialias).with_noise(scenario.camera.noise_std as f32),
             rng: Xoshiro256PlusPlus::seed_from_u64(scenario.seed ^ 0x5EED_0FF4_A3E5),
             hidden: false,
+            target_offset: nalgebra::Vector3::zeros(),
         })
     }
 
@@ -121,6 +123,12 @@ impl World {
         self.hidden = hidden;
     }
 
+    /// Shifts the block by `offset` (world, m) from its scripted pose (a conveyor driven by
+    /// the caller).
+    pub fn set_target_offset(&mut self, offset: nalgebra::Vector3<f64>) {
+        self.target_offset = offset;
+    }
+
     /// `^W T_CR`: the right camera's pose from the arm's forward kinematics.
     pub fn camera_pose(&self) -> Isometry3<f64> {
         self.arm.camera_pose(self.scenario.camera.baseline_m)
@@ -128,7 +136,9 @@ impl World {
 
     /// `^W T_M` at the current time.
     pub fn target_pose(&self) -> Isometry3<f64> {
-        self.target.target_world_pose(self.arm.time())
+        let mut pose = self.target.target_world_pose(self.arm.time());
+        pose.translation.vector += self.target_offset;
+        pose
     }
 
     /// `^CR T_M`: the target in the right camera frame (computed in f64).

@@ -18,7 +18,9 @@
 //!   converted to hue only where the sample points hit); [`hue`]: RGB→hue, the hue match table.
 //! - [`model`]: the surface-strips block model; [`fitness`]: eq. 34–35.
 //! - [`ga`]: the 1-step GA; [`kinematics`]: serial chains (from DH or URDF), the PA-10, Jacobians;
-//!   [`feedforward`]: eq. 15–25.
+//!   [`feedforward`]: eq. 15–25; [`target_motion`]: the target's own motion (eq. 23's
+//!   `J_n` term) and the hand-over of a pose to a later time; [`servo`]: a position-based
+//!   visual servo law on the handed-over pose.
 //! - [`tracker`]: one generation per frame pair; [`board`]: the camera-controller trait and
 //!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.
 //!
@@ -96,8 +98,10 @@ pub mod model;
 pub mod pose;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod quat;
+pub mod servo;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod synth;
+pub mod target_motion;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod tracker;
 

@@ -18,14 +18,19 @@ use crate::image::{Hue, Image, PixelFormat};
 use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
+use crate::target_motion::{self, PredictError, Prediction, TargetFilter};
 
-/// Whether the arm's motion is fed forward to the population (eq. 36).
+/// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Feedforward {
     /// Plain 1-step GA.
     Off,
-    /// 1-step GA + motion feedforward.
+    /// 1-step GA + motion feedforward of the arm (`J_m q̇`, eq. 24).
     On,
+    /// 1-step GA + feedforward of the arm's and the target's motion
+    /// (`J_m q̇ + J_n ^W ψ̇_M`, eq. 23), the target's velocity from the tracker's
+    /// [`TargetFilter`] once it is trusted (until then as [`Feedforward::On`]).
+    OnWithTarget,
 }
 
 /// Joint positions (rad) and velocities (rad/s) sampled at `time_us`.
@@ -57,6 +62,9 @@ pub struct Estimate {
     pub fitness: f32,
     /// Generation number (1 after the first frame).
     pub generation: u32,
+    /// Capture time of the frame pair (µs, the board's clock): the time of the joint sample
+    /// the estimate was computed with, which the board takes with the frame.
+    pub capture_time_us: u64,
 }
 
 /// Why a tracker configuration was rejected.
@@ -240,6 +248,7 @@ pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = DEFAULT_POPULAT
     ga: Ga<P>,
     rng: Xoshiro128PlusPlus,
     generation: u32,
+    target: TargetFilter,
 }
 
 impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
@@ -252,7 +261,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
         let mut ga = Ga::new(Psi::IDENTITY);
         ga.reset_uniform(&config.search, &mut rng);
-        Ok(Self { config, model, lut, ga, rng, generation: 0 })
+        Ok(Self { config, model, lut, ga, rng, generation: 0, target: TargetFilter::with_defaults() })
     }
 
     /// [`Tracker::new`] built in `slot` (e.g. a board's static), so that no whole tracker is
@@ -273,6 +282,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
                 t.lut = lut;
                 t.rng = rng;
                 t.generation = 0;
+                t.target = TargetFilter::with_defaults();
                 t
             }
             None => Self::fresh_in(slot, config, model, lut, rng),
@@ -291,7 +301,15 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         lut: HueLut,
         rng: Xoshiro128PlusPlus,
     ) -> &mut Self {
-        slot.insert(Self { config, model, lut, ga: Ga::new(Psi::IDENTITY), rng, generation: 0 })
+        slot.insert(Self {
+            config,
+            model,
+            lut,
+            ga: Ga::new(Psi::IDENTITY),
+            rng,
+            generation: 0,
+            target: TargetFilter::with_defaults(),
+        })
     }
 
     /// Validates `config` and builds its model and hue table.
@@ -334,6 +352,21 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.generation
     }
 
+    /// The filter of the target's own motion, updated with every estimate.
+    pub fn target_filter(&self) -> &TargetFilter {
+        &self.target
+    }
+
+    /// Hands the latest estimate over to time `t_us` (e.g. when a controller acts on it):
+    /// see [`TargetFilter::predict`]. `joints` is the newest joint sample.
+    ///
+    /// # Errors
+    /// [`PredictError::NoTrack`] before the first estimate or after the target was lost;
+    /// [`PredictError::NonFiniteJoint`].
+    pub fn predict(&self, joints: &JointSample<DOF>, t_us: u64) -> Result<Prediction, PredictError> {
+        self.target.predict(&self.config.arm, &self.config.flange_to_camera, joints, t_us)
+    }
+
     /// Re-seeds the population around a known pose (the paper starts with the true pose
     /// known): the elite at `psi`, the others within `±spread` per gene.
     ///
@@ -345,12 +378,14 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             return Err(StepError::Pose(PoseError::NonFinite));
         }
         self.ga.reset_around(psi, spread, &self.config.search, &mut self.rng);
+        self.target.reset();
         Ok(())
     }
 
     /// Re-seeds the population uniformly over the search space.
     pub fn reset_uniform(&mut self) {
         self.ga.reset_uniform(&self.config.search, &mut self.rng);
+        self.target.reset();
     }
 
     /// `F(ψ)` of any pose on a frame pair (diagnostics; no state change).
@@ -388,9 +423,11 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     }
 
     /// One generation: with [`Feedforward::On`] every individual is first moved by
-    /// `J_m(q) q̇ · dt` (eq. 36), then the population is evaluated on `frame`, the best is the
-    /// estimate, and the next population is bred. `dt_s` is the time since the previous frame
-    /// (0 for the first). `probe` is told when each [`Phase`] begins.
+    /// `J_m(q) q̇ · dt` (eq. 36), with [`Feedforward::OnWithTarget`] by
+    /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then the population is evaluated on `frame`,
+    /// the best is the estimate, the next population is bred, and the estimate, taken into the
+    /// world at `joints.q`, updates the target filter. `dt_s` is the time since the previous
+    /// frame (0 for the first). `probe` is told when each [`Phase`] begins.
     ///
     /// # Errors
     /// [`StepError::ImageSize`], [`StepError::NonFiniteJoint`] or [`StepError::BadDt`]; the
@@ -412,13 +449,26 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
 
         probe.mark(Phase::Feedforward);
-        if feedforward == Feedforward::On {
-            let twist =
-                feedforward::camera_twist(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
-            self.ga.shift_all(&self.config.search, |psi| {
-                let rate = feedforward::psi_rate(&twist, psi);
-                feedforward::shift(psi, &rate, dt_s);
-            });
+        match feedforward {
+            Feedforward::Off => {}
+            Feedforward::On => {
+                let twist =
+                    feedforward::camera_twist(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
+                self.ga.shift_all(&self.config.search, |psi| {
+                    let rate = feedforward::psi_rate(&twist, psi);
+                    feedforward::shift(psi, &rate, dt_s);
+                });
+            }
+            Feedforward::OnWithTarget => {
+                let motion =
+                    feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
+                let target =
+                    feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &self.target.feedforward_velocity());
+                self.ga.shift_all(&self.config.search, |psi| {
+                    let rate = feedforward::psi_rate_moving(&motion.twist, &target, psi);
+                    feedforward::shift(psi, &rate, dt_s);
+                });
+            }
         }
 
         probe.mark(Phase::Evaluate);
@@ -428,8 +478,15 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         probe.mark(Phase::Breed);
         self.ga.breed(&best, &self.config.ga, &self.config.search, &mut self.rng);
         self.generation = self.generation.wrapping_add(1);
+        let world = target_motion::world_pose(&self.config.arm, &joints.q, &self.config.flange_to_camera, &best.psi);
+        self.target.update(&world, joints.time_us, best.fitness);
         probe.mark(Phase::Done);
 
-        Ok(Estimate { psi: best.psi, fitness: best.fitness, generation: self.generation })
+        Ok(Estimate {
+            psi: best.psi,
+            fitness: best.fitness,
+            generation: self.generation,
+            capture_time_us: joints.time_us,
+        })
     }
 }

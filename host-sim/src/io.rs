@@ -103,15 +103,40 @@ fn write_trace_to(out: &mut dyn Write, rows: &[TraceRow]) -> Result<()> {
     let mut w = csv::Writer::from_writer(out);
     w.write_record(trace_header())?;
     for r in rows {
-        let mut rec: Vec<String> = Vec::with_capacity(34);
-        rec.push(format!("{:.3}", r.t));
-        rec.extend(r.q.iter().chain(r.qd.iter()).map(|v| format!("{v:.6}")));
-        for psi in [&r.truth, &r.estimate] {
-            rec.extend(psi.0[..3].iter().map(|v| format!("{:.4}", v * 1e3)));
-            rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
-        }
-        rec.push(format!("{:.5}", r.fitness));
-        w.write_record(&rec)?;
+        w.write_record(trace_record(r))?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
+/// The fields of one row of `trace.csv` (see [`trace_header`]).
+pub fn trace_record(r: &TraceRow) -> Vec<String> {
+    let mut rec: Vec<String> = Vec::with_capacity(34);
+    rec.push(format!("{:.3}", r.t));
+    rec.extend(r.q.iter().chain(r.qd.iter()).map(|v| format!("{v:.6}")));
+    for psi in [&r.truth, &r.estimate] {
+        rec.extend(psi.0[..3].iter().map(|v| format!("{:.4}", v * 1e3)));
+        rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
+    }
+    rec.push(format!("{:.5}", r.fitness));
+    rec
+}
+
+/// Writes `trace.csv` of a closed-loop run: the columns of [`trace_header`] followed by
+/// `extra_header`, one row of `rows` with its `extra` fields per frame.
+///
+/// # Errors
+/// I/O errors, or `extra` shorter than `rows`.
+pub fn write_trace_with(path: &Path, rows: &[TraceRow], extra_header: &[&str], extra: &[Vec<String>]) -> Result<()> {
+    anyhow::ensure!(extra.len() >= rows.len(), "{} extra rows for {} trace rows", extra.len(), rows.len());
+    let mut w = csv::Writer::from_path(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut header = trace_header();
+    header.extend(extra_header.iter().map(|h| (*h).to_owned()));
+    w.write_record(header)?;
+    for (r, x) in rows.iter().zip(extra) {
+        let mut rec = trace_record(r);
+        rec.extend(x.iter().cloned());
+        w.write_record(rec)?;
     }
     w.flush()?;
     Ok(())

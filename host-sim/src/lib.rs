@@ -11,6 +11,7 @@
 //! scenario as one ([`export`]).
 
 pub mod arm;
+pub mod closed_loop;
 pub mod experiment;
 pub mod export;
 pub mod frame;
@@ -23,6 +24,7 @@ pub mod render;
 pub mod robot;
 pub mod scenario;
 pub mod sequence;
+pub mod servo;
 pub mod sim;
 pub mod timing;
 pub mod track;

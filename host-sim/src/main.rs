@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand};
 use evorec_core::tracker::Feedforward;
 use evorec_sim::scenario::{Method, Scenario};
 use evorec_sim::sequence::Sequence;
-use evorec_sim::{experiment, export, frame, hil, io, paper, track};
+use evorec_sim::{closed_loop, experiment, export, frame, hil, io, paper, servo, track};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -56,6 +56,30 @@ enum Command {
         /// target/thumbv7em-none-eabihf/release/evorec-firmware).
         #[arg(long)]
         firmware: Option<PathBuf>,
+    },
+    /// Closed-loop experiments (position-based visual servoing from the tracker's estimates):
+    /// conveyor 0/0.05/0.1/0.2 m/s and turning block × (ga, ff, ff+target) × gains × delays,
+    /// in parallel; writes DIR/servo_table.csv, DIR/servo_table.md, DIR/stability_*.png and
+    /// DIR/runs/*/servo_error.csv.
+    Servo {
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Simulated seconds per run.
+        #[arg(long, default_value_t = 10.0)]
+        duration: f64,
+        /// Servo gains (1/s), comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = [1.0, 2.0, 4.0, 8.0])]
+        gains: Vec<f64>,
+        /// Processing delays (frame periods), comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = [0, 1, 2, 3])]
+        delays: Vec<u32>,
+        /// Conveyor speeds (m/s), comma-separated (the turning block is always added).
+        #[arg(long, value_delimiter = ',', default_values_t = [0.0, 0.05, 0.1, 0.2])]
+        speeds: Vec<f64>,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
     },
     /// Worst-case timing and memory per GA generation on the Cortex-M4: runs the timing
     /// firmware under QEMU with -icount and writes DIR/timing.json and DIR/timing.md. Builds
@@ -200,12 +224,36 @@ fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<
     Ok(())
 }
 
+fn report_servo(s: &closed_loop::ServoSummary) {
+    println!(
+        "servo (t >= {:.1} s): RMS error {:.2} mm / {:.3} deg, spread {:.2} mm / {:.3} deg, {} frames not tracking, \
+         max camera speed {:.3} m/s: {}",
+        s.steady_from_s,
+        s.rms_err_mm,
+        s.rms_err_deg,
+        s.spread_mm,
+        s.spread_deg,
+        s.frames_not_tracking,
+        s.max_camera_speed_m_s,
+        s.outcome.as_str()
+    );
+}
+
 fn execute(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Run { scenario, out } => {
             let s = load(&scenario)?;
             io::create_out_dir(&out)?;
             let t0 = Instant::now();
+            if s.servo.is_some() {
+                let output = closed_loop::run(&s, &closed_loop::LoopOptions::for_scenario(&s), || {})?;
+                let title = format!("{} ({}, closed loop)", scenario.display(), s.method.as_str());
+                closed_loop::write_outputs(&output, &out, &title)?;
+                report(&output.run.summary.accuracy, t0);
+                report_servo(&output.servo_summary);
+                println!("wrote {}", out.display());
+                return Ok(());
+            }
             let output = experiment::run(&s, || {})?;
             let title = format!("{} ({})", scenario.display(), s.method.as_str());
             experiment::write_outputs(&output, &out, &title)?;
@@ -255,6 +303,19 @@ fn execute(cli: Cli) -> Result<()> {
                 b.finish_and_clear();
             }
             println!("wrote {} ({} frames, {} joint samples)", out.display(), stats.frames, stats.joint_samples);
+        }
+        Command::Servo { out, duration, gains, delays, speeds, quiet } => {
+            anyhow::ensure!(duration > 0.0 && duration <= 3600.0, "--duration: must be in (0, 3600], got {duration}");
+            anyhow::ensure!(gains.iter().all(|g| *g > 0.0 && *g <= 50.0), "--gains: each must be in (0, 50]");
+            anyhow::ensure!(delays.iter().all(|d| *d <= 10), "--delays: each must be in 0..=10");
+            anyhow::ensure!(speeds.iter().all(|v| (0.0..=0.3).contains(v)), "--speeds: each must be in [0, 0.3]");
+            let mut g = servo::GridSettings { duration_s: duration, gains, delays, ..servo::GridSettings::default() };
+            g.targets = speeds.iter().map(|&speed_m_s| servo::TargetCase::Conveyor { speed_m_s }).collect();
+            g.targets.push(servo::TargetCase::Rotating { omega_rad_s: 0.5 });
+            let t0 = Instant::now();
+            let results = servo::run_grid(&g, &out, !quiet)?;
+            println!("{}", servo::markdown(&results).split("\n\n").next().unwrap_or_default());
+            println!("{} runs in {:.1} s; wrote {}", results.len(), t0.elapsed().as_secs_f64(), out.display());
         }
         Command::Timing { out } => {
             io::create_out_dir(&out)?;

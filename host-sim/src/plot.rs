@@ -26,10 +26,10 @@ pub const PANEL_PLOT_SIZE: (u32, u32) = (1000, 900);
 pub const FITNESS_PLOT_SIZE: (u32, u32) = (1000, 380);
 
 /// Font family name under which the embedded font is registered with plotters.
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 /// Registers the embedded DejaVu Sans with plotters once per process.
-fn ensure_font() -> anyhow::Result<()> {
+pub(crate) fn ensure_font() -> anyhow::Result<()> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         let normal = plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular()).is_ok();
@@ -120,7 +120,7 @@ fn tick_formatter(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
     }
 }
 
-fn draw_err<E: std::fmt::Display>(e: E) -> anyhow::Error {
+pub(crate) fn draw_err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("drawing failed: {e}")
 }
 
@@ -178,7 +178,7 @@ fn draw_panel(
 }
 
 /// Renders into an RGB buffer with `draw` and saves it as a PNG.
-fn render_png(
+pub(crate) fn render_png(
     path: &Path,
     size: (u32, u32),
     draw: impl FnOnce(&DrawingArea<BitMapBackend<'_>, Shift>) -> anyhow::Result<()>,

@@ -17,7 +17,7 @@ use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::arm::{ArmSim, CONTROL_PERIOD_S, DOF};
-use crate::motion::{self, FlangeTrajectory, TargetMotion};
+use crate::motion::{self, FlangeTrajectory, TargetMotion, Twist};
 use crate::render::{self, AntiAlias, RenderOptions, StereoImages};
 use crate::scenario::Scenario;
 
@@ -47,6 +47,8 @@ pub struct World {
     block: Block,
     render: RenderOptions,
     rng: Xoshiro256PlusPlus,
+    hidden: bool,
+    target_offset: nalgebra::Vector3<f64>,
 }
 
 impl World {
@@ -69,6 +71,8 @@ impl World {
             block: block(scenario),
             render: RenderOptions::default().with_antialias(antialias).with_noise(scenario.camera.noise_std as f32),
             rng: Xoshiro256PlusPlus::seed_from_u64(scenario.seed ^ 0x5EED_0FF4_A3E5),
+            hidden: false,
+            target_offset: nalgebra::Vector3::zeros(),
         })
     }
 
@@ -104,6 +108,27 @@ impl World {
         }
     }
 
+    /// Runs the 1 ms joint control loop up to time `t` (s) in closed loop: before every
+    /// control period `control` gives the flange setpoint (pose and world twist at the flange
+    /// origin) instead of the scripted trajectory.
+    pub fn advance_with(&mut self, t: f64, mut control: impl FnMut(&ArmSim) -> (Isometry3<f64>, Twist)) {
+        while self.arm.time() + 0.5 * CONTROL_PERIOD_S < t {
+            let (pose, twist) = control(&self.arm);
+            self.arm.step(CONTROL_PERIOD_S, &pose, &twist);
+        }
+    }
+
+    /// Hides the block from both cameras (an occluder in front of them) or shows it again.
+    pub fn set_target_hidden(&mut self, hidden: bool) {
+        self.hidden = hidden;
+    }
+
+    /// Shifts the block by `offset` (world, m) from its scripted pose (a conveyor driven by
+    /// the caller).
+    pub fn set_target_offset(&mut self, offset: nalgebra::Vector3<f64>) {
+        self.target_offset = offset;
+    }
+
     /// `^W T_CR`: the right camera's pose from the arm's forward kinematics.
     pub fn camera_pose(&self) -> Isometry3<f64> {
         self.arm.camera_pose(self.scenario.camera.baseline_m)
@@ -111,7 +136,9 @@ impl World {
 
     /// `^W T_M` at the current time.
     pub fn target_pose(&self) -> Isometry3<f64> {
-        self.target.target_world_pose(self.arm.time())
+        let mut pose = self.target.target_world_pose(self.arm.time());
+        pose.translation.vector += self.target_offset;
+        pose
     }
 
     /// `^CR T_M`: the target in the right camera frame (computed in f64).
@@ -127,7 +154,9 @@ impl World {
 
     /// Renders both cameras' RGB images at the current time.
     pub fn render(&mut self) -> StereoImages {
-        let pose: Isometry3<f32> = self.target_in_camera().cast();
+        // A block behind the camera renders as the background alone.
+        let pose: Isometry3<f32> =
+            if self.hidden { Isometry3::translation(0.0, 0.0, -10.0) } else { self.target_in_camera().cast() };
         render::render_stereo(&self.rig, &pose, &self.block, &self.render, &mut self.rng)
     }
 }

@@ -49,6 +49,7 @@ fn small_messages() -> Vec<Envelope<'static>> {
                 psi: Psi::new([0.01, -0.02, 0.7], [f32::MIN_POSITIVE, -0.0, 1.0e-30]),
                 fitness: 0.875,
                 generation: 42,
+                capture_time_us: 0,
             }),
         },
         Envelope::bare(Message::End),
@@ -89,6 +90,7 @@ fn nan_bits_cross_unchanged() {
         psi: Psi::new([odd_nan, 0.0, 0.0], [0.0; 3]),
         fitness: f32::from_bits(0xFFA0_0001),
         generation: 1,
+        capture_time_us: 0,
     }));
     let bytes = encode(&env);
     let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
@@ -196,7 +198,7 @@ fn bad_feedforward_flag_is_rejected() {
     // The feedforward flag sits after 30 f32 fields, the seed and the hue tolerance.
     let ff = 4 * 4 + 2 * 2 + 4 + 12 + 24 + 12 + 16 + 12 + 12 + 8 + 1;
     assert_eq!(payload[ff], 1);
-    payload[ff] = 2;
+    payload[ff] = 3;
     assert_eq!(decode_small(MsgType::Config, &payload[..len]), Err(DecodeError::BadValue));
 }
 
@@ -233,7 +235,7 @@ mod prop {
             let env = Envelope {
                 sequence,
                 capture_time_us: time,
-                message: Message::Estimate(Estimate { psi: Psi(psi), fitness, generation }),
+                message: Message::Estimate(Estimate { psi: Psi(psi), fitness, generation, capture_time_us: 0 }),
             };
             let bytes = encode(&env);
             let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();

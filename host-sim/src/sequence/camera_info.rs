@@ -13,7 +13,7 @@
 
 use std::path::Path;
 
-use evorec_core::camera::Pinhole;
+use evorec_core::camera::{Distortion, Pinhole};
 use serde::{Deserialize, Serialize};
 
 use super::error::{Result, SequenceError, one_line};
@@ -77,7 +77,7 @@ fn first_line(text: &str) -> String {
 ///
 /// # Errors
 /// `(field, message)` for a bad shape, a non-finite or non-positive focal length, skew, a size
-/// the core does not take, or a distortion model/coefficients the core does not support yet.
+/// the core does not take, or a distortion model other than plumb_bob with 5 coefficients.
 pub fn to_pinhole(info: &CameraInfo) -> std::result::Result<Pinhole, (&'static str, String)> {
     shape(&info.camera_matrix, 3, 3).map_err(|m| ("camera_matrix", m))?;
     shape(&info.rectification_matrix, 3, 3).map_err(|m| ("rectification_matrix", m))?;
@@ -86,18 +86,19 @@ pub fn to_pinhole(info: &CameraInfo) -> std::result::Result<Pinhole, (&'static s
     if k[1] != 0.0 || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0 {
         return Err(("camera_matrix", format!("must be [fx 0 cx; 0 fy cy; 0 0 1] (no skew), got {k:?}")));
     }
-    check_distortion(info)?;
+    let lens = distortion(info)?;
     let (w, h) = (u16::try_from(info.image_width), u16::try_from(info.image_height));
     let (Ok(w), Ok(h)) = (w, h) else {
         return Err(("image_width", format!("{}x{} is too large", info.image_width, info.image_height)));
     };
-    let (fx, fy, cx, cy) = (k[0], k[4], k[2] + 0.5, k[5] + 0.5);
-    Pinhole::new_checked(fx as f32, fy as f32, cx as f32, cy as f32, w, h).map_err(|e| ("camera_matrix", e.to_string()))
+    let (fx, fy, cx, cy) = (k[0] as f32, k[4] as f32, k[2] as f32, k[5] as f32);
+    let cam = Pinhole::from_opencv(fx, fy, cx, cy, w, h).map_err(|e| ("camera_matrix", e.to_string()))?;
+    Ok(cam.with_distortion(lens))
 }
 
-/// TODO(lead): distortion. The one place where lens distortion is refused until the core
-/// projects through `Distortion::plumb_bob` (then build the camera with it instead).
-fn check_distortion(info: &CameraInfo) -> std::result::Result<(), (&'static str, String)> {
+/// The lens distortion of a camera_info: OpenCV's plumb_bob `D = [k1, k2, p1, p2, k3]` (an empty
+/// `D` means none). The core applies it when it projects the model, so raw images are matched.
+fn distortion(info: &CameraInfo) -> std::result::Result<Distortion, (&'static str, String)> {
     let d = &info.distortion_coefficients;
     if info.distortion_model != "plumb_bob" {
         return Err(("distortion_model", format!("\"{}\" is not supported (only plumb_bob)", info.distortion_model)));
@@ -105,13 +106,11 @@ fn check_distortion(info: &CameraInfo) -> std::result::Result<(), (&'static str,
     if d.data.len() != d.rows * d.cols || !(d.data.len() == 5 || d.data.is_empty()) {
         return Err(("distortion_coefficients", format!("expected 5 values (k1 k2 p1 p2 k3), got {}", d.data.len())));
     }
-    if d.data.iter().any(|v| *v != 0.0) {
-        return Err((
-            "distortion_coefficients",
-            format!("non-zero lens distortion {:?} is not supported yet (undistort the images first)", d.data),
-        ));
+    let mut k = [0.0f32; 5];
+    for (dst, src) in k.iter_mut().zip(d.data.iter()) {
+        *dst = *src as f32;
     }
-    Ok(())
+    Distortion::plumb_bob(k).map_err(|e| ("distortion_coefficients", e.to_string()))
 }
 
 fn shape(m: &YamlMatrix, rows: usize, cols: usize) -> std::result::Result<(), String> {

@@ -273,11 +273,17 @@ fn malformed_toml_yaml_and_tum_are_located() {
 }
 
 #[test]
-fn lens_distortion_is_refused_for_now() {
+fn lens_distortion_reaches_the_core_camera() {
     let (_tmp, dir) = valid();
-    replace(&dir, "calib/left.yaml", "data: [0, 0, 0, 0, 0]", "data: [0.1, 0, 0, 0, 0]");
+    replace(&dir, "calib/left.yaml", "data: [0, 0, 0, 0, 0]", "data: [0.1, -0.02, 0.001, 0.002, 0.003]");
+    let s = Sequence::load(&dir).unwrap();
+    assert_eq!(s.rig.left.distortion().apply(0.0, 0.0), (0.0, 0.0));
+    let (x, y) = s.rig.left.distortion().apply(0.2, -0.1);
+    assert!((x - 0.2).abs() > 1e-4 && (y + 0.1).abs() > 1e-4, "distortion not applied: {x} {y}");
+    assert_eq!(s.rig.right.distortion().apply(0.2, -0.1), (0.2, -0.1));
+    replace(&dir, "calib/left.yaml", "data: [0.1, -0.02, 0.001, 0.002, 0.003]", "data: [0.1, 0, 0, 0]");
     let e = error_of(&dir);
-    assert!(e.contains("calib/left.yaml: distortion_coefficients") && e.contains("not supported yet"), "{e}");
+    assert!(e.contains("calib/left.yaml: distortion_coefficients") && e.contains("expected 5 values"), "{e}");
 }
 
 #[test]

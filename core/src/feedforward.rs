@@ -89,8 +89,8 @@ pub fn camera_motion<const DOF: usize>(
     let (j, r_wc, p_wc) = chain.jacobian_at(q, flange_to_camera);
     let jqd = j * SVector::<f32, DOF>::from(*qd);
     let r_cw = r_wc.transpose();
-    let twist =
-        CameraTwist { v: r_cw * Vector3::new(jqd[0], jqd[1], jqd[2]), w: r_cw * Vector3::new(jqd[3], jqd[4], jqd[5]) };
+    let [vx, vy, vz, wx, wy, wz]: [f32; 6] = jqd.into();
+    let twist = CameraTwist { v: r_cw * Vector3::new(vx, vy, vz), w: r_cw * Vector3::new(wx, wy, wz) };
     CameraMotion { twist, r_wc, p_wc }
 }
 

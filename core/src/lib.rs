@@ -16,7 +16,7 @@
 //! - [`camera`]: pinhole cameras and the stereo rig (eq. 26–31).
 //! - [`hue`]: validated hue-image views, RGB→hue, the hue match table.
 //! - [`model`]: the surface-strips block model; [`fitness`]: eq. 34–35.
-//! - [`ga`]: the 1-step GA; [`kinematics`]: DH chains, the PA-10, Jacobians;
+//! - [`ga`]: the 1-step GA; [`kinematics`]: serial chains (from DH or URDF), the PA-10, Jacobians;
 //!   [`feedforward`]: eq. 15–25; [`target_motion`]: the target's own motion (eq. 23's
 //!   `J_n` term) and the hand-over of a pose to a later time.
 //! - [`tracker`]: one generation per frame pair; [`board`]: the camera-controller trait and

@@ -6,7 +6,7 @@
 //! world — the same trait and loop as on the firmware —, runs and their summaries
 //! ([`experiment`]), the paper's experiment grid ([`paper`]), single-frame rendering
 //! ([`frame`]), the same runs with the tracker in the firmware on QEMU ([`hil`]), output
-//! files ([`io`]) and plots ([`plot`]).
+//! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]).
 
 pub mod arm;
 pub mod closed_loop;
@@ -18,6 +18,7 @@ pub mod motion;
 pub mod paper;
 pub mod plot;
 pub mod render;
+pub mod robot;
 pub mod scenario;
 pub mod servo;
 pub mod sim;

@@ -5,7 +5,7 @@
 //!
 //! ## Fixed geometry
 //! - The right camera `Σ_CR` sits on the flange at `[+baseline/2, 0, 0.05]` m (flange
-//!   coordinates) with the flange's orientation, see [`crate::arm::flange_to_camera`].
+//!   coordinates) with the flange's orientation, see [`flange_to_camera`].
 //! - At `t = 0` the flange is at [`FLANGE_START_M`] with orientation
 //!   [`initial_camera_rotation`]: the optical axis looks along world `+x`, tilted down by
 //!   [`CAMERA_TILT_DEG`].
@@ -31,11 +31,24 @@
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::arm::flange_to_camera_f64;
-use crate::scenario::Scenario;
-
 /// Downward tilt `φ` of the optical axis at `t = 0` (degrees).
 pub const CAMERA_TILT_DEG: f64 = 20.0;
+
+/// Height of the right camera's origin above the flange, along the flange `z` axis (m).
+pub const CAMERA_MOUNT_OFFSET_M: f64 = 0.05;
+
+/// `^H T_CR` in f64: the right camera frame is the flange frame translated by
+/// `[+baseline/2, 0, 0.05]` m (flange coordinates), with the same orientation (optical axis =
+/// flange `z`).
+pub fn flange_to_camera_f64(baseline_m: f64) -> Isometry3<f64> {
+    Isometry3::from_parts(Translation3::new(0.5 * baseline_m, 0.0, CAMERA_MOUNT_OFFSET_M), UnitQuaternion::identity())
+}
+
+/// `^H T_CR` as the core's f32 isometry (see [`flange_to_camera_f64`]); pass it to
+/// `evorec_core::feedforward` and to the tracker configuration.
+pub fn flange_to_camera(baseline_m: f64) -> Isometry3<f32> {
+    flange_to_camera_f64(baseline_m).cast::<f32>()
+}
 
 /// Flange position `p_e0` at `t = 0` (world, metres).
 pub const FLANGE_START_M: [f64; 3] = [0.45, 0.0, 0.75];
@@ -138,16 +151,16 @@ pub struct FlangeTrajectory {
 }
 
 impl FlangeTrajectory {
-    /// The flange motion described by a scenario, starting at [`initial_flange_pose`].
-    pub fn from_scenario(s: &Scenario) -> Self {
-        Self {
-            kind: s.robot.motion,
-            start: initial_flange_pose(),
-            orbit_centre: target_centre(s.camera.baseline_m, s.target.distance_m),
-            omega_rad_s: s.robot.omega_rad_s,
-            amplitude_m: s.robot.amplitude_m,
-            amplitude_rad: s.robot.amplitude_deg.to_radians(),
-        }
+    /// A flange motion of `kind` starting at [`initial_flange_pose`], orbiting (motion B) the
+    /// vertical axis through `orbit_centre`.
+    pub fn new(
+        kind: MotionKind,
+        omega_rad_s: f64,
+        amplitude_m: f64,
+        amplitude_rad: f64,
+        orbit_centre: Point3<f64>,
+    ) -> Self {
+        Self { kind, start: initial_flange_pose(), orbit_centre, omega_rad_s, amplitude_m, amplitude_rad }
     }
 
     /// Desired flange pose and twist at time `t` (s).
@@ -207,16 +220,6 @@ pub struct TargetMotion {
 }
 
 impl TargetMotion {
-    /// The target motion described by a scenario.
-    pub fn from_scenario(s: &Scenario) -> Self {
-        Self {
-            centre: target_centre(s.camera.baseline_m, s.target.distance_m),
-            yaw0_rad: s.target.yaw0_deg.to_radians(),
-            amplitude_rad: s.target.amplitude_deg.to_radians(),
-            omega_rad_s: s.target.omega_rad_s,
-        }
-    }
-
     /// The yaw `θ_o(t)` added to `yaw0` (rad).
     pub fn theta(&self, t: f64) -> f64 {
         self.amplitude_rad * (self.omega_rad_s * t).sin()
@@ -241,14 +244,7 @@ impl TargetMotion {
 /// The default geometry's trajectory (baseline 0.1 m, 0.7 m, ±0.1 m, ±15°) for tests.
 #[cfg(test)]
 pub(crate) fn test_trajectory(kind: MotionKind, omega: f64) -> FlangeTrajectory {
-    FlangeTrajectory {
-        kind,
-        start: initial_flange_pose(),
-        orbit_centre: target_centre(0.1, 0.7),
-        omega_rad_s: omega,
-        amplitude_m: 0.1,
-        amplitude_rad: 15f64.to_radians(),
-    }
+    FlangeTrajectory::new(kind, omega, 0.1, 15f64.to_radians(), target_centre(0.1, 0.7))
 }
 
 #[cfg(test)]

@@ -16,8 +16,8 @@ use nalgebra::Isometry3;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use crate::arm::{self, ArmSim, CONTROL_PERIOD_S, DOF};
-use crate::motion::{FlangeTrajectory, TargetMotion, Twist};
+use crate::arm::{ArmSim, CONTROL_PERIOD_S, DOF};
+use crate::motion::{self, FlangeTrajectory, TargetMotion, Twist};
 use crate::render::{self, AntiAlias, RenderOptions, StereoImages};
 use crate::scenario::Scenario;
 
@@ -65,8 +65,8 @@ impl World {
         Ok(Self {
             scenario: *scenario,
             arm,
-            trajectory: FlangeTrajectory::from_scenario(scenario),
-            target: TargetMotion::from_scenario(scenario),
+            trajectory: flange_trajectory(scenario),
+            target: target_motion(scenario),
             rig: rig(scenario)?,
             block: block(scenario),
             render: RenderOptions::default().with_antialias(antialias).with_noise(scenario.camera.noise_std as f32),
@@ -302,7 +302,24 @@ pub fn frame_time(s: &Scenario, frame: u32) -> Result<f64> {
 
 /// The flange-to-camera transform of a scenario (f32, for the tracker).
 pub fn flange_to_camera(s: &Scenario) -> Isometry3<f32> {
-    arm::flange_to_camera(s.camera.baseline_m)
+    motion::flange_to_camera(s.camera.baseline_m)
+}
+
+/// The flange motion a scenario describes.
+pub fn flange_trajectory(s: &Scenario) -> FlangeTrajectory {
+    let r = &s.robot;
+    let centre = motion::target_centre(s.camera.baseline_m, s.target.distance_m);
+    FlangeTrajectory::new(r.motion, r.omega_rad_s, r.amplitude_m, r.amplitude_deg.to_radians(), centre)
+}
+
+/// The target motion a scenario describes.
+pub fn target_motion(s: &Scenario) -> TargetMotion {
+    TargetMotion {
+        centre: motion::target_centre(s.camera.baseline_m, s.target.distance_m),
+        yaw0_rad: s.target.yaw0_deg.to_radians(),
+        amplitude_rad: s.target.amplitude_deg.to_radians(),
+        omega_rad_s: s.target.omega_rad_s,
+    }
 }
 
 /// Renders the frame at `frame` of a scenario (advancing a fresh world to its time).

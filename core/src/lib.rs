@@ -14,7 +14,8 @@
 //! - [`math`]: the only path to `sqrt`/`sin`/… (libm), so host and Cortex-M4 agree bit for bit.
 //! - [`quat`], [`pose`]: unit quaternions (eq. 1–12) and the 6-parameter pose (eq. 13).
 //! - [`camera`]: pinhole cameras and the stereo rig (eq. 26–31).
-//! - [`hue`]: validated hue-image views, RGB→hue, the hue match table.
+//! - [`image`]: validated image views in the sensor's pixel format (hue bytes or raw RGB565,
+//!   converted to hue only where the sample points hit); [`hue`]: RGB→hue, the hue match table.
 //! - [`model`]: the surface-strips block model; [`fitness`]: eq. 34–35.
 //! - [`ga`]: the 1-step GA; [`kinematics`]: serial chains (from DH or URDF), the PA-10, Jacobians;
 //!   [`feedforward`]: eq. 15–25; [`target_motion`]: the target's own motion (eq. 23's
@@ -78,6 +79,7 @@ pub mod feedforward;
 pub mod fitness;
 pub mod ga;
 pub mod hue;
+pub mod image;
 pub mod kinematics;
 pub mod math;
 pub mod model;

@@ -13,7 +13,8 @@ use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, DEFAULT_POPULATION, HUE
 use crate::feedforward;
 use crate::fitness::{Evaluator, Fitness};
 use crate::ga::{Best, Ga, GaError, GaParams, SearchSpace};
-use crate::hue::{HueImage, HueLut};
+use crate::hue::HueLut;
+use crate::image::{Hue, Image, PixelFormat};
 use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
@@ -43,13 +44,13 @@ pub struct JointSample<const DOF: usize> {
     pub time_us: u64,
 }
 
-/// A synchronised stereo pair of hue images.
+/// A synchronised stereo pair of images in pixel format `F` (hue bytes by default).
 #[derive(Debug, Clone, Copy)]
-pub struct StereoFrame<'a> {
+pub struct StereoFrame<'a, F: PixelFormat = Hue> {
     /// Left image.
-    pub left: HueImage<&'a [u8]>,
+    pub left: Image<&'a [u8], F>,
     /// Right image.
-    pub right: HueImage<&'a [u8]>,
+    pub right: Image<&'a [u8], F>,
 }
 
 /// The tracker's output for one frame pair.
@@ -336,15 +337,15 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     ///
     /// # Errors
     /// [`StepError::ImageSize`] or [`StepError::Pose`].
-    pub fn fitness_of(&self, psi: &Psi, frame: &StereoFrame<'_>) -> Result<Fitness, StepError> {
+    pub fn fitness_of<F: PixelFormat>(&self, psi: &Psi, frame: &StereoFrame<'_, F>) -> Result<Fitness, StepError> {
         self.check_frame(frame)?;
         psi.validate().map_err(StepError::Pose)?;
         let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
         Ok(eval.evaluate_psi(psi, &frame.left, &frame.right))
     }
 
-    fn check_frame(&self, frame: &StereoFrame<'_>) -> Result<(), StepError> {
-        let check = |side: Side, img: &HueImage<&[u8]>, cam: &Pinhole| {
+    fn check_frame<F: PixelFormat>(&self, frame: &StereoFrame<'_, F>) -> Result<(), StepError> {
+        let check = |side: Side, img: &Image<&[u8], F>, cam: &Pinhole| {
             let (got, expected) = ((img.width(), img.height()), (cam.width(), cam.height()));
             if got == expected { Ok(()) } else { Err(StepError::ImageSize { side, got, expected }) }
         };
@@ -356,9 +357,9 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     ///
     /// # Errors
     /// As [`Tracker::step_probed`].
-    pub fn step(
+    pub fn step<F: PixelFormat>(
         &mut self,
-        frame: &StereoFrame<'_>,
+        frame: &StereoFrame<'_, F>,
         joints: &JointSample<DOF>,
         dt_s: f32,
         feedforward: Feedforward,
@@ -376,9 +377,9 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// # Errors
     /// [`StepError::ImageSize`], [`StepError::NonFiniteJoint`] or [`StepError::BadDt`]; the
     /// tracker is then unchanged.
-    pub fn step_probed(
+    pub fn step_probed<F: PixelFormat>(
         &mut self,
-        frame: &StereoFrame<'_>,
+        frame: &StereoFrame<'_, F>,
         joints: &JointSample<DOF>,
         dt_s: f32,
         feedforward: Feedforward,

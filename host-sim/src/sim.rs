@@ -238,6 +238,7 @@ impl ErrorType for SimBoard {
 }
 
 impl CameraController<DOF> for SimBoard {
+    type Format = evorec_core::image::Hue;
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SimError> {
         if self.next >= self.frames {
             return Err(SimError::EndOfStream);

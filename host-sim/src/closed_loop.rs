@@ -30,9 +30,9 @@ use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
 use crate::arm::{ArmSim, CONTROL_PERIOD_S, DOF};
-use crate::motion::flange_to_camera_f64;
 use crate::experiment::{self, INITIAL_SPREAD, RunOutput, SimTracker, Summary};
 use crate::motion::Twist;
+use crate::motion::flange_to_camera_f64;
 use crate::render;
 use crate::scenario::{Scenario, ServoSection};
 use crate::sim::{TraceRow, World, frame_total};

@@ -61,8 +61,8 @@ pub enum LoopMethod {
     /// 1-step GA + motion feedforward of the arm.
     #[serde(rename = "ff")]
     Ff,
-    /// + feedforward of the target's own motion in the tracker, hand-over with the target
-    /// filter's velocity and that velocity fed forward in the servo law.
+    /// Feedforward of the arm's and the target's own motion in the tracker, hand-over with
+    /// the target filter's velocity and that velocity fed forward in the servo law.
     #[serde(rename = "ff+target")]
     FfTarget,
 }

@@ -623,6 +623,14 @@ mod tests {
         assert!(back.is_some_and(|t| t < start + duration + 0.5), "{back:?}");
         let last = rows.last().map(|r| r.error.translation_norm()).unwrap_or(1.0);
         assert!(last < 0.005, "{last}");
+        let stopped = rows.iter().find(|r| r.t > start && r.camera_speed_m_s < 1e-3).map(|r| r.t - start);
+        let after = rows.iter().filter(|r| r.t >= start + duration).map(|r| r.camera_speed_m_s).fold(0.0, f64::max);
+        println!(
+            "occlusion: speed before {before:.3} m/s, stopped {stopped:?} s after it began, tracking again at {back:?} s, \
+             max speed after {after:.3} m/s (limit {}), final error {:.2} mm",
+            sec.max_speed_m_s,
+            last * 1e3
+        );
     }
 
     #[test]

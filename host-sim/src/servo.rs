@@ -61,8 +61,8 @@ pub enum LoopMethod {
     /// 1-step GA + motion feedforward of the arm.
     #[serde(rename = "ff")]
     Ff,
-    /// + feedforward of the target's own motion in the tracker, hand-over with the target
-    /// filter's velocity and that velocity fed forward in the servo law.
+    /// Feedforward of the arm's and the target's own motion in the tracker, hand-over with
+    /// the target filter's velocity and that velocity fed forward in the servo law.
     #[serde(rename = "ff+target")]
     FfTarget,
 }
@@ -387,12 +387,10 @@ pub fn stability_map(
             chart
                 .configure_mesh()
                 .disable_mesh()
-                .x_desc("delay (frames)")
-                .y_desc("gain (1/s)")
-                .x_labels(nx)
-                .y_labels(ny)
-                .x_label_formatter(&|x| g.delays.get(x.floor() as usize).map(|d| d.to_string()).unwrap_or_default())
-                .y_label_formatter(&|y| g.gains.get(y.floor() as usize).map(|v| v.to_string()).unwrap_or_default())
+                .x_desc("delay (frames), increasing →")
+                .y_desc("gain, increasing →")
+                .x_labels(0)
+                .y_labels(0)
                 .label_style((FONT, 14))
                 .draw()
                 .map_err(draw_err)?;
@@ -409,13 +407,14 @@ pub fn stability_map(
                         outcome_colour(s.outcome).filled(),
                     )))
                     .map_err(draw_err)?;
-                chart
-                    .draw_series(std::iter::once(Text::new(
-                        format!("{:.1} mm", s.rms_err_mm),
-                        (x + 0.2, y + 0.6),
-                        (FONT, 13).into_font(),
-                    )))
-                    .map_err(draw_err)?;
+                for (text, dy) in [
+                    (format!("λ {} /s, {} fr", c.gain, c.delay_frames), 0.75),
+                    (format!("{:.1} mm", s.rms_err_mm), 0.45),
+                ] {
+                    chart
+                        .draw_series(std::iter::once(Text::new(text, (x + 0.12, y + dy), (FONT, 13).into_font())))
+                        .map_err(draw_err)?;
+                }
             }
         }
         Ok(())

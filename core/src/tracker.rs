@@ -478,8 +478,13 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         probe.mark(Phase::Breed);
         self.ga.breed(&best, &self.config.ga, &self.config.search, &mut self.rng);
         self.generation = self.generation.wrapping_add(1);
-        let world = target_motion::world_pose(&self.config.arm, &joints.q, &self.config.flange_to_camera, &best.psi);
-        self.target.update(&world, joints.time_us, best.fitness);
+        // The target filter (one forward kinematics and a data-dependent update) runs only in the
+        // mode that uses it, so the other modes keep the paper's constant work per generation.
+        if feedforward == Feedforward::OnWithTarget {
+            let world =
+                target_motion::world_pose(&self.config.arm, &joints.q, &self.config.flange_to_camera, &best.psi);
+            self.target.update(&world, joints.time_us, best.fitness);
+        }
         probe.mark(Phase::Done);
 
         Ok(Estimate {

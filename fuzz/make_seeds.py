@@ -77,6 +77,91 @@ def main():
     with open(os.path.join(HERE, "..", "scenarios", "smoke.toml"), "rb") as f:
         write("scenario_toml", "smoke", f.read())
     write("scenario_toml", "minimal", b'seed = 1\nduration_s = 1.0\nmethod = "ga"\n')
+    sequence_seeds()
+
+
+SEQUENCE_TOML = b"""format = "evorec-seq/1"
+name = "seed"
+
+[robot]
+urdf = "robot.urdf"
+base_link = "base_link"
+flange_link = "flange_link"
+
+[cameras]
+left = "calib/left.yaml"
+right = "calib/right.yaml"
+right_to_left = [1.0, 0.0, 0.0, 0.1,  0.0, 1.0, 0.0, 0.0,  0.0, 0.0, 1.0, 0.0,  0.0, 0.0, 0.0, 1.0]
+flange_to_right = [0.0, 1.0, 0.0, -0.04,  -1.0, 0.0, 0.0, -0.05,  0.0, 0.0, 1.0, 0.1,  0.0, 0.0, 0.0, 1.0]
+
+[target]
+size_m = [0.1, 0.15, 0.2]
+face_hues_deg = [0.0, 120.0, 240.0, 0.0, 120.0, 240.0]
+initial_pose = { t_m = [-0.05, 0.0, 0.7], q_xyzw = [0.0, 0.0, 0.0, 1.0] }
+
+[search]
+min_m = [-0.3, -0.3, 0.4]
+max_m = [0.3, 0.3, 1.0]
+"""
+
+CAMERA_INFO = b"""image_width: 640
+image_height: 480
+camera_name: left
+camera_matrix:
+  rows: 3
+  cols: 3
+  data: [800.0, 0.0, 319.5, 0.0, 800.0, 239.5, 0.0, 0.0, 1.0]
+distortion_model: plumb_bob
+distortion_coefficients:
+  rows: 1
+  cols: 5
+  data: [-0.2, 0.05, 0.001, -0.001, 0.0]
+rectification_matrix:
+  rows: 3
+  cols: 3
+  data: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+projection_matrix:
+  rows: 3
+  cols: 4
+  data: [800.0, 0.0, 319.5, 0.0, 0.0, 800.0, 239.5, 0.0, 0.0, 0.0, 1.0, 0.0]
+"""
+
+URDF_2DOF = b"""<robot name="seed">
+  <link name="base_link"/>
+  <link name="l1"/>
+  <link name="flange_link"/>
+  <joint name="j1" type="revolute">
+    <parent link="base_link"/><child link="l1"/>
+    <origin xyz="0 0 0.3" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/>
+  </joint>
+  <joint name="j2" type="prismatic">
+    <parent link="l1"/><child link="flange_link"/>
+    <origin xyz="0.1 0 0" rpy="0 1.5707963 0"/><axis xyz="0 0 1"/>
+    <limit lower="0" upper="0.5" effort="1" velocity="1"/>
+  </joint>
+</robot>
+"""
+
+
+def sequence_seeds():
+    """sequence_files: the first byte picks the reader (0 sequence.toml, 1 camera_info, 2 URDF,
+    3 frames.csv, 4 joints.csv with joints j1 j2, 5 TUM)."""
+    write("sequence_files", "manifest", b"\0" + SEQUENCE_TOML)
+    write("sequence_files", "camera-info", b"\1" + CAMERA_INFO)
+    write("sequence_files", "urdf", b"\2" + URDF_2DOF)
+    with open(os.path.join(HERE, "..", "robots", "pa10.urdf"), "rb") as f:
+        write("sequence_files", "urdf-pa10", b"\2" + f.read())
+    frames = b"index,t_s,left,right\n" + b"".join(
+        b"%d,%.9f,left/%06d.png,right/%06d.png\n" % (k, k / 30, k, k) for k in range(3)
+    )
+    write("sequence_files", "frames", b"\3" + frames)
+    joints = b"t_s,pos_j1,pos_j2,vel_j1,vel_j2\n" + b"".join(
+        b"%.3f,%.4f,%.4f,0.1,-0.2\n" % (k * 0.002, 0.1 * k, 0.2 - 0.001 * k) for k in range(4)
+    )
+    write("sequence_files", "joints", b"\4" + joints)
+    tum = b"# t tx ty tz qx qy qz qw\n0.0 -0.05 0.0 0.7 0.0 0.0 0.0 1.0\n0.033 -0.05 0.0 0.7 0.0 0.0 0.6 0.8\n"
+    write("sequence_files", "tum", b"\5" + tum)
 
 
 if __name__ == "__main__":

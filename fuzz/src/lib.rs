@@ -34,6 +34,7 @@ pub const TARGETS: &[(&str, fn(&[u8]))] = &[
     ("host_replies", host_replies),
     ("tracker_step", tracker_step),
     ("scenario_toml", scenario_toml),
+    ("sequence_files", sequence_files),
 ];
 
 /// A growable byte sink (the fuzz bodies' stand-in for a link's transmit side).
@@ -229,4 +230,74 @@ pub fn scenario_toml(data: &[u8]) {
     let back = evorec_sim::scenario::Scenario::from_toml_str(&toml);
     let Ok(back) = back else { panic!("serialised scenario does not parse: {back:?}\n{toml}") };
     assert_eq!(back.to_toml_string().ok(), Some(toml), "serialise∘parse is not the identity");
+}
+
+/// The joint names `sequence_files` reads `joints.csv` against (a 2-joint chain keeps the
+/// header short enough for the fuzzer to find).
+const FUZZ_JOINTS: [&str; 2] = ["j1", "j2"];
+
+/// The recorded-sequence reader (`evorec_sim::sequence`): the first byte picks the file kind,
+/// the rest is that file's text — `sequence.toml`, camera_info YAML, URDF (chain `base_link` →
+/// `flange_link`), `frames.csv`, `joints.csv` (joints `j1`, `j2`) or a TUM trajectory.
+/// Properties: every error is one line naming the file; every accepted file satisfies the
+/// reader's documented invariants (strictly increasing times, finite values, a rigid hand-eye
+/// transform, a joint state inside the sampled span).
+pub fn sequence_files(data: &[u8]) {
+    use evorec_sim::sequence::{camera_info, manifest, tables, tum};
+    let Some((&kind, rest)) = data.split_first() else { return };
+    let Ok(text) = std::str::from_utf8(rest) else { return };
+    let path = std::path::Path::new("fuzz-input");
+    let one_line = |e: &dyn std::fmt::Display| {
+        let msg = e.to_string();
+        assert!(!msg.contains('\n'), "a reader error spans several lines: {msg:?}");
+        assert!(msg.starts_with("fuzz-input"), "a reader error does not name the file: {msg:?}");
+    };
+    match kind % 6 {
+        0 => match manifest::parse(text, path) {
+            Ok(m) => {
+                let rot = m.flange_to_right.rotation.coords.norm();
+                assert!((rot - 1.0).abs() < 1e-6, "accepted hand-eye rotation is not unit: {rot}");
+            }
+            Err(e) => one_line(&e),
+        },
+        1 => match camera_info::parse(text, path) {
+            Ok((_, cam)) => assert!(cam.fx() > 0.0 && cam.fy() > 0.0, "accepted camera has a bad focal length"),
+            Err(e) => one_line(&e),
+        },
+        2 => match evorec_sim::robot::ArmModel::from_urdf_str(text, "base_link", "flange_link", "fuzz-input") {
+            Ok(arm) => {
+                let _ = arm.to_chain::<7>();
+            }
+            Err(e) => one_line(&e),
+        },
+        3 => match tables::parse_frames(text.as_bytes(), path, std::path::Path::new("seq")) {
+            Ok(rows) => {
+                assert!(!rows.is_empty(), "no frames accepted as a sequence");
+                assert!(rows.windows(2).all(|w| w[0].index < w[1].index && w[0].t_s < w[1].t_s));
+            }
+            Err(e) => one_line(&e),
+        },
+        4 => {
+            let names: Vec<String> = FUZZ_JOINTS.iter().map(|n| (*n).to_owned()).collect();
+            match tables::JointTable::parse(text.as_bytes(), path, &names) {
+                Ok(table) => {
+                    let (first, last) = table.span();
+                    assert!(first.is_finite() && last.is_finite() && first <= last);
+                    let mid = first + (last - first) / 2.0;
+                    for t in [first, mid, last] {
+                        let s = table.at(t);
+                        let Some(s) = s else { panic!("no joint state at {t} inside [{first}, {last}]") };
+                        assert_eq!((s.q.len(), s.qd.len()), (names.len(), names.len()));
+                        assert!(s.q.iter().chain(&s.qd).all(|v| v.is_finite()), "non-finite joint state at {t}");
+                    }
+                    assert!(table.at(last + 1.0).is_none() && table.at(f64::NAN).is_none());
+                }
+                Err(e) => one_line(&e),
+            }
+        }
+        _ => match tum::parse(text, path) {
+            Ok(poses) => assert!(poses.windows(2).all(|w| w[0].t < w[1].t), "TUM times accepted out of order"),
+            Err(e) => one_line(&e),
+        },
+    }
 }

@@ -58,7 +58,15 @@ pub struct CameraInfo {
 /// Missing file, malformed YAML, bad shapes or values, unsupported distortion.
 pub fn load(path: &Path) -> Result<(CameraInfo, Pinhole)> {
     let text = std::fs::read_to_string(path).map_err(|e| SequenceError::file(path, format!("cannot read: {e}")))?;
-    let info: CameraInfo = serde_saphyr::from_str(&text).map_err(|e| {
+    parse(&text, path)
+}
+
+/// Parses and converts camera_info YAML text (`path` only names it in errors).
+///
+/// # Errors
+/// As [`load`].
+pub fn parse(text: &str, path: &Path) -> Result<(CameraInfo, Pinhole)> {
+    let info: CameraInfo = serde_saphyr::from_str(text).map_err(|e| {
         let err = SequenceError::file(path, first_line(&e.to_string()));
         match e.location() {
             Some(loc) if loc.line() > 0 => err.at_line(loc.line()),

@@ -13,6 +13,7 @@
 //! error found when the sequence is loaded, so the feedforward always uses the arm's motion at
 //! the moment the image was taken, never an extrapolation or the last sample received.
 
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use super::error::{Result, SequenceError};
@@ -35,12 +36,12 @@ pub struct FrameRow {
     pub line: u64,
 }
 
-fn reader(path: &Path) -> Result<csv::Reader<std::fs::File>> {
-    csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .comment(None)
-        .from_path(path)
-        .map_err(|e| SequenceError::file(path, format!("cannot read: {e}")))
+fn open(path: &Path) -> Result<std::fs::File> {
+    std::fs::File::open(path).map_err(|e| SequenceError::file(path, format!("cannot read: {e}")))
+}
+
+fn reader<R: Read>(source: R) -> csv::Reader<R> {
+    csv::ReaderBuilder::new().trim(csv::Trim::All).comment(None).from_reader(source)
 }
 
 fn csv_error(path: &Path, e: &csv::Error) -> SequenceError {
@@ -51,7 +52,7 @@ fn csv_error(path: &Path, e: &csv::Error) -> SequenceError {
     }
 }
 
-fn headers(path: &Path, r: &mut csv::Reader<std::fs::File>) -> Result<Vec<String>> {
+fn headers<R: Read>(path: &Path, r: &mut csv::Reader<R>) -> Result<Vec<String>> {
     let h = r.headers().map_err(|e| csv_error(path, &e))?;
     Ok(h.iter().map(str::to_owned).collect())
 }
@@ -73,7 +74,15 @@ fn number(path: &Path, line: u64, field: &str, text: &str) -> Result<f64> {
 /// Missing file, wrong header, a row with the wrong number of fields, a non-numeric, NaN or
 /// infinite time, indices or times not strictly increasing, no rows.
 pub fn read_frames(path: &Path, dir: &Path) -> Result<Vec<FrameRow>> {
-    let mut r = reader(path)?;
+    parse_frames(open(path)?, path, dir)
+}
+
+/// [`read_frames`] from any byte source (`path` only names it in errors).
+///
+/// # Errors
+/// As [`read_frames`].
+pub fn parse_frames(source: impl Read, path: &Path, dir: &Path) -> Result<Vec<FrameRow>> {
+    let mut r = reader(source);
     let h = headers(path, &mut r)?;
     if h != FRAMES_HEADER {
         return Err(SequenceError::file(
@@ -142,7 +151,15 @@ impl JointTable {
     /// Missing file, a header that does not match `names`, a bad row, a NaN or infinite value,
     /// times not strictly increasing, no rows.
     pub fn read(path: &Path, names: &[String]) -> Result<Self> {
-        let mut r = reader(path)?;
+        Self::parse(open(path)?, path, names)
+    }
+
+    /// [`JointTable::read`] from any byte source (`path` only names it in errors).
+    ///
+    /// # Errors
+    /// As [`JointTable::read`].
+    pub fn parse(source: impl Read, path: &Path, names: &[String]) -> Result<Self> {
+        let mut r = reader(source);
         let h = headers(path, &mut r)?;
         let expected: Vec<String> = std::iter::once("t_s".to_owned())
             .chain(names.iter().map(|n| format!("pos_{n}")))

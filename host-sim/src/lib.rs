@@ -26,5 +26,6 @@ pub mod scenario;
 pub mod sequence;
 pub mod servo;
 pub mod sim;
+pub mod text;
 pub mod timing;
 pub mod track;

@@ -129,7 +129,8 @@ impl ArmModel {
     ) -> Result<Self, RobotError> {
         let file = source_name.to_string();
         let robot = urdf_rs::read_from_string(text)
-            .map_err(|e| RobotError::Parse { file: file.clone(), message: e.to_string() })?;
+            .map_err(|e| RobotError::Parse { file: file.clone(), message: crate::text::one_line(&e.to_string()) })?;
+        plain_names(&robot, &file)?;
         let path = chain_joints(&robot, base_link, flange_link, &file)?;
         let mut joint_names = Vec::new();
         let mut joints = Vec::new();
@@ -205,6 +206,21 @@ impl ArmModel {
         };
         RobotError::Joint { file: self.file.clone(), joint, problem: format!("in f32: {e}") }
     }
+}
+
+/// Refuses link and joint names with control characters (a name with a line break would
+/// split every later message that quotes it).
+fn plain_names(robot: &urdf_rs::Robot, file: &str) -> Result<(), RobotError> {
+    let bad = |name: &str| name.chars().any(char::is_control);
+    if let Some(l) = robot.links.iter().find(|l| bad(&l.name)) {
+        let link = l.name.escape_debug().to_string();
+        return Err(RobotError::Link { file: file.into(), link, problem: "name holds a control character".into() });
+    }
+    if let Some(j) = robot.joints.iter().find(|j| bad(&j.name)) {
+        let joint = j.name.escape_debug().to_string();
+        return Err(RobotError::Joint { file: file.into(), joint, problem: "name holds a control character".into() });
+    }
+    Ok(())
 }
 
 /// The joints from `base` down to `flange`, in that order.

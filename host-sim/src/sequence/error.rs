@@ -54,10 +54,7 @@ impl fmt::Display for SequenceError {
 
 impl std::error::Error for SequenceError {}
 
-/// Collapses a (possibly multi-line) parser message into one line.
-pub fn one_line(text: &str) -> String {
-    text.split_whitespace().collect::<Vec<_>>().join(" ")
-}
+pub use crate::text::one_line;
 
 /// Shorthand for results of the reader.
 pub type Result<T> = std::result::Result<T, SequenceError>;

@@ -127,12 +127,11 @@ impl<'a, F: PixelFormat> View<'a, F> {
     /// The row needs no compare of its own: for any `i32` `v`, `|v >> 16| ≤ 2¹⁵`, so with a
     /// column inside the image the wrapping index `row · width + col` is `< len` exactly when
     /// `0 ≤ row < height` (a negative row wraps to at least `2³² − 2²⁶ > len`). The one bounds
-    /// check of `get` is the image test; the M4 code predicates the load on it (no branch), so
-    /// every point costs the same inside and outside the image.
+    /// check of `get` is the image test; the M4 code predicates the load on it (`ite`, no
+    /// branch), so every point costs the same inside and outside the image.
     #[inline(always)]
-    fn walk<const G: usize>(&self, row: &FixedRow, score: &impl Fn(u8) -> u32) -> u32 {
+    fn walk<const G: usize>(&self, row: &FixedRow, score: &impl Fn(u8) -> u32, hits: &mut u32) {
         let (mut u, mut v) = (row.u, row.v);
-        let mut hits = 0u32;
         for _ in 0..G {
             let col = (u >> FIX_BITS) as u32;
             let index = ((v >> FIX_BITS) as u32).wrapping_mul(self.width).wrapping_add(col);
@@ -141,11 +140,10 @@ impl<'a, F: PixelFormat> View<'a, F> {
                 Some(&px) => F::hue(px),
                 None => NO_HUE,
             };
-            hits += score(hue);
+            *hits += score(hue);
             u = u.wrapping_add(row.du);
             v = v.wrapping_add(row.dv);
         }
-        hits
     }
 }
 
@@ -258,10 +256,10 @@ fn walk_edge<const G: usize, F: PixelFormat>(
     let (ins, outs) = rows.split_at(INNER_INSETS_M.len());
     let (mut hits_in, mut hits_out) = (0u32, 0u32);
     for row in ins {
-        hits_in += view.walk::<G>(row, inner);
+        view.walk::<G>(row, inner, &mut hits_in);
     }
     for row in outs {
-        hits_out += view.walk::<G>(row, outer);
+        view.walk::<G>(row, outer, &mut hits_out);
     }
     (hits_in, hits_out)
 }
@@ -341,6 +339,13 @@ impl Projector {
     }
 }
 
+/// `a.min(b)` for finite numbers (focal lengths and block sizes are validated finite) as one
+/// compare instead of a call to `fminf` with its NaN rules.
+#[inline(always)]
+fn min_finite(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
 /// Counts of one camera for the model at `(r, t)` in that camera's frame.
 ///
 /// The work is the same for every pose: see the module docs.
@@ -354,7 +359,7 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
 ) -> Counts {
     let view = View::of(image);
     let half = model.half_size();
-    let focal = cam.fx().min(cam.fy());
+    let focal = min_finite(cam.fx(), cam.fy());
 
     // Nearest depth of the block inflated by the outer rows (every sample point is inside it).
     let margin = OUTER_OFFSETS_M.iter().fold(0.0f32, |m, d| m.max(*d));
@@ -390,7 +395,7 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
         let c2 = center.dot(&center);
         // Narrowest full side of the face, and its foreshortened size in pixels ≥ MIN_FACE_PX:
         // f · side · (dist / |c|) / |c| ≥ MIN_FACE_PX.
-        let side = 2.0 * half[(a + 1) % 3].min(half[(a + 2) % 3]);
+        let side = 2.0 * min_finite(half[(a + 1) % 3], half[(a + 2) % 3]);
         if in_front
             && dist > 0.0
             && dist * dist > MIN_VISIBLE_COS * MIN_VISIBLE_COS * c2

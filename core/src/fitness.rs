@@ -20,17 +20,21 @@
 //! is on the silhouette: the visibility only masks the counts. Points outside the image read as "no hue"; nothing is ever read
 //! out of bounds.
 //!
-//! **Per point** (plain pinhole): three additions (the row is walked in homogeneous
-//! coordinates), one division, two multiplications, two truncating float→int conversions, one
-//! unsigned compare per axis, the slice's bounds check, the pixel load, for RGB565 one load
-//! from the 64 KiB hue table ([`crate::image::RGB565_HUE`]), and one load from the hue match
-//! table. **Per pose** the block's axis-aligned structure is used: every row start, step and
-//! offset is a multiple of one projected model axis, precomputed once per camera and pose.
+//! **Per row** (plain pinhole): the perspective division of its two end points, and the step
+//! between its points in 16.16 fixed point (see `Affine` for why the affine walk between
+//! exactly projected ends samples the model's row). **Per point**: two integer additions, a
+//! shift and a multiply-add for the index, the column compare, the slice's bounds check (which
+//! is the row test, see `View::walk`), the pixel load (predicated: no branch, so points
+//! outside the image cost the same as points inside), for RGB565 one load from the 64 KiB hue
+//! table ([`crate::image::RGB565_HUE`]), and one load from the hue match table. **Per pose** the
+//! block's axis-aligned structure is used: every row start, step and offset is a multiple of
+//! one projected model axis, precomputed once per camera and pose.
 //!
 //! **Lens distortion.** A camera with [`crate::camera::Distortion`] ≠ 0 takes the distorted
 //! kernel, chosen once per camera and pose (a camera without distortion pays nothing): rows are
 //! walked in normalised coordinates and every point goes through the plumb_bob polynomial and
-//! `K` (about 20 more float operations). Points beyond the calibrated field (see
+//! `K` (about 20 more float operations, and a division per point: it keeps the per-point
+//! projection and costs several times the pinhole walk per point). Points beyond the calibrated field (see
 //! `distortion_field_r2`) read as outside the image.
 
 use nalgebra::{Matrix3, Vector3};
@@ -89,11 +93,12 @@ struct View<'a, F: PixelFormat> {
 
 impl<'a, F: PixelFormat> View<'a, F> {
     fn of<B: AsRef<[u8]>>(img: &'a Image<B, F>) -> Self {
+        // `pixels.len() == width · height` (at most 2²², see [`MAX_IMAGE_SIDE`]).
         Self { pixels: img.pixels(), width: u32::from(img.width()), height: u32::from(img.height()) }
     }
 
     /// The hue byte at the point whose pixel coordinates plus one are `(u1, v1)`, or `NO_HUE`
-    /// outside the image.
+    /// outside the image (the lens kernel's per-point read).
     ///
     /// Pixel `(i, j)` covers `[i, i+1) × [j, j+1)`. The projector adds 1 to both coordinates,
     /// so for every point inside the image `u1, v1 ≥ 1` and the truncating conversion
@@ -113,28 +118,193 @@ impl<'a, F: PixelFormat> View<'a, F> {
             None => NO_HUE,
         }
     }
+
+    /// Sums `score(hue)` over the `G` points of a fixed-point row (the pinhole kernel's
+    /// inner loop).
+    ///
+    /// Per point: `u >> 16` is `⌊u⌋` (arithmetic shift), the column; as an unsigned number it
+    /// is `≥ width` left of the image too, and such a column moves the index to `u32::MAX`.
+    /// The row needs no compare of its own: for any `i32` `v`, `|v >> 16| ≤ 2¹⁵`, so with a
+    /// column inside the image the wrapping index `row · width + col` is `< len` exactly when
+    /// `0 ≤ row < height` (a negative row wraps to at least `2³² − 2²⁶ > len`). The one bounds
+    /// check of `get` is the image test; the M4 code predicates the load on it (`ite`, no
+    /// branch), so every point costs the same inside and outside the image.
+    #[inline(always)]
+    fn walk<const G: usize>(&self, row: &FixedRow, score: &impl Fn(u8) -> u32, hits: &mut u32) {
+        let (mut u, mut v) = (row.u, row.v);
+        for _ in 0..G {
+            let col = (u >> FIX_BITS) as u32;
+            let index = ((v >> FIX_BITS) as u32).wrapping_mul(self.width).wrapping_add(col);
+            let index = if col < self.width { index } else { u32::MAX };
+            let hue = match self.pixels.get(index as usize) {
+                Some(&px) => F::hue(px),
+                None => NO_HUE,
+            };
+            *hits += score(hue);
+            u = u.wrapping_add(row.du);
+            v = v.wrapping_add(row.dv);
+        }
+    }
 }
 
-/// Sums `score(hue)` over the `G` points `start + i·step` of one row, walked by adding
-/// `step` (three additions per point).
-#[inline(always)]
-fn count_row<const G: usize, F: PixelFormat>(
-    view: &View<'_, F>,
-    to_pixel: impl Fn(f32, f32, f32) -> (f32, f32),
-    score: impl Fn(u8) -> u32,
-    start: [f32; 3],
+/// Fraction bits of the pinhole kernel's fixed-point pixel coordinates (16.16 in an `i32`).
+const FIX_BITS: u32 = 16;
+/// `2^FIX_BITS`: one pixel in fixed point.
+const FIX_ONE: f32 = (1u32 << FIX_BITS) as f32;
+/// Largest `|u|`, `|v|` (pixels) a sample point of a pose may project to for the pinhole
+/// kernel; a pose whose block (inflated by the outer rows) could reach farther scores 0 in
+/// that camera, as a pose behind it does. Such a block is within centimetres of the camera
+/// and mostly outside the field of view: 16384 pixels from the principal point is 80° off
+/// the axis for a focal length of 2900 pixels. With it, every fixed-point coordinate of a row
+/// walk stays within `±2³⁰` and no addition wraps.
+pub const MAX_PIXEL_REACH: f32 = 16384.0;
+
+/// The rows of one edge's strip in homogeneous image coordinates: every row's first point,
+/// the step between points and the whole row `(G − 1)·step`.
+struct EdgeRows {
+    /// First points: the inner rows, then the outer rows (as [`ROW_DISTANCES_M`]).
+    starts: [[f32; 3]; ROWS_PER_EDGE],
+    /// Step between the points of a row.
     step: [f32; 3],
-) -> u32 {
-    let [mut x, mut y, mut w] = start;
-    let mut hits = 0u32;
-    for _ in 0..G {
-        let (u1, v1) = to_pixel(x, y, w);
-        hits += score(view.hue(u1, v1));
-        x += step[0];
-        y += step[1];
-        w += step[2];
+    /// `(G − 1)·step`.
+    span: [f32; 3],
+}
+
+/// How a camera walks the rows of an edge's strip: `G` points each, `inner(hue)` summed over
+/// the inner rows and `outer(hue)` over the outer rows.
+trait RowWalk {
+    fn count_edge<const G: usize>(
+        &self,
+        rows: &EdgeRows,
+        inner: &impl Fn(u8) -> u32,
+        outer: &impl Fn(u8) -> u32,
+    ) -> (u32, u32);
+}
+
+/// One row of the pinhole kernel in 16.16 fixed point: its first point (pixel coordinates,
+/// `(0, 0)` the corner of the first pixel) and the step between its points.
+#[derive(Debug, Clone, Copy, Default)]
+struct FixedRow {
+    u: i32,
+    v: i32,
+    du: i32,
+    dv: i32,
+}
+
+impl FixedRow {
+    /// The row from `start` to `start + span` (homogeneous coordinates of `K·(R·p + t)` with
+    /// the first two rows of `K` scaled by `2¹⁶`) walked in `G − 1` equal steps.
+    ///
+    /// The conversion truncates towards zero: a point in `(−2⁻¹⁶, 0)` reads column or row 0
+    /// instead of −1 (as far off as the fixed point's own resolution).
+    #[inline(always)]
+    fn new<const G: usize>(start: [f32; 3], span: [f32; 3]) -> Self {
+        let end = add(start, span);
+        let (i0, i1) = (1.0 / start[2], 1.0 / end[2]);
+        let (u0, v0) = (start[0] * i0, start[1] * i0);
+        let (u1, v1) = (end[0] * i1, end[1] * i1);
+        let per_step = 1.0 / (G - 1) as f32;
+        Self { u: u0 as i32, v: v0 as i32, du: ((u1 - u0) * per_step) as i32, dv: ((v1 - v0) * per_step) as i32 }
     }
-    hits
+}
+
+/// The plain pinhole walk: the perspective division at the rows' two ends only, then an
+/// affine walk in 16.16 fixed point between them (per point two integer additions, the index,
+/// two compares, the pixel load, the tables; see [`View::hue_fixed`]).
+///
+/// **Exactness.** The projection of a straight row is a straight segment, and the affine walk
+/// stays on the segment between the exactly projected ends: every point read is the
+/// projection of a point of the model's row. Only where along the row it lies differs from
+/// the uniform steps of the model: with `w₀`, `w₁` the depths of the row's ends, the image
+/// point at parameter `s ∈ [0, 1]` of the affine walk is the projection of the row point at
+///
+/// ```text
+/// s' = s·w₀ / w̃(s),   w̃(s) = (1 − s)·w₁ + s·w₀,   |s' − s| = s(1 − s)·|w₁ − w₀| / w̃(s)
+///                                                   ≤ |w₁ − w₀| / (4·min(w₀, w₁)),
+/// ```
+///
+/// second order in the relative depth change across the row (a 150 mm row at 450 mm tilted
+/// 45° moves its middle point by 6 % of the row). The rows' distances from their edges, which
+/// make the fitness sharp, are exact. The fixed-point steps add at most `G` units of 2⁻¹⁶
+/// pixel. See the test `affine_walk_stays_on_the_projected_row`.
+struct Affine<'v, 'p, F: PixelFormat> {
+    view: &'v View<'p, F>,
+}
+
+impl<F: PixelFormat> RowWalk for Affine<'_, '_, F> {
+    #[inline(always)]
+    fn count_edge<const G: usize>(
+        &self,
+        rows: &EdgeRows,
+        inner: &impl Fn(u8) -> u32,
+        outer: &impl Fn(u8) -> u32,
+    ) -> (u32, u32) {
+        let fixed = rows.starts.map(|start| FixedRow::new::<G>(start, rows.span));
+        walk_edge::<G, F>(self.view, &fixed, inner, outer)
+    }
+}
+
+/// The integer part of [`Affine`]: the fixed-point rows of one edge walked, out of line so
+/// that its registers hold only the walk (no spills in the hot loop).
+#[inline(never)]
+fn walk_edge<const G: usize, F: PixelFormat>(
+    view: &View<'_, F>,
+    rows: &[FixedRow; ROWS_PER_EDGE],
+    inner: &impl Fn(u8) -> u32,
+    outer: &impl Fn(u8) -> u32,
+) -> (u32, u32) {
+    let (ins, outs) = rows.split_at(INNER_INSETS_M.len());
+    let (mut hits_in, mut hits_out) = (0u32, 0u32);
+    for row in ins {
+        view.walk::<G>(row, inner, &mut hits_in);
+    }
+    for row in outs {
+        view.walk::<G>(row, outer, &mut hits_out);
+    }
+    (hits_in, hits_out)
+}
+
+/// The lens walk: every point is walked in normalised homogeneous coordinates (three
+/// additions), divided, and mapped to pixels by `to_pixel` (the plumb_bob polynomial and `K`).
+struct Lens<'v, 'p, F: PixelFormat, P: Fn(f32, f32, f32) -> (f32, f32)> {
+    view: &'v View<'p, F>,
+    to_pixel: P,
+}
+
+impl<F: PixelFormat, P: Fn(f32, f32, f32) -> (f32, f32)> Lens<'_, '_, F, P> {
+    #[inline(always)]
+    fn row<const G: usize>(&self, start: [f32; 3], step: [f32; 3], score: &impl Fn(u8) -> u32) -> u32 {
+        let [mut x, mut y, mut w] = start;
+        let mut hits = 0u32;
+        for _ in 0..G {
+            let (u1, v1) = (self.to_pixel)(x, y, w);
+            hits += score(self.view.hue(u1, v1));
+            x += step[0];
+            y += step[1];
+            w += step[2];
+        }
+        hits
+    }
+}
+
+impl<F: PixelFormat, P: Fn(f32, f32, f32) -> (f32, f32)> RowWalk for Lens<'_, '_, F, P> {
+    #[inline(always)]
+    fn count_edge<const G: usize>(
+        &self,
+        rows: &EdgeRows,
+        inner: &impl Fn(u8) -> u32,
+        outer: &impl Fn(u8) -> u32,
+    ) -> (u32, u32) {
+        let (ins, outs) = rows.starts.split_at(INNER_INSETS_M.len());
+        let (mut hits_in, mut hits_out) = (0u32, 0u32);
+        for start in ins {
+            hits_in += self.row::<G>(*start, rows.step, inner);
+        }
+        for start in outs {
+            hits_out += self.row::<G>(*start, rows.step, outer);
+        }
+        (hits_in, hits_out)
+    }
 }
 
 #[inline(always)]
@@ -169,6 +339,13 @@ impl Projector {
     }
 }
 
+/// `a.min(b)` for finite numbers (focal lengths and block sizes are validated finite) as one
+/// compare instead of a call to `fminf` with its NaN rules.
+#[inline(always)]
+fn min_finite(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
 /// Counts of one camera for the model at `(r, t)` in that camera's frame.
 ///
 /// The work is the same for every pose: see the module docs.
@@ -182,12 +359,18 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
 ) -> Counts {
     let view = View::of(image);
     let half = model.half_size();
-    let focal = cam.fx().min(cam.fy());
+    let focal = min_finite(cam.fx(), cam.fy());
 
     // Nearest depth of the block inflated by the outer rows (every sample point is inside it).
     let margin = OUTER_OFFSETS_M.iter().fold(0.0f32, |m, d| m.max(*d));
-    let reach = |a: usize| r[(2, a)].abs() * (half[a] + margin);
-    let in_front = t.z - (reach(0) + reach(1) + reach(2)) > MIN_DEPTH_M;
+    let inflated = [half[0] + margin, half[1] + margin, half[2] + margin];
+    let reach = |i: usize| (0..3).fold(0.0f32, |s, a| s + r[(i, a)].abs() * inflated[a]);
+    let near = t.z - reach(2);
+    // The pinhole kernel's fixed point holds every sample point (see `MAX_PIXEL_REACH`).
+    let fits = |f: f32, c: f32, lateral: f32| f * lateral + c.abs() * near <= MAX_PIXEL_REACH * near;
+    let in_front = near > MIN_DEPTH_M
+        && (!cam.distortion().is_none()
+            || (fits(cam.fx(), cam.cx(), t.x.abs() + reach(0)) && fits(cam.fy(), cam.cy(), t.y.abs() + reach(1))));
 
     // d_a = (column a of R) · t: the camera is on the +a side of the block iff d_a < −h_a.
     let mut d = [0.0f32; 3];
@@ -212,7 +395,7 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
         let c2 = center.dot(&center);
         // Narrowest full side of the face, and its foreshortened size in pixels ≥ MIN_FACE_PX:
         // f · side · (dist / |c|) / |c| ≥ MIN_FACE_PX.
-        let side = 2.0 * half[(a + 1) % 3].min(half[(a + 2) % 3]);
+        let side = 2.0 * min_finite(half[(a + 1) % 3], half[(a + 2) % 3]);
         if in_front
             && dist > 0.0
             && dist * dist > MIN_VISIBLE_COS * MIN_VISIBLE_COS * c2
@@ -223,14 +406,11 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
     }
 
     let faces = FacePlan { chosen, visible_mask, front: core::array::from_fn(|k| front(k as u8)) };
-    // K' with the principal point moved by +1 pixel for `View::hue`.
-    let (fx, fy, cx1, cy1) = (cam.fx(), cam.fy(), cam.cx() + 1.0, cam.cy() + 1.0);
+    let (fx, fy) = (cam.fx(), cam.fy());
     if cam.distortion().is_none() {
-        let proj = Projector::new([fx, fy, cx1, cy1], r, t);
-        count_faces(model, lut, &view, &proj, &faces, |x, y, w| {
-            let inv = 1.0 / w;
-            (x * inv, y * inv)
-        })
+        // K with the pixel coordinates in 16.16 fixed point (scaled by 2¹⁶, exactly).
+        let proj = Projector::new([fx * FIX_ONE, fy * FIX_ONE, cam.cx() * FIX_ONE, cam.cy() * FIX_ONE], r, t);
+        count_faces(model, lut, &Affine { view: &view }, &proj, &faces)
     } else {
         // Normalised coordinates, then the lens, then K'. Beyond `r2_max` the plumb_bob
         // polynomial is outside the calibrated field (and may fold back into the image):
@@ -254,12 +434,13 @@ fn distorted_counts<const G: usize, F: PixelFormat>(
     let (fx, fy, cx1, cy1) = (cam.fx(), cam.fy(), cam.cx() + 1.0, cam.cy() + 1.0);
     let (d, r2_max) = (*cam.distortion(), distortion_field_r2(cam));
     let proj = Projector::new([1.0, 1.0, 0.0, 0.0], r, t);
-    count_faces(model, lut, view, &proj, faces, move |x, y, w| {
+    let to_pixel = move |x: f32, y: f32, w: f32| {
         let inv = 1.0 / w;
         let (xn, yn) = (x * inv, y * inv);
         let (xd, yd) = d.apply(xn, yn);
         if xn * xn + yn * yn <= r2_max { (fx * xd + cx1, fy * yd + cy1) } else { (-1.0, -1.0) }
-    })
+    };
+    count_faces(model, lut, &Lens { view, to_pixel }, &proj, faces)
 }
 
 /// The squared normalised radius within which a distorted camera's model is used: twice the
@@ -279,16 +460,14 @@ struct FacePlan {
     front: [bool; FACES],
 }
 
-/// The counts of the planned faces, with `to_pixel(x, y, w)` mapping a projected homogeneous
-/// point to its pixel coordinates plus one.
+/// The counts of the planned faces, with `walk` counting the rows.
 #[inline(always)]
-fn count_faces<const G: usize, F: PixelFormat>(
+fn count_faces<const G: usize>(
     model: &SurfaceStrips<G>,
     lut: &HueLut,
-    view: &View<'_, F>,
+    walk: &impl RowWalk,
     proj: &Projector,
     faces: &FacePlan,
-    to_pixel: impl Fn(f32, f32, f32) -> (f32, f32) + Copy,
 ) -> Counts {
     // The block is axis-aligned in Σ_M, so every row vector is a multiple of one column of
     // `proj.m` (the projected axis): per axis, its half size, row start, step and row offsets.
@@ -303,6 +482,8 @@ fn count_faces<const G: usize, F: PixelFormat>(
         let a = k % 3;
         let centre = if k < 3 { add(proj.c, axes[a].half) } else { sub(proj.c, axes[a].half) };
         let (mut inner, mut outer) = (0u32, 0u32);
+        let inner_score = |h: u8| u32::from(plane[usize::from(h)]);
+        let outer_score = |h: u8| u32::from(lut.mask(h) & visible_mask != 0);
         // Edges on the ±b sides run along c, those on the ±c sides along b (as `model::Edge`).
         for (side, along) in [((a + 1) % 3, (a + 2) % 3), ((a + 2) % 3, (a + 1) % 3)] {
             let (s, l) = (&axes[side], &axes[along]);
@@ -313,18 +494,13 @@ fn count_faces<const G: usize, F: PixelFormat>(
                     (add(sub(centre, s.half), l.start), side + 3)
                 };
                 // The inward direction is −side on the + side, +side on the − side.
-                let row = |r: usize| if positive { sub(base, s.rows[r]) } else { add(base, s.rows[r]) };
-                for r in 0..INNER_INSETS_M.len() {
-                    inner += count_row::<G, F>(view, to_pixel, |h| u32::from(plane[usize::from(h)]), row(r), l.step);
-                }
-                let mut hits = 0u32;
-                for r in INNER_INSETS_M.len()..ROWS_PER_EDGE {
-                    let score = |h| u32::from(lut.mask(h) & visible_mask != 0);
-                    hits += count_row::<G, F>(view, to_pixel, score, row(r), l.step);
-                }
+                let starts = s.rows.map(|d| if positive { sub(base, d) } else { add(base, d) });
+                let rows = EdgeRows { starts, step: l.step, span: l.span };
+                let (hits_in, hits_out) = walk.count_edge::<G>(&rows, &inner_score, &outer_score);
+                inner += hits_in;
                 // Outer rows count only on silhouette edges (the face across is hidden).
                 if !faces.front.get(neighbour).copied().unwrap_or(false) {
-                    outer += hits;
+                    outer += hits_out;
                 }
             }
         }
@@ -346,6 +522,8 @@ struct AxisRows {
     start: [f32; 3],
     /// `step_x · m·e_x`: step between the points of a row along `x`.
     step: [f32; 3],
+    /// `2·reach_x · m·e_x = (G − 1)·step`: from the first point of a row along `x` to its last.
+    span: [f32; 3],
     /// `d_r · m·e_x` for every row distance `d_r` of [`ROW_DISTANCES_M`].
     rows: [[f32; 3]; ROWS_PER_EDGE],
 }
@@ -355,7 +533,13 @@ impl AxisRows {
     fn new(proj: &Projector, x: usize, half: f32, reach: f32, step: f32) -> Self {
         let col = [proj.m[0][x], proj.m[1][x], proj.m[2][x]];
         let scale = |f: f32| col.map(|v| f * v);
-        Self { half: scale(half), start: scale(-reach), step: scale(step), rows: ROW_DISTANCES_M.map(scale) }
+        Self {
+            half: scale(half),
+            start: scale(-reach),
+            step: scale(step),
+            span: scale(2.0 * reach),
+            rows: ROW_DISTANCES_M.map(scale),
+        }
     }
 }
 
@@ -532,6 +716,65 @@ mod tests {
         let p = Psi::new([5.0, 0.0, 0.5], [0.0; 3]);
         let far = camera_counts(&model, &lut, &barrel, &image, &p.rotation_unchecked(), &p.translation());
         assert_eq!(far.inner_matched + far.strip_matched, 0);
+    }
+
+    #[test]
+    fn affine_walk_stays_on_the_projected_row() {
+        const G: usize = 8;
+        let cam = rig().right;
+        let q = crate::quat::from_angle_axis(0.8, &Vector3::new(0.3, 1.0, 0.2)).unwrap();
+        let pose = Psi::from_parts(&Vector3::new(0.05, -0.03, 0.45), &q);
+        let (r, t) = (pose.rotation_unchecked(), pose.translation());
+        let s = FIX_ONE;
+        let proj = Projector::new([cam.fx() * s, cam.fy() * s, cam.cx() * s, cam.cy() * s], &r, &t);
+        let model = SurfaceStrips::<G>::new(&Block::PAPER).unwrap();
+        let project = |p: &Vector3<f32>| {
+            let c = r * p + t;
+            (
+                (
+                    f64::from(cam.fx()) * f64::from(c.x) / f64::from(c.z) + f64::from(cam.cx()),
+                    f64::from(cam.fy()) * f64::from(c.y) / f64::from(c.z) + f64::from(cam.cy()),
+                ),
+                f64::from(c.z),
+            )
+        };
+        let mut worst_shift = 0.0f64;
+        for face in model.faces() {
+            for e in &face.edges {
+                for d in ROW_DISTANCES_M {
+                    let first = e.base + e.inward * d;
+                    let last = first + e.step * (G - 1) as f32;
+                    let h = |p: &Vector3<f32>| {
+                        let m = &proj.m;
+                        let row = |i: usize| m[i][0] * p.x + m[i][1] * p.y + m[i][2] * p.z + proj.c[i];
+                        [row(0), row(1), row(2)]
+                    };
+                    let (a, b) = (h(&first), h(&last));
+                    let row = FixedRow::new::<G>(a, sub(b, a));
+                    let ((u0, v0), w0) = project(&first);
+                    let ((u1, v1), w1) = project(&last);
+                    let (du, dv) = (u1 - u0, v1 - v0);
+                    let len2 = du * du + dv * dv;
+                    let bound = (w1 - w0).abs() / (4.0 * w0.min(w1));
+                    for i in 0..G {
+                        let fx = f64::from(row.u.wrapping_add(row.du * i as i32)) / 65536.0;
+                        let fy = f64::from(row.v.wrapping_add(row.dv * i as i32)) / 65536.0;
+                        // On the projected segment: distance to its line ≤ 0.01 px...
+                        let off = ((fx - u0) * dv - (fy - v0) * du).abs() / len2.sqrt();
+                        assert!(off < 0.01, "{off} px off the row");
+                        // ...and the row point it shows is within the bound of the model's.
+                        let s_img = ((fx - u0) * du + (fy - v0) * dv) / len2;
+                        let s = i as f64 / (G - 1) as f64;
+                        let s_model = s_img * w0 / ((1.0 - s_img) * w1 + s_img * w0);
+                        let shift = (s_model - s).abs();
+                        assert!(shift <= bound + 1e-3, "shift {shift} > bound {bound}");
+                        worst_shift = worst_shift.max(shift);
+                    }
+                }
+            }
+        }
+        // The pose is tilted: the walk does move points along their rows, a little.
+        assert!(worst_shift > 1e-3 && worst_shift < 0.1, "{worst_shift}");
     }
 
     #[test]

@@ -98,8 +98,9 @@ impl Mix {
 /// The cycle estimate's inputs from the disassembly of the measured image.
 #[derive(Debug, Clone)]
 pub struct MixAnalysis {
-    /// The mix of one sample point: the instructions between consecutive `vdiv.f32` of the
-    /// fitness kernel (`camera_counts`, inlined rows), averaged over those windows.
+    /// The mix of one sample point: the instructions between consecutive predicated pixel
+    /// loads (`ldrblo`/`ldrhlo`, one per point) of the fitness kernel's integer walk
+    /// (`walk_edge`, unrolled rows), averaged over those windows.
     pub point: Mix,
     /// Number of point windows found.
     pub windows: usize,
@@ -124,12 +125,14 @@ pub(super) fn analyse_mix(objdump: &Path, elf: &Path) -> Result<MixAnalysis> {
     let kernel = reach
         .iter()
         .copied()
-        .find(|&f| funcs.get(f).is_some_and(|x| x.name.contains("camera_counts")))
-        .ok_or_else(|| anyhow!("no camera_counts reachable from the generation in {}", elf.display()))?;
-    // Windows from one vdiv to the next (a point each), where the row is unrolled.
+        .find(|&f| funcs.get(f).is_some_and(|x| x.name.contains("walk_edge")))
+        .ok_or_else(|| anyhow!("no fitness walk_edge reachable from the generation in {}", elf.display()))?;
+    // Windows from one point's predicated pixel load to the next (a point each), where the row
+    // is unrolled; the row and edge bookkeeping makes the longer windows, left out below.
     let kf = funcs.get(kernel).ok_or_else(|| anyhow!("kernel index"))?;
+    let is_pixel_load = |m: &str| m.starts_with("ldrblo") || m.starts_with("ldrhlo");
     let divs: Vec<usize> =
-        kf.insns.iter().enumerate().filter(|(_, (_, i))| i.mnemonic.starts_with("vdiv")).map(|(k, _)| k).collect();
+        kf.insns.iter().enumerate().filter(|(_, (_, i))| is_pixel_load(&i.mnemonic)).map(|(k, _)| k).collect();
     let mut gaps: Vec<usize> = divs.windows(2).map(|w| w[1] - w[0]).collect();
     gaps.sort_unstable();
     let median = gaps.get(gaps.len() / 2).copied().unwrap_or(0);
@@ -251,7 +254,7 @@ pub(super) fn assumptions() -> Vec<&'static str> {
     vec![
         "Cortex-M4F at 168 MHz; the zero-wait-state figure assumes every code and data access at 0 wait states, the flash figure adds the wait states of the model below",
         "per-class worst-case costs from the Cortex-M4 TRM: ALU/IT 1, MUL/UMULL/UMLAL 1, MLA/MLS 2, SDIV/UDIV 12, LDR/STR 2, LDRD/STRD 3, LDM/STM/PUSH/POP 1+N (+3 if PC is loaded), every branch 1+P with P = 3 (pipeline refill, conditional branches counted as taken), VADD/VSUB/VMUL/VCVT/VMOV/VCMP 1, VMLA/VMLS 3, VDIV.F32/VSQRT.F32 14, VLDR/VSTR 2, VLDM/VSTM/VPUSH/VPOP 1+N words",
-        "instruction mix: sample points = measured points x the mean static mix of one point (the instructions between consecutive vdiv.f32 in the unrolled fitness kernel camera_counts, both arms of the bounds test included); every other measured instruction x the cycles per instruction of the static mix of all other code reachable from the generation function (llvm-objdump)",
+        "instruction mix: sample points = measured points x the mean static mix of one point (the instructions between consecutive predicated pixel loads ldrblo/ldrhlo in the unrolled integer walk of the fitness kernel, walk_edge; the per-row perspective divisions are in the rest); every other measured instruction x the cycles per instruction of the static mix of all other code reachable from the generation function (llvm-objdump)",
         "no interrupts, no DMA contention, FPU lazy stacking not triggered",
     ]
 }

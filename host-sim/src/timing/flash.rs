@@ -241,7 +241,7 @@ pub(super) fn assumptions() -> Vec<&'static str> {
         "flash: STM32F4 at 168 MHz with 5 wait states (RM0090, 2.7-3.6 V) behind the ART accelerator (64 x 128-bit instruction cache, 8 x 128-bit data cache, prefetch buffer): a flash access that misses the ART costs +5 cycles",
         "data: every load from flash misses the ART data cache (+5): PC-relative literals, tbb/tbh tables, and loads through a register holding a flash address (movw/movt, adr or a literal load, tracked forward through each function; e.g. constant tables in .rodata, the RGB565 -> hue table); the frames, the tracker and the stack are in SRAM (0 wait states)",
         "code outside the hot loop: every branch lands on a line that misses the instruction cache (+5); sequential fetch is covered by the prefetch buffer except a 16-byte line whose instructions execute in fewer than 6 cycles stalls for the difference; in the rest of the code, loads through registers of unknown provenance are counted as flash loads too",
-        "hot loop (the sample points of the fitness kernel): if its unrolled code spans at most 1 KiB it hits the instruction cache after one miss per line per kernel call (population x 2 cameras calls per generation); otherwise it is costed like the rest of the code",
+        "hot loop (the sample points of the fitness kernel): if its unrolled code spans at most 1 KiB it hits the instruction cache after one miss per line per call of the integer walk (population x 2 cameras x 12 edges calls per generation); otherwise it is costed like the rest of the code",
     ]
 }
 

@@ -1,18 +1,19 @@
 #!/usr/bin/env python3
 """Writes the hand-made seed inputs of the fuzz corpora (fuzz/corpus/<target>/seed-*).
 
-Link messages follow hil-stubs/src/protocol/mod.rs (24-byte header, payload, CRC-32/ISO-HDLC
-trailer = zlib.crc32). Run from anywhere: python3 fuzz/make_seeds.py
+Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 2: 24-byte header,
+payload, CRC-32/ISO-HDLC trailer = zlib.crc32; frames carry RGB565 images, 2 bytes a pixel). Run from anywhere: python3 fuzz/make_seeds.py
 """
 import os
 import struct
 import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+VERSION = 2
 
 
 def msg(kind, payload=b"", seq=0, time_us=0):
-    header = b"EVRC" + bytes([1, kind]) + b"\0\0" + struct.pack("<IIQ", seq, len(payload), time_us)
+    header = b"EVRC" + bytes([VERSION, kind]) + b"\0\0" + struct.pack("<IIQ", seq, len(payload), time_us)
     body = header + payload
     return body + struct.pack("<I", zlib.crc32(body))
 
@@ -39,10 +40,11 @@ def setup(width, height):
     return p
 
 
-def frame(width, height, t_us, hue):
+def frame(width, height, t_us, shade):
+    """A FRAME payload with two RGB565 images (little-endian u16 per pixel)."""
     p = struct.pack("<HHQ", width, height, t_us) + f32s(*[0.1] * 7) + f32s(*[0.01] * 7)
     n = width * height
-    left = bytes((hue + i) % 256 for i in range(n))
+    left = b"".join(struct.pack("<H", (shade * 257 + 977 * i) % 65536) for i in range(n))
     return p + left + left[::-1]
 
 
@@ -69,9 +71,9 @@ def main():
     replies += msg(7, struct.pack("<5I", 2, 1, 1, 13_892, 90_000))
     write("host_replies", "conversation", replies)
     write("host_replies", "error", msg(8, struct.pack("<I", 2)))
-    # tracker_step: camera 16x12, no reset, one step on 16x12 images with zero joints, dt 0.033
+    # tracker_step: camera 16x12, no reset, one step on 16x12 RGB565 images with zero joints, dt 0.033
     step = bytes([16, 12, 0]) + struct.pack("<HHHH", 16, 12, 16, 12) + bytes([7, 1])
-    step += bytes((i * 13) % 256 for i in range(16 * 12)) + f32s(*[0.0] * 14) + f32s(0.033) + bytes([1])
+    step += bytes((i * 13) % 256 for i in range(2 * 16 * 12)) + f32s(*[0.0] * 14) + f32s(0.033) + bytes([1])
     write("tracker_step", "one-step", step)
     write("tracker_step", "nan-joints", step[: -(14 * 4 + 5)] + f32s(float("nan"), *[0.0] * 13) + f32s(0.033) + b"\1")
     with open(os.path.join(HERE, "..", "scenarios", "smoke.toml"), "rb") as f:

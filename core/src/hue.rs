@@ -77,19 +77,34 @@ pub struct HueLut {
 }
 
 impl HueLut {
+    /// The table that matches nothing (every entry 0).
+    pub const EMPTY: Self = Self { table: [0; 256], planes: [[0; 256]; 8] };
+
     /// Table for up to 8 face hues (in hue units) with a band of `±tolerance` units.
     /// `NO_HUE` and bytes `≥ HUE_UNITS` match nothing.
     pub fn new(face_hues: &[u8], tolerance: u8) -> Self {
-        let mut table = [0u8; 256];
-        for (h, entry) in (0u8..HUE_UNITS).zip(table.iter_mut()) {
-            for (k, &b) in face_hues.iter().take(8).enumerate() {
-                if hue_distance(h, b % HUE_UNITS) <= tolerance {
-                    *entry |= 1 << k;
+        let mut lut = Self::EMPTY;
+        lut.fill(face_hues, tolerance);
+        lut
+    }
+
+    /// Rebuilds this table in place as [`HueLut::new`]`(face_hues, tolerance)`, with no
+    /// temporary table (a board builds its tracker's table where it lives).
+    pub fn fill(&mut self, face_hues: &[u8], tolerance: u8) {
+        for h in 0..=u8::MAX {
+            let mut mask = 0u8;
+            if h < HUE_UNITS {
+                for (k, &b) in face_hues.iter().take(8).enumerate() {
+                    if hue_distance(h, b % HUE_UNITS) <= tolerance {
+                        mask |= 1 << k;
+                    }
                 }
             }
+            self.table[usize::from(h)] = mask;
+            for (k, plane) in self.planes.iter_mut().enumerate() {
+                plane[usize::from(h)] = (mask >> k) & 1;
+            }
         }
-        let planes = core::array::from_fn(|k| table.map(|m| (m >> k) & 1));
-        Self { table, planes }
     }
 
     /// Bit `k` of every entry, as 0 or 1: `plane(k)[h] == (mask(h) >> k) & 1` (one load and
@@ -166,6 +181,9 @@ mod tests {
                 assert_eq!(lut.plane(k)[usize::from(h)], (lut.mask(h) >> k) & 1);
             }
         }
+        let mut refilled = HueLut::new(&[90], 30);
+        refilled.fill(&[0, 60, 120, 0, 60, 120], 5);
+        assert_eq!(refilled, lut);
     }
 
     #[test]

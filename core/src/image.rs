@@ -143,6 +143,99 @@ pub fn rgb565_to_hue(px: u16) -> u8 {
     RGB565_HUE[usize::from(px)]
 }
 
+/// Mid grey, `(132, 130, 132)` widened: the RGB565 value [`hue_to_rgb565`] gives pixels
+/// without a hue (its table entry is [`NO_HUE`]).
+pub const RGB565_GREY: u16 = 0x8410;
+
+/// For every hue byte the most saturated RGB565 value whose [`RGB565_HUE`] entry is that hue
+/// (largest `max − min` after widening, then the brightest), computed at compile time from
+/// the same table; [`RGB565_GREY`] for bytes `HUE_UNITS..=255`. Every hue unit has one (the
+/// table's 65 536 entries cover all 180 units), so `RGB565_HUE[HUE_RGB565[h]] == h`.
+pub static HUE_RGB565: [u16; 256] = hue_rgb565_table();
+
+const fn hue_rgb565_table() -> [u16; 256] {
+    let mut best = [RGB565_GREY; 256];
+    // Score (max − min, max) of the value kept for each hue; 0 = none yet.
+    let mut score = [0u32; 256];
+    let mut i = 0usize;
+    while i < 1 << 16 {
+        let (r, g, b) = rgb565_to_rgb888(i as u16);
+        let h = rgb_to_hue(r, g, b) as usize;
+        if h < crate::config::HUE_UNITS as usize {
+            let (max, min) = (max3(r, g, b) as u32, min3(r, g, b) as u32);
+            let s = ((max - min) << 8) | max;
+            if s > score[h] {
+                score[h] = s;
+                best[h] = i as u16;
+            }
+        }
+        i += 1;
+    }
+    best
+}
+
+const fn max3(a: u8, b: u8, c: u8) -> u8 {
+    let m = if a > b { a } else { b };
+    if m > c { m } else { c }
+}
+
+const fn min3(a: u8, b: u8, c: u8) -> u8 {
+    let m = if a < b { a } else { b };
+    if m < c { m } else { c }
+}
+
+/// The RGB565 value a sensor would deliver for a pixel of hue byte `h` (see [`HUE_RGB565`]).
+///
+/// # Examples
+/// ```
+/// use evorec_core::image::{hue_to_rgb565, rgb565_to_hue, RGB565_GREY};
+/// use evorec_core::config::NO_HUE;
+/// for h in 0..180u8 {
+///     assert_eq!(rgb565_to_hue(hue_to_rgb565(h)), h);
+/// }
+/// assert_eq!(hue_to_rgb565(0), 0xF800); // pure red
+/// assert_eq!(hue_to_rgb565(NO_HUE), RGB565_GREY);
+/// assert_eq!(rgb565_to_hue(RGB565_GREY), NO_HUE);
+/// ```
+#[inline]
+pub fn hue_to_rgb565(h: u8) -> u16 {
+    HUE_RGB565[usize::from(h)]
+}
+
+/// Turns a hue image held in the first `pixels` bytes of `buf` into the RGB565 image of
+/// those hues ([`hue_to_rgb565`], little-endian, `2·pixels` bytes), in place: how synthetic
+/// hue frames (the core's [`crate::synth`] rasterizer) become sensor frames on a board
+/// without a second buffer.
+///
+/// # Errors
+/// [`ImageError::TooShort`] if `buf` holds fewer than `2·pixels` bytes (`buf` unchanged).
+///
+/// # Examples
+/// ```
+/// use evorec_core::image::{expand_hue_to_rgb565, Rgb565Image};
+/// let mut buf = [0u8, 60, 255, 0, 0, 0];
+/// expand_hue_to_rgb565(&mut buf, 3).unwrap();
+/// let img = Rgb565Image::new_checked(&buf[..], 3, 1).unwrap();
+/// assert_eq!([img.hue(0, 0), img.hue(1, 0), img.hue(2, 0)], [Some(0), Some(60), Some(255)]);
+/// assert!(expand_hue_to_rgb565(&mut buf[..5], 3).is_err());
+/// ```
+pub fn expand_hue_to_rgb565(buf: &mut [u8], pixels: usize) -> Result<(), ImageError> {
+    let needed = pixels.saturating_mul(2);
+    let Some(buf) = buf.get_mut(..needed) else {
+        let n = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+        return Err(ImageError::TooShort { needed: n(needed), got: n(buf.len()) });
+    };
+    // Back to front: pixel i moves to bytes 2i, 2i+1 ≥ i, so no hue byte is overwritten
+    // before it is read.
+    for i in (0..pixels).rev() {
+        let h = buf.get(i).copied().unwrap_or(crate::config::NO_HUE);
+        if let Some(px) = buf.get_mut(2 * i..2 * i + 2) {
+            px.copy_from_slice(&hue_to_rgb565(h).to_le_bytes());
+        }
+    }
+    Ok(())
+}
+
 /// Why a buffer is not an image of the given size.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
@@ -325,6 +418,37 @@ mod tests {
             Rgb565Image::new_checked(&bytes[..], 2, 0).unwrap_err(),
             ImageError::BadSize { width: 2, height: 0 }
         );
+    }
+
+    #[test]
+    fn every_hue_has_a_saturated_rgb565_value() {
+        for h in 0..=255u8 {
+            let px = hue_to_rgb565(h);
+            if h < HUE_UNITS {
+                assert_eq!(rgb565_to_hue(px), h, "{h}");
+                let (r, g, b) = rgb565_to_rgb888(px);
+                assert!(r.max(g).max(b) - r.min(g).min(b) >= 250, "{h}: {px:#06x}");
+            } else {
+                assert_eq!(px, RGB565_GREY);
+            }
+        }
+        assert_eq!(rgb565_to_hue(RGB565_GREY), NO_HUE);
+    }
+
+    #[test]
+    fn expansion_in_place_keeps_every_hue() {
+        let hues: [u8; 7] = [0, 1, 59, 60, 179, 200, NO_HUE];
+        let mut buf = [0u8; 14];
+        buf[..7].copy_from_slice(&hues);
+        expand_hue_to_rgb565(&mut buf, 7).unwrap();
+        let img = Rgb565Image::new_checked(&buf[..], 7, 1).unwrap();
+        for (x, &h) in hues.iter().enumerate() {
+            let want = if h < HUE_UNITS { h } else { NO_HUE };
+            assert_eq!(img.hue(x as u16, 0), Some(want));
+        }
+        let mut short = [1u8; 13];
+        assert_eq!(expand_hue_to_rgb565(&mut short, 7), Err(ImageError::TooShort { needed: 14, got: 13 }));
+        assert_eq!(short, [1u8; 13]);
     }
 
     #[test]

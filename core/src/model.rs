@@ -116,6 +116,31 @@ impl Block {
     }
 }
 
+/// Writes the sample geometry of face `k` of a block of half edge lengths `half` into `face`
+/// (rows from `m0` inside the corners, `steps` intervals per row). Out of line and writing in
+/// place (with [`SurfaceStrips::rebuild`]), so that building a model needs no large stack frame
+/// on a board.
+#[inline(never)]
+fn face_samples(face: &mut FaceSamples, k: usize, half: &Vector3<f32>, m0: f32, steps: f32, hue_deg: f32) {
+    let a = k % 3;
+    let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+    let (hb, hc) = (half[b], half[c]);
+    let center = Block::normal(k) * half[a];
+    let (eb, ec) = (unit(b), unit(c));
+    // Edges on the ±b sides run along e_c; edges on the ±c sides run along e_b.
+    let along_c = ec * (2.0 * (hc - m0) / steps);
+    let along_b = eb * (2.0 * (hb - m0) / steps);
+    let start_c = -ec * (hc - m0);
+    let start_b = -eb * (hb - m0);
+    face.edges = [
+        Edge { base: center + eb * hb + start_c, step: along_c, inward: -eb, neighbour: b as u8 },
+        Edge { base: center - eb * hb + start_c, step: along_c, inward: eb, neighbour: (b + 3) as u8 },
+        Edge { base: center + ec * hc + start_b, step: along_b, inward: -ec, neighbour: c as u8 },
+        Edge { base: center - ec * hc + start_b, step: along_b, inward: ec, neighbour: (c + 3) as u8 },
+    ];
+    face.hue = hue::degrees_to_units(hue_deg);
+}
+
 fn unit(axis: usize) -> Vector3<f32> {
     let mut v = Vector3::zeros();
     if let Some(c) = v.get_mut(axis) {
@@ -184,12 +209,36 @@ impl<const G: usize> SurfaceStrips<G> {
     /// opposite pair), visible or not, so the work does not depend on the pose.
     pub const POINTS_PER_CAMERA: usize = 3 * (Self::INNER_PER_FACE + Self::OUTER_PER_FACE);
 
+    /// The model of nothing (every sample at the block's centre, size 0), to be
+    /// [`SurfaceStrips::rebuild`]t where it lives.
+    pub const EMPTY: Self = {
+        let zero = Vector3::new(0.0, 0.0, 0.0);
+        let edge = Edge { base: zero, step: zero, inward: zero, neighbour: 0 };
+        Self {
+            block: Block { size_m: [0.0; 3], face_hues_deg: [0.0; FACES] },
+            half: zero,
+            row_reach: [0.0; 3],
+            row_step: [0.0; 3],
+            faces: [FaceSamples { edges: [edge; 4], hue: 0 }; FACES],
+        }
+    };
+
     /// Builds the sample points of `block`.
     ///
     /// # Errors
     /// [`ModelError::NonFinite`] or [`ModelError::TooSmall`].
     pub fn new(block: &Block) -> Result<Self, ModelError> {
-        const { assert!(G >= 2, "a sample row needs at least 2 points") };
+        let mut model = Self::EMPTY;
+        model.rebuild(block)?;
+        Ok(model)
+    }
+
+    /// Checks that `block` gives a model ([`SurfaceStrips::new`] succeeds exactly when this
+    /// does).
+    ///
+    /// # Errors
+    /// [`ModelError::NonFinite`] or [`ModelError::TooSmall`].
+    pub fn check(block: &Block) -> Result<(), ModelError> {
         if !block.size_m.iter().chain(block.face_hues_deg.iter()).all(|v| v.is_finite()) {
             return Err(ModelError::NonFinite);
         }
@@ -197,33 +246,28 @@ impl<const G: usize> SurfaceStrips<G> {
         if block.size_m.iter().any(|&s| s <= 2.0 * deepest + 2e-3) {
             return Err(ModelError::TooSmall);
         }
+        Ok(())
+    }
+
+    /// Rebuilds this model in place as [`SurfaceStrips::new`]`(block)`, with no temporary
+    /// model (a board builds its tracker's model where it lives). On error it is unchanged.
+    ///
+    /// # Errors
+    /// As [`SurfaceStrips::check`].
+    pub fn rebuild(&mut self, block: &Block) -> Result<(), ModelError> {
+        const { assert!(G >= 2, "a sample row needs at least 2 points") };
+        Self::check(block)?;
         let m0 = INNER_INSETS_M.iter().fold(f32::MAX, |m, d| m.min(*d));
         let half = Vector3::from(block.size_m.map(|s| 0.5 * s));
         let steps = (G - 1) as f32;
-        let blank = Edge { base: Vector3::zeros(), step: Vector3::zeros(), inward: Vector3::zeros(), neighbour: 0 };
-        let mut faces = [FaceSamples { edges: [blank; 4], hue: 0 }; FACES];
-        for (k, (face, hue_deg)) in faces.iter_mut().zip(block.face_hues_deg.iter()).enumerate() {
-            let a = k % 3;
-            let (b, c) = ((a + 1) % 3, (a + 2) % 3);
-            let (hb, hc) = (half[b], half[c]);
-            let center = Block::normal(k) * half[a];
-            let (eb, ec) = (unit(b), unit(c));
-            // Edges on the ±b sides run along e_c; edges on the ±c sides run along e_b.
-            let along_c = ec * (2.0 * (hc - m0) / steps);
-            let along_b = eb * (2.0 * (hb - m0) / steps);
-            let start_c = -ec * (hc - m0);
-            let start_b = -eb * (hb - m0);
-            face.edges = [
-                Edge { base: center + eb * hb + start_c, step: along_c, inward: -eb, neighbour: b as u8 },
-                Edge { base: center - eb * hb + start_c, step: along_c, inward: eb, neighbour: (b + 3) as u8 },
-                Edge { base: center + ec * hc + start_b, step: along_b, inward: -ec, neighbour: c as u8 },
-                Edge { base: center - ec * hc + start_b, step: along_b, inward: ec, neighbour: (c + 3) as u8 },
-            ];
-            face.hue = hue::degrees_to_units(*hue_deg);
+        for (k, (face, hue_deg)) in self.faces.iter_mut().zip(block.face_hues_deg.iter()).enumerate() {
+            face_samples(face, k, &half, m0, steps, *hue_deg);
         }
-        let row_reach = [half.x - m0, half.y - m0, half.z - m0];
-        let row_step = row_reach.map(|r| 2.0 * r / steps);
-        Ok(Self { block: *block, half, row_reach, row_step, faces })
+        self.block = *block;
+        self.half = half;
+        self.row_reach = [half.x - m0, half.y - m0, half.z - m0];
+        self.row_step = self.row_reach.map(|r| 2.0 * r / steps);
+        Ok(())
     }
 
     /// Per axis `x`: a row running along `x` starts at coordinate `−row_reach[x]` (and ends at

@@ -264,58 +264,62 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         Ok(Self { config, model, lut, ga, rng, generation: 0, target: TargetFilter::with_defaults() })
     }
 
-    /// [`Tracker::new`] built in `slot` (e.g. a board's static), so that no whole tracker is
-    /// assembled on the stack and copied: a tracker already in the slot is re-initialised field
-    /// by field, an empty slot gets the model and hue table moved in and the population filled
-    /// in place. On error the slot is unchanged.
+    /// [`Tracker::new`] built in `slot` (e.g. a board's static), so that no whole tracker, and
+    /// none of its large parts (the hue table, the population), is assembled on the stack and
+    /// copied: the configuration is validated first, an empty slot gets a blank tracker written
+    /// into it, and then every part is (re)built where it lives — the hue table through
+    /// [`HueLut::fill`], the population through [`Ga::reset_uniform`]. On error the slot is
+    /// unchanged.
     ///
     /// # Errors
     /// As [`Tracker::new`].
     #[inline(never)]
     pub fn new_in(slot: &mut Option<Self>, config: TrackerConfig<DOF>) -> Result<&mut Self, ConfigError> {
-        let (model, lut) = Self::checked_parts(&config)?;
-        let rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
+        Self::check_config(&config)?;
         let t = match slot {
-            Some(t) => {
-                t.config = config;
-                t.model = model;
-                t.lut = lut;
-                t.rng = rng;
-                t.generation = 0;
-                t.target = TargetFilter::with_defaults();
-                t
-            }
-            None => Self::fresh_in(slot, config, model, lut, rng),
+            Some(t) => t,
+            None => Self::blank_in(slot, &config),
         };
+        // Cannot fail: `check_config` checked the block (and `rebuild` checks before writing).
+        t.model.rebuild(&config.block)?;
+        t.config = config;
+        let hues: [u8; FACES] = t.model.faces().map(|f| f.hue);
+        t.lut.fill(&hues, t.config.hue_tolerance);
+        t.rng = Xoshiro128PlusPlus::seed_from_u64(t.config.seed);
+        t.generation = 0;
+        t.target = TargetFilter::with_defaults();
         t.ga.reset_uniform(&t.config.search, &mut t.rng);
         Ok(t)
     }
 
-    /// Puts a tracker of these parts into the empty `slot` (kept out of line: its frame holds
-    /// the one tracker-sized temporary of [`Tracker::new_in`]).
+    /// Puts a blank tracker (empty model and hue table, identity population) into the empty
+    /// `slot`; [`Tracker::new_in`] then builds its parts in place. Out of line, so that only
+    /// this frame holds the blank's small parts.
     #[inline(never)]
-    fn fresh_in(
-        slot: &mut Option<Self>,
-        config: TrackerConfig<DOF>,
-        model: SurfaceStrips<G>,
-        lut: HueLut,
-        rng: Xoshiro128PlusPlus,
-    ) -> &mut Self {
+    fn blank_in<'s>(slot: &'s mut Option<Self>, config: &TrackerConfig<DOF>) -> &'s mut Self {
         slot.insert(Self {
-            config,
-            model,
-            lut,
+            config: *config,
+            model: SurfaceStrips::EMPTY,
+            lut: HueLut::EMPTY,
             ga: Ga::new(Psi::IDENTITY),
-            rng,
+            rng: Xoshiro128PlusPlus::seed_from_u64(config.seed),
             generation: 0,
             target: TargetFilter::with_defaults(),
         })
     }
 
     /// Validates `config` and builds its model and hue table.
-    #[inline(never)]
     fn checked_parts(config: &TrackerConfig<DOF>) -> Result<(SurfaceStrips<G>, HueLut), ConfigError> {
+        Self::check_config(config)?;
         let model = SurfaceStrips::<G>::new(&config.block)?;
+        let hues: [u8; FACES] = model.faces().map(|f| f.hue);
+        let lut = HueLut::new(&hues, config.hue_tolerance);
+        Ok((model, lut))
+    }
+
+    /// Validates `config` (everything [`Tracker::new`] can refuse).
+    fn check_config(config: &TrackerConfig<DOF>) -> Result<(), ConfigError> {
+        SurfaceStrips::<G>::check(&config.block)?;
         config.ga.validate(P)?;
         if config.hue_tolerance >= HUE_UNITS / 2 {
             return Err(ConfigError::HueTolerance);
@@ -327,9 +331,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         if !ft.translation.vector.iter().chain(ft.rotation.coords.iter()).all(|v| v.is_finite()) {
             return Err(ConfigError::NonFiniteTransform);
         }
-        let hues: [u8; FACES] = model.faces().map(|f| f.hue);
-        let lut = HueLut::new(&hues, config.hue_tolerance);
-        Ok((model, lut))
+        Ok(())
     }
 
     /// The configuration.

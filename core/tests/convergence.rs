@@ -180,3 +180,43 @@ fn landscape_probe() {
         }
     }
 }
+
+/// `Tracker::new_in` (the board's in-place construction) builds exactly the tracker of
+/// `Tracker::new`, into an empty slot and over a tracker of another configuration alike, and
+/// leaves the slot unchanged when it refuses a configuration.
+#[test]
+fn in_place_construction_equals_new() {
+    let cam = Pinhole::new_checked(200.0, 200.0, 80.0, 60.0, 160, 120).unwrap();
+    let rig = StereoRig::parallel(cam, 0.1).unwrap();
+    let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(11);
+    let mut other = config.with_seed(5);
+    other.block = Block { size_m: [0.3, 0.2, 0.25], face_hues_deg: [30.0, 90.0, 150.0, 210.0, 270.0, 330.0] };
+    other.hue_tolerance = 9;
+    let truth = Psi::new([0.01, 0.0, 0.6], [0.1, 0.2, 0.0]);
+    let (l, r) = render(&rig, &truth);
+    let frame = StereoFrame {
+        left: HueImage::new_checked(&l[..], 160, 120).unwrap(),
+        right: HueImage::new_checked(&r[..], 160, 120).unwrap(),
+    };
+    let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
+    let mut reference: Acquiring = Tracker::new(config).unwrap();
+    let expected = reference.step(&frame, &joints, 0.0, Feedforward::Off).unwrap();
+    let mut empty: Option<Acquiring> = None;
+    let mut reused: Option<Acquiring> = Some(Tracker::new(other).unwrap());
+    for slot in [&mut empty, &mut reused] {
+        let t = Tracker::new_in(slot, config).unwrap();
+        assert_eq!(t.model(), Tracker::<7, 40, 8>::new(config).unwrap().model());
+        assert_eq!(t.config(), &config);
+        let got = t.step(&frame, &joints, 0.0, Feedforward::Off).unwrap();
+        assert_eq!(got.psi.0.map(f32::to_bits), expected.psi.0.map(f32::to_bits));
+        assert_eq!(got.fitness.to_bits(), expected.fitness.to_bits());
+    }
+    // A refused configuration leaves the slot as it was.
+    let mut bad = config;
+    bad.block.size_m[0] = f32::NAN;
+    let before = reused.as_ref().unwrap().population().map(|p| p.0.map(f32::to_bits));
+    assert!(Tracker::new_in(&mut reused, bad).is_err());
+    assert_eq!(reused.as_ref().unwrap().population().map(|p| p.0.map(f32::to_bits)), before);
+    assert_eq!(reused.as_ref().unwrap().config(), &config);
+}

@@ -16,7 +16,7 @@ use std::io::Cursor;
 
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::ga::SearchSpace;
-use evorec_core::hue::HueImage;
+use evorec_core::image::Rgb565Image;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, TrackerConfig};
@@ -156,8 +156,8 @@ fn population_bits(t: &FirmwareTracker) -> Vec<[u32; 6]> {
     t.population().iter().map(|p| p.0.map(f32::to_bits)).collect()
 }
 
-/// `HueImage` and `Tracker::step` (the firmware's tracker type) on arbitrary image sizes and
-/// bytes, joint values and time steps: the camera size, then up to 4 steps, each with image
+/// `Rgb565Image` and `Tracker::step` (the firmware's tracker type, on the link's RGB565 frames)
+/// on arbitrary image sizes and bytes, joint values and time steps: the camera size, then up to 4 steps, each with image
 /// sizes, joint values, `dt` and the feedforward flag from the input. A refused step must leave
 /// the tracker unchanged; an accepted one must give a valid pose and a fitness in `[0, 1]`.
 pub fn tracker_step(data: &[u8]) {
@@ -186,11 +186,12 @@ pub fn tracker_step(data: &[u8]) {
         let (lw, lh, rw, rh) = (b.u16() % 64, b.u16() % 64, b.u16() % 64, b.u16() % 64);
         let fill = b.u8();
         // One byte short, exact or one too many.
-        let left_len = (usize::from(lw) * usize::from(lh) + usize::from(b.u8() % 3)).saturating_sub(1);
+        let left_len = (2 * usize::from(lw) * usize::from(lh) + usize::from(b.u8() % 3)).saturating_sub(1);
         let mut left: Vec<u8> = b.bytes(left_len).to_vec();
         left.resize(left_len, fill);
-        let right: Vec<u8> = left.iter().rev().copied().take(usize::from(rw) * usize::from(rh)).collect();
-        let (Ok(l), Ok(r)) = (HueImage::new_checked(&left[..], lw, lh), HueImage::new_checked(&right[..], rw, rh))
+        let right: Vec<u8> = left.iter().rev().copied().take(2 * usize::from(rw) * usize::from(rh)).collect();
+        let (Ok(l), Ok(r)) =
+            (Rgb565Image::new_checked(&left[..], lw, lh), Rgb565Image::new_checked(&right[..], rw, rh))
         else {
             continue;
         };

@@ -8,7 +8,8 @@
 //! use evorec_firmware::host::{HilSession, Reply, default_firmware_path};
 //! use evorec_firmware::protocol::Frame;
 //! # let setup: evorec_firmware::protocol::Setup = todo!();
-//! # let (left, right, joints) = (vec![255u8; 160 * 120], vec![255u8; 160 * 120], todo!());
+//! // Two RGB565 images (2 bytes per pixel), as the cameras deliver them.
+//! # let (left, right, joints) = (vec![0u8; 160 * 120 * 2], vec![0u8; 160 * 120 * 2], todo!());
 //! let mut hil = HilSession::start(&default_firmware_path(), "out/hil".as_ref(), &setup)?;
 //! let frame = Frame { width: 160, height: 120, joints, left: &left, right: &right };
 //! match hil.step(1, 33_333, &frame)? {
@@ -158,9 +159,9 @@ pub enum HilError {
         /// What was awaited.
         expected: &'static str,
     },
-    /// A frame's images are not `width · height` bytes each.
+    /// A frame's images are not `width · height · 2` bytes (RGB565) each.
     BadFrame {
-        /// `width · height`.
+        /// `width · height · 2`.
         expected: usize,
         /// Left image length.
         left: usize,
@@ -210,7 +211,7 @@ impl std::fmt::Display for HilError {
                 write!(f, "expected {expected} from the firmware, got {got:?} (sequence {sequence})")
             }
             Self::BadFrame { expected, left, right } => {
-                write!(f, "frame images have {left} and {right} bytes, width x height is {expected}")
+                write!(f, "frame images have {left} and {right} bytes, width x height x 2 (RGB565) is {expected}")
             }
         }
     }

@@ -19,26 +19,32 @@
 //! their estimates (checked by `tests/tests/hil_equivalence.rs` of the workspace).
 //!
 //! ## On-board frame size and memory
-//! Frames are 2 × 160×120 hue bytes ([`FRAME_WIDTH`] × [`FRAME_HEIGHT`], 37.5 KiB), received
-//! straight into two static buffers (no second copy). The tracker (the core's defaults: 7 DOF,
+//! Frames are 2 × 160×120 RGB565 pixels ([`FRAME_WIDTH`] × [`FRAME_HEIGHT`], 2 bytes each,
+//! 75 KiB), what OV7670/OV2640-class sensors deliver, received straight into two static
+//! buffers (no second copy). The board computes the hue of the pixels its sample points hit
+//! through the core's 64 KiB `RGB565_HUE` table (one more load per point, read-only data in
+//! flash); no whole frame is converted. The tracker (the core's defaults: 7 DOF,
 //! [`DEFAULT_POPULATION`](evorec_core::config::DEFAULT_POPULATION) individuals,
-//! [`DEFAULT_GRID`](evorec_core::config::DEFAULT_GRID) samples per row) lives in a static too. `memory.x` at the workspace root budgets an STM32F4-class
-//! part (1 MiB flash, 128 KiB SRAM); the firmware's own budget is flash ≤ 256 KiB and
-//! statics + stack ≤ 128 KiB. The stack is painted by cortex-m-rt before `main` and its
-//! high-water mark is reported in `DONE` and in the log.
+//! [`DEFAULT_GRID`](evorec_core::config::DEFAULT_GRID) samples per row) lives in a static too
+//! and is built in place (`Tracker::new_in`: model, hue-match table and population are
+//! written where they live, so no tracker-sized temporary is on the stack). `memory.x` at the
+//! workspace root budgets an STM32F4-class part (1 MiB flash, 128 KiB SRAM); the firmware's
+//! own budget is flash ≤ 256 KiB plus the hue table, and statics + stack ≤ 128 KiB with a
+//! stack ≤ 6 KiB. The stack is painted by cortex-m-rt before `main` and its high-water mark
+//! is reported in `DONE` and in the log.
 //!
 //! Measured (rustc 1.95, release profile: fat LTO, opt-level 3; core defaults):
 //!
 //! | what                                   | bytes   | how                                   |
 //! |----------------------------------------|---------|---------------------------------------|
-//! | flash (`.vector_table+.text+.rodata+.data`) | 106 928 | `llvm-size -B` text + data        |
-//! | static RAM (`.data+.bss`)              | 41 616  | `llvm-size -B` data + bss             |
-//! | stack high-water mark                  | 10 476  | stack painting, 30-frame demo         |
-//! | RAM total                              | 52 092  | of 128 KiB                            |
+//! | flash (`.vector_table+.text+.rodata+.data`) | 191 188 | `llvm-size -B` text + data        |
+//! | of which the RGB565→hue table          | 65 536  | `llvm-nm -S` (`RGB565_HUE`)           |
+//! | static RAM (`.data+.bss`)              | 82 408  | `llvm-size -B` data + bss (76 800: frames) |
+//! | stack high-water mark                  | 5 316   | stack painting, 30-frame demo (`cargo run --release`) |
+//! | RAM total                              | 87 724  | of 128 KiB                            |
 //!
-//! The stack peak is the tracker's construction ([`setup`]'s `build_tracker_in` through the
-//! core's `Tracker::new_in`, which builds the tracker in its static slot; its frames are
-//! 3.9 KB + 2.8 KB); the per-frame loop needs less.
+//! The stack's deepest path is the demo's loop (`main` → demo → `board::run` →
+//! `Tracker::step_probed`); building the tracker needs less.
 //!
 //! ## Commands (run inside `hil-stubs/`, whose `.cargo/config.toml` selects the target)
 //! - build the firmware: `cargo build --release`
@@ -90,12 +96,13 @@ pub mod sys;
 #[allow(unsafe_code)]
 pub mod cmsdk_timer;
 
-/// Width of the on-board hue frames (pixels).
+/// Width of the on-board frames (pixels).
 pub const FRAME_WIDTH: u16 = 160;
-/// Height of the on-board hue frames (pixels).
+/// Height of the on-board frames (pixels).
 pub const FRAME_HEIGHT: u16 = 120;
-/// Bytes of one on-board hue image (`FRAME_WIDTH · FRAME_HEIGHT`).
-pub const IMAGE_BYTES: usize = FRAME_WIDTH as usize * FRAME_HEIGHT as usize;
+/// Bytes of one on-board RGB565 image (`FRAME_WIDTH · FRAME_HEIGHT ·`
+/// [`protocol::BYTES_PER_PIXEL`]).
+pub const IMAGE_BYTES: usize = FRAME_WIDTH as usize * FRAME_HEIGHT as usize * protocol::BYTES_PER_PIXEL;
 
 /// The firmware's tracker: the core's defaults (7 DOF, default population and grid).
 pub type FirmwareTracker = evorec_core::Tracker;

@@ -149,7 +149,7 @@ where
     W: ByteSink<Error = E>,
     E: core::fmt::Debug,
 {
-    type Format = evorec_core::image::Hue;
+    type Format = crate::protocol::LinkFormat;
 
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, Self::Error> {
         self.answer_pending()?;
@@ -300,8 +300,8 @@ where
 mod tests {
     use super::*;
     use crate::protocol::tests::sample_setup;
-    use crate::protocol::{Frame, SliceSource, Truncated};
-    use evorec_core::config::NO_HUE;
+    use crate::protocol::{BYTES_PER_PIXEL, Frame, SliceSource, Truncated};
+    use evorec_core::image::{RGB565_GREY, Rgb565Image, hue_to_rgb565};
     use std::vec;
     use std::vec::Vec;
 
@@ -349,9 +349,12 @@ mod tests {
     #[test]
     fn full_conversation_answers_every_frame_in_order() {
         let setup = sample_setup();
-        let n = usize::from(setup.width) * usize::from(setup.height);
-        let (l, r) = (vec![NO_HUE; n], vec![NO_HUE; n]);
-        let small = vec![NO_HUE; 100];
+        let n = usize::from(setup.width) * usize::from(setup.height) * BYTES_PER_PIXEL;
+        // Grey left, a band of face-hue pixels on the right.
+        let l: Vec<u8> = (0..n / 2).flat_map(|_| RGB565_GREY.to_le_bytes()).collect();
+        let r: Vec<u8> =
+            (0..n / 2).flat_map(|i| hue_to_rgb565(if i % 160 < 40 { 60 } else { 255 }).to_le_bytes()).collect();
+        let small = vec![0u8; 100 * BYTES_PER_PIXEL];
         let mut input = encode(&Envelope::bare(Message::Config(setup)));
         input.extend(encode(&frame_env(1, setup.width, setup.height, &l, &r)));
         input.extend(encode(&frame_env(2, 10, 10, &small, &small))); // wrong size: refused
@@ -389,8 +392,8 @@ mod tests {
         // The estimates are exactly those of a host tracker built from the same setup.
         let mut host: Tracker = setup.build_tracker().unwrap();
         let frame = evorec_core::StereoFrame {
-            left: evorec_core::hue::HueImage::new_checked(&l[..], setup.width, setup.height).unwrap(),
-            right: evorec_core::hue::HueImage::new_checked(&r[..], setup.width, setup.height).unwrap(),
+            left: Rgb565Image::new_checked(&l[..], setup.width, setup.height).unwrap(),
+            right: Rgb565Image::new_checked(&r[..], setup.width, setup.height).unwrap(),
         };
         let j = JointSample { q: [0.1; DOF], qd: [0.02; DOF], time_us: 0 };
         let e1 = host.step(&frame, &j, 0.0, setup.feedforward).unwrap();
@@ -416,11 +419,11 @@ mod tests {
 
     #[test]
     fn frame_before_config_is_a_protocol_error() {
-        let l = [0u8; 4];
+        let l = [0u8; 8];
         let input = encode(&frame_env(1, 2, 2, &l, &l));
         let mut out = VecSink::default();
         let mut slot: Option<Tracker> = None;
-        let (mut lb, mut rb) = ([0u8; 4], [0u8; 4]);
+        let (mut lb, mut rb) = ([0u8; 8], [0u8; 8]);
         let r = serve(SliceSource::new(&input), &mut out, &mut slot, &mut lb, &mut rb, StackUsage::default);
         assert_eq!(r, Err(ServeError::Link(LinkError::Unexpected(MsgType::Frame))));
         assert_eq!(replies(&out.0)[0].message, Message::Error(ErrorCode::Unexpected as u32));
@@ -429,8 +432,8 @@ mod tests {
     #[test]
     fn corrupt_frame_stops_the_loop_with_an_error_message() {
         let setup = sample_setup();
-        let n = usize::from(setup.width) * usize::from(setup.height);
-        let l = vec![NO_HUE; n];
+        let n = usize::from(setup.width) * usize::from(setup.height) * BYTES_PER_PIXEL;
+        let l = vec![0u8; n];
         let mut input = encode(&Envelope::bare(Message::Config(setup)));
         let mut frame = encode(&frame_env(1, setup.width, setup.height, &l, &l));
         frame[100] ^= 1;

@@ -43,21 +43,7 @@ mod firmware {
         match rt::open_link() {
             Ok((rx, tx)) => {
                 log::info!("link open");
-                match link_board::serve(rx, tx, slot, left, right, report_stack) {
-                    Ok(stats) => {
-                        log::info!(
-                            "END: {} frames, {} estimates, {} rejected",
-                            stats.frames,
-                            stats.published,
-                            stats.rejected
-                        );
-                        rt::exit(true)
-                    }
-                    Err(e) => {
-                        log::error!("stopped: {e}");
-                        rt::exit(false)
-                    }
-                }
+                rt::exit(link(rx, tx, slot, left, right))
             }
             Err(_) => {
                 log::info!("no host link ({:?} missing): demo on on-board synthetic frames", rt::HOST_TO_FIRMWARE);
@@ -66,14 +52,33 @@ mod firmware {
         }
     }
 
-    /// Tracks [`DEMO_FRAMES`] frames of [`selftest::SynthBoard`]; true on success.
+    /// Serves the host over the link; true on success. Out of line (as [`demo`]), so that
+    /// `main`'s frame holds neither path's locals.
+    #[inline(never)]
+    fn link(
+        rx: sys::HostFile,
+        tx: sys::HostFile,
+        slot: &mut Option<FirmwareTracker>,
+        left: &mut [u8],
+        right: &mut [u8],
+    ) -> bool {
+        match link_board::serve(rx, tx, slot, left, right, report_stack) {
+            Ok(stats) => {
+                log::info!("END: {} frames, {} estimates, {} rejected", stats.frames, stats.published, stats.rejected);
+                true
+            }
+            Err(e) => {
+                log::error!("stopped: {e}");
+                false
+            }
+        }
+    }
+
+    /// Tracks [`DEMO_FRAMES`] frames of [`selftest::SynthBoard`]; true on success. Out of
+    /// line, so that `main`'s frame does not hold the demo's locals on the link path.
+    #[inline(never)]
     fn demo(slot: &mut Option<FirmwareTracker>, left: &mut [u8], right: &mut [u8]) -> bool {
-        let Ok(config) = selftest::tracker_config() else { return false };
-        let Ok(setup) = Setup::from_tracker_config(&config, Feedforward::On, &selftest::START, &selftest::SPREAD)
-        else {
-            return false;
-        };
-        let Ok(tracker) = setup.build_tracker_in(slot) else { return false };
+        let Some(tracker) = demo_tracker(slot) else { return false };
         let Ok(mut camera) = selftest::SynthBoard::new(DEMO_FRAMES) else { return false };
         match board::run(&mut camera, tracker, Feedforward::On, left, right, DEMO_FRAMES) {
             Ok(stats) => {
@@ -86,6 +91,15 @@ mod firmware {
                 false
             }
         }
+    }
+
+    /// The demo's tracker, built into `slot` (out of line: the configuration and the setup
+    /// are gone from the stack before the loop runs).
+    #[inline(never)]
+    fn demo_tracker(slot: &mut Option<FirmwareTracker>) -> Option<&mut FirmwareTracker> {
+        let config = selftest::tracker_config().ok()?;
+        let setup = Setup::from_tracker_config(&config, Feedforward::On, &selftest::START, &selftest::SPREAD).ok()?;
+        setup.build_tracker_in(slot).ok()
     }
 }
 

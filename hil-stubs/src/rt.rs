@@ -14,7 +14,7 @@ pub const HOST_TO_FIRMWARE: &CStr = c"evorec-h2f.fifo";
 /// Firmware → host FIFO (opened second).
 pub const FIRMWARE_TO_HOST: &CStr = c"evorec-f2h.fifo";
 
-/// The left and right hue frame buffers (2 × 160×120 bytes, in .bss).
+/// The left and right RGB565 frame buffers (2 × 160×120 × 2 bytes, in .bss).
 static FRAME_BUFFERS: ConstStaticCell<[[u8; IMAGE_BYTES]; 2]> = ConstStaticCell::new([[0; IMAGE_BYTES]; 2]);
 
 /// The frame buffers; `None` after the first call (they are handed out once).

@@ -12,7 +12,7 @@ use evorec_core::board::{CameraController, ErrorKind, ErrorType, FrameInfo};
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::NO_HUE;
 use evorec_core::ga::SearchSpace;
-use evorec_core::hue::HueImage;
+use evorec_core::image::{Rgb565Image, expand_hue_to_rgb565};
 use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
@@ -25,8 +25,10 @@ use nalgebra::{Isometry3, Translation3, Vector3};
 pub const WIDTH: u16 = 160;
 /// Image height of the scenario.
 pub const HEIGHT: u16 = 120;
-/// Bytes of one hue image.
-pub const IMAGE_BYTES: usize = WIDTH as usize * HEIGHT as usize;
+/// Pixels of one image.
+pub const PIXELS: usize = WIDTH as usize * HEIGHT as usize;
+/// Bytes of one RGB565 image (what the cameras deliver, 2 bytes per pixel).
+pub const IMAGE_BYTES: usize = 2 * PIXELS;
 /// Generations [`run_steps`] runs.
 pub const STEPS: usize = 3;
 /// Frame period (µs, 30 frames/s).
@@ -110,16 +112,20 @@ pub fn joints(k: u32) -> JointSample<7> {
     }
 }
 
-/// Renders the block at `psi` (in `Σ_CR`) into both images (`NO_HUE` background).
+/// Renders the block at `psi` (in `Σ_CR`) into both RGB565 images (grey background): the
+/// core's hue rasterizer into the first [`PIXELS`] bytes, then expanded in place to the
+/// RGB565 value of each hue ([`expand_hue_to_rgb565`]).
 ///
 /// # Errors
 /// [`Failure::Image`] if a buffer is smaller than [`IMAGE_BYTES`] or `psi` is invalid.
 pub fn render(rig: &StereoRig, psi: &Psi, left: &mut [u8], right: &mut [u8]) -> Result<(), Failure> {
     let iso = psi.try_to_isometry().map_err(|_| Failure::Image)?;
-    left.fill(NO_HUE);
-    right.fill(NO_HUE);
-    synth::render_block(&Block::PAPER, &rig.right, &iso, right).map_err(|_| Failure::Image)?;
-    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), left).map_err(|_| Failure::Image)
+    for (img, cam, pose) in [(right, &rig.right, iso), (left, &rig.left, rig.left_from_right * iso)] {
+        img.get_mut(..PIXELS).ok_or(Failure::Image)?.fill(NO_HUE);
+        synth::render_block(&Block::PAPER, cam, &pose, img).map_err(|_| Failure::Image)?;
+        expand_hue_to_rgb565(img, PIXELS).map_err(|_| Failure::Image)?;
+    }
+    Ok(())
 }
 
 /// Builds the scenario's tracker (reset around [`START`]), renders [`TRUTH`] and runs
@@ -134,8 +140,8 @@ pub fn run_steps(left: &mut [u8], right: &mut [u8]) -> Result<[EstimateBits; STE
     tracker.reset_around(&START, &SPREAD).map_err(|_| Failure::Tracker)?;
     render(&rig, &TRUTH, left, right)?;
     let frame = StereoFrame {
-        left: HueImage::new_checked(&*left, WIDTH, HEIGHT).map_err(|_| Failure::Image)?,
-        right: HueImage::new_checked(&*right, WIDTH, HEIGHT).map_err(|_| Failure::Image)?,
+        left: Rgb565Image::new_checked(&*left, WIDTH, HEIGHT).map_err(|_| Failure::Image)?,
+        right: Rgb565Image::new_checked(&*right, WIDTH, HEIGHT).map_err(|_| Failure::Image)?,
     };
     let mut out = [EstimateBits { psi: [0; 6], fitness: 0, generation: 0 }; STEPS];
     for (k, slot) in out.iter_mut().enumerate() {
@@ -188,7 +194,7 @@ impl ErrorType for SynthBoard {
 }
 
 impl CameraController<7> for SynthBoard {
-    type Format = evorec_core::image::Hue;
+    type Format = evorec_core::image::Rgb565;
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, ErrorKind> {
         if self.next >= self.frames {
             return Err(ErrorKind::EndOfStream);
@@ -207,11 +213,16 @@ impl CameraController<7> for SynthBoard {
     fn publish(&mut self, frame: &FrameInfo, estimate: &Estimate) -> Result<(), ErrorKind> {
         let truth = self.truth(frame.sequence);
         let err_mm = (estimate.psi.translation() - truth.translation()).norm() * 1000.0;
+        // Printed in fixed point: formatting an f32 takes 2 KB of stack on the board.
+        let f_milli = (estimate.fitness * 1000.0) as u32;
+        let err_tenths = (err_mm * 10.0) as u32;
         log::info!(
-            "frame {:3}: F = {:.3}, position error {:.1} mm, generation {}",
+            "frame {:3}: F = {}.{:03}, position error {}.{} mm, generation {}",
             frame.sequence,
-            estimate.fitness,
-            err_mm,
+            f_milli / 1000,
+            f_milli % 1000,
+            err_tenths / 10,
+            err_tenths % 10,
             estimate.generation
         );
         Ok(())

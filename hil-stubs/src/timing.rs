@@ -8,12 +8,15 @@
 //! [`PhaseTimer`] is the core's [`PhaseProbe`] reading such a down-counter at each phase
 //! boundary of [`Tracker::step_probed`](evorec_core::tracker::Tracker::step_probed).
 //!
-//! Frames are made on the board ([`CaseGen`]: the core's `synth` rasterizer plus a xorshift
-//! noise generator), not streamed: the measured window contains nothing but the tracker's
-//! code. [`schedule`] lists the kinds of frames of a run: normal frames with the target
-//! tracked or at random poses, blank frames, target absent (distractor patches only), target
-//! filling the image, pure noise, target under noise, and fast arm motion (large
-//! feedforward shifts that push individuals into the search-space clamps).
+//! Frames are made on the board ([`CaseGen`]: the core's `synth` rasterizer, expanded to the
+//! RGB565 pixels the cameras deliver, plus a xorshift noise generator), not streamed: the
+//! measured window contains nothing but the tracker's code, which reads RGB565 and computes
+//! the hue of every sampled pixel through the core's 64 KiB `RGB565_HUE` table, so the hue
+//! work is in every count. [`schedule`] lists the kinds of frames of a run: normal frames
+//! with the target tracked or at random poses, blank frames, target absent (distractor
+//! patches only), target filling the image, pure RGB565 noise (every table entry), target
+//! under noise, RGB565 extremes (the table's ends and the pure primaries), and fast arm
+//! motion (large feedforward shifts that push individuals into the search-space clamps).
 //!
 //! Every measured generation is printed as one line ([`GenLine`], `GEN key=value …`), which
 //! `evorec timing` (host) parses with [`GenLine::parse`].
@@ -23,6 +26,7 @@ use core::fmt;
 use evorec_core::camera::StereoRig;
 use evorec_core::config::NO_HUE;
 use evorec_core::hue;
+use evorec_core::image::expand_hue_to_rgb565;
 use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
@@ -119,17 +123,20 @@ pub enum CaseKind {
     Filling,
     /// Every pixel the hue of one face.
     UniformHue,
-    /// Every pixel a random byte (all hues, matching or not).
+    /// Every pixel a random RGB565 value (any entry of the hue table, matching or not).
     Noise,
-    /// The target with a quarter of the pixels replaced by random bytes.
+    /// The target with a quarter of the pixels replaced by random RGB565 values.
     NoisyTarget,
+    /// Every pixel one of [`RGB565_EXTREMES`] at random: the hue table's first and last
+    /// entries (black, white: no hue) and the pure primaries (the paper block's face hues).
+    Rgb565Extremes,
     /// The target tracked while the arm moves fast (large feedforward shifts, clamping).
     FastArm,
 }
 
 impl CaseKind {
     /// Every kind, in schedule order.
-    pub const ALL: [CaseKind; 9] = [
+    pub const ALL: [CaseKind; 10] = [
         Self::Tracking,
         Self::Blank,
         Self::Absent,
@@ -137,6 +144,7 @@ impl CaseKind {
         Self::UniformHue,
         Self::Noise,
         Self::NoisyTarget,
+        Self::Rgb565Extremes,
         Self::RandomPose,
         Self::FastArm,
     ];
@@ -152,6 +160,7 @@ impl CaseKind {
             Self::UniformHue => "uniform_hue",
             Self::Noise => "noise",
             Self::NoisyTarget => "noisy_target",
+            Self::Rgb565Extremes => "rgb565_extremes",
             Self::FastArm => "fast_arm",
         }
     }
@@ -162,10 +171,14 @@ impl CaseKind {
     }
 }
 
-/// Frames of the default configuration's run.
-pub const FULL_FRAMES: u32 = 126;
-/// Frames of each configuration of the sweep (every kind at least twice).
-pub const SWEEP_FRAMES: u32 = 27;
+/// Frames of the default configuration's run (13 of every kind).
+pub const FULL_FRAMES: u32 = 130;
+/// Frames of each configuration of the sweep (every kind three times).
+pub const SWEEP_FRAMES: u32 = 30;
+
+/// The pixels of [`CaseKind::Rgb565Extremes`]: black and white (the hue table's first and last
+/// entries, no hue) and pure red, green and blue (every colour field at its extreme).
+pub const RGB565_EXTREMES: [u16; 5] = [0x0000, 0xFFFF, 0xF800, 0x07E0, 0x001F];
 
 /// The kind of frame `k` of a run of `frames` frames: blocks of consecutive frames of one
 /// kind (so the tracker's state evolves as in operation: it loses the target on blank
@@ -283,12 +296,22 @@ impl CaseGen {
         p
     }
 
+    /// Replaces every `every`-th pixel (on average) of an RGB565 image by a random value.
     fn noise(&mut self, img: &mut [u8], every: u32) {
-        for px in img.iter_mut() {
+        for px in img.chunks_exact_mut(2) {
             let x = self.rng.next_u32();
             if x.is_multiple_of(every) {
-                *px = (x >> 8) as u8;
+                px.copy_from_slice(&((x >> 8) as u16).to_le_bytes());
             }
+        }
+    }
+
+    /// Sets every pixel of an RGB565 image to one of [`RGB565_EXTREMES`] at random.
+    fn extremes(&mut self, img: &mut [u8]) {
+        for px in img.chunks_exact_mut(2) {
+            let i = (self.rng.next_u32() >> 8) as usize % RGB565_EXTREMES.len();
+            let v = RGB565_EXTREMES.get(i).copied().unwrap_or(0);
+            px.copy_from_slice(&v.to_le_bytes());
         }
     }
 
@@ -309,8 +332,10 @@ impl CaseGen {
         }
     }
 
-    /// Writes frame `k` of `kind` into `left`/`right` (each `width · height` bytes) and returns
-    /// its joint sample.
+    /// Writes frame `k` of `kind` into `left`/`right` as RGB565 (each `2 · width · height`
+    /// bytes) and returns its joint sample. The scene is drawn as hue bytes into the first
+    /// `width · height` bytes of each buffer and expanded in place to RGB565; noise and the
+    /// extremes are then written as RGB565 values.
     ///
     /// # Errors
     /// [`FrameError`] if a buffer is too small.
@@ -321,6 +346,32 @@ impl CaseGen {
         left: &mut [u8],
         right: &mut [u8],
     ) -> Result<JointSample<7>, FrameError> {
+        let n = self.width * self.height;
+        let (left, right) = (left.get_mut(..2 * n).ok_or(FrameError)?, right.get_mut(..2 * n).ok_or(FrameError)?);
+        self.draw_hues(k, kind, left, right)?;
+        expand_hue_to_rgb565(left, n).map_err(|_| FrameError)?;
+        expand_hue_to_rgb565(right, n).map_err(|_| FrameError)?;
+        match kind {
+            CaseKind::Noise => {
+                self.noise(left, 1);
+                self.noise(right, 1);
+            }
+            CaseKind::NoisyTarget => {
+                self.noise(left, 4);
+                self.noise(right, 4);
+            }
+            CaseKind::Rgb565Extremes => {
+                self.extremes(left);
+                self.extremes(right);
+            }
+            _ => {}
+        }
+        Ok(Self::joints(k, kind == CaseKind::FastArm))
+    }
+
+    /// The hue stage of [`CaseGen::frame`]: the scene as hue bytes in the first
+    /// `width · height` bytes of each buffer.
+    fn draw_hues(&mut self, k: u32, kind: CaseKind, left: &mut [u8], right: &mut [u8]) -> Result<(), FrameError> {
         let n = self.width * self.height;
         let (left, right) = (left.get_mut(..n).ok_or(FrameError)?, right.get_mut(..n).ok_or(FrameError)?);
         left.fill(NO_HUE);
@@ -334,7 +385,7 @@ impl CaseGen {
                 let p = self.random_pose();
                 self.render(&p, left, right)?;
             }
-            CaseKind::Blank => {}
+            CaseKind::Blank | CaseKind::Noise | CaseKind::Rgb565Extremes => {}
             CaseKind::Absent => {
                 self.patches(left);
                 self.patches(right);
@@ -352,18 +403,12 @@ impl CaseGen {
                 left.fill(hue);
                 right.fill(hue);
             }
-            CaseKind::Noise => {
-                self.noise(left, 1);
-                self.noise(right, 1);
-            }
             CaseKind::NoisyTarget => {
                 let p = self.truth(k, false);
                 self.render(&p, left, right)?;
-                self.noise(left, 4);
-                self.noise(right, 4);
             }
         }
-        Ok(Self::joints(k, kind == CaseKind::FastArm))
+        Ok(())
     }
 }
 
@@ -463,6 +508,7 @@ impl GenLine {
 mod tests {
     use super::*;
     use core::cell::Cell;
+    use evorec_core::image::{PixelFormat, Rgb565, Rgb565Image};
     use std::format;
     use std::vec;
 
@@ -498,7 +544,8 @@ mod tests {
         for frames in [FULL_FRAMES, SWEEP_FRAMES] {
             for kind in CaseKind::ALL {
                 let n = (0..frames).filter(|&k| schedule(k, frames) == kind).count() as u32;
-                assert!(n >= frames / 9 - 1 && n >= 2, "{kind:?}: {n} of {frames}");
+                let kinds = CaseKind::ALL.len() as u32;
+                assert!(n >= frames / kinds - 1 && n >= 2, "{kind:?}: {n} of {frames}");
             }
         }
         assert_eq!(schedule(0, FULL_FRAMES), CaseKind::Tracking);
@@ -526,15 +573,21 @@ mod tests {
     fn frames_of_every_kind_are_made() {
         let config = crate::selftest::tracker_config().unwrap();
         let mut cases = CaseGen::new(config.rig, config.flange_to_camera, 5).unwrap();
-        let (mut l, mut r) = (vec![0u8; 160 * 120], vec![0u8; 160 * 120]);
+        let (mut l, mut r) = (vec![0u8; 2 * 160 * 120], vec![0u8; 2 * 160 * 120]);
         for (k, kind) in CaseKind::ALL.into_iter().enumerate() {
-            let k = 14 * k as u32 + 13;
+            let k = 13 * k as u32 + 12;
             let j = cases.frame(k, kind, &mut l, &mut r).unwrap();
-            let painted = l.iter().filter(|&&h| h != NO_HUE).count();
+            let img = Rgb565Image::new_checked(&l[..], 160, 120).unwrap();
+            let painted = img.pixels().iter().filter(|&&px| Rgb565::hue(px) != NO_HUE).count();
             match kind {
                 CaseKind::Blank => assert_eq!(painted, 0),
-                CaseKind::Filling | CaseKind::UniformHue | CaseKind::Noise => {
-                    assert!(painted > 150 * 110, "{kind:?}: {painted}")
+                CaseKind::Filling | CaseKind::UniformHue => assert!(painted > 150 * 110, "{kind:?}: {painted}"),
+                // Random RGB565 values: most have a hue (not too dark, not too grey).
+                CaseKind::Noise => assert!(painted > 160 * 120 / 2, "{kind:?}: {painted}"),
+                // Three of the five extremes are pure primaries.
+                CaseKind::Rgb565Extremes => {
+                    assert!(painted.abs_diff(160 * 120 * 3 / 5) < 600, "{kind:?}: {painted}");
+                    assert!(img.pixels().iter().all(|px| RGB565_EXTREMES.contains(&u16::from_le_bytes(*px))));
                 }
                 // Fast arm motion may carry the target out of view: only the speed is checked.
                 CaseKind::FastArm => assert!(j.qd.iter().any(|v| v.abs() > 0.2), "{:?}", j.qd),
@@ -543,5 +596,7 @@ mod tests {
             assert!(j.qd.iter().any(|v| *v != 0.0));
         }
         assert!(cases.frame(0, CaseKind::Blank, &mut l[..10], &mut r).is_err());
+        // Hue-sized buffers are too small for RGB565 frames.
+        assert!(cases.frame(0, CaseKind::Blank, &mut l[..160 * 120], &mut r).is_err());
     }
 }

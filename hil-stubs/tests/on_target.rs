@@ -16,7 +16,7 @@
 use core::f32::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
 
 use evorec_core::camera::{Pinhole, ProjectError, StereoRig};
-use evorec_core::hue::HueImage;
+use evorec_core::image::Rgb565Image;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
 use evorec_core::tracker::{StereoFrame, Tracker};
@@ -142,8 +142,8 @@ fn fitness_at_true_and_perturbed_poses(left: &mut [u8], right: &mut [u8]) -> Out
     let rig = selftest::rig().map_err(|_| ())?;
     selftest::render(&rig, &selftest::TRUTH, left, right).map_err(|_| ())?;
     let frame = StereoFrame {
-        left: HueImage::new_checked(&*left, selftest::WIDTH, selftest::HEIGHT).map_err(|_| ())?,
-        right: HueImage::new_checked(&*right, selftest::WIDTH, selftest::HEIGHT).map_err(|_| ())?,
+        left: Rgb565Image::new_checked(&*left, selftest::WIDTH, selftest::HEIGHT).map_err(|_| ())?,
+        right: Rgb565Image::new_checked(&*right, selftest::WIDTH, selftest::HEIGHT).map_err(|_| ())?,
     };
     let at_truth = tracker.fitness_of(&selftest::TRUTH, &frame).map_err(|_| ())?.total;
     ensure(at_truth == 1.0, format_args!("F(true pose) = 1 exactly, got {at_truth}"))?;

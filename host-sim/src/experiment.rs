@@ -133,7 +133,7 @@ pub fn run(s: &Scenario, mut on_frame: impl FnMut()) -> Result<RunOutput> {
     let mut tracker = SimTracker::new(tracker_config(s)?).map_err(|e| anyhow::anyhow!("tracker: {e}"))?;
     tracker.reset_around(&truth0, &INITIAL_SPREAD).map_err(|e| anyhow::anyhow!("initial pose: {e}"))?;
     let mut board = ProgressBoard { inner: SimBoard::new(world), on_frame: &mut on_frame };
-    let n = usize::from(s.camera.width) * usize::from(s.camera.height);
+    let n = sim::image_bytes(s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let stats = board::run(&mut board, &mut tracker, feedforward(s.method), &mut left, &mut right, u32::MAX)
         .map_err(|e| anyhow::anyhow!("simulated board: {e:?}"))?;

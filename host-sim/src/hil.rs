@@ -1,6 +1,7 @@
 //! `evorec hil`: the same scenario, but the tracker runs in the firmware on QEMU.
 //!
-//! The simulated board renders each frame and samples the arm exactly as in `evorec run`;
+//! The simulated board renders each frame (as the cameras' RGB565 pixels) and samples the arm
+//! exactly as in `evorec run`;
 //! instead of calling the host tracker, the frame and joint sample go over the firmware's
 //! semihosting link ([`evorec_firmware::host::HilSession`]) and the firmware's estimate comes
 //! back. The firmware runs the core's generic loop on the same numbers, so `trace.csv` and
@@ -13,7 +14,7 @@ use anyhow::{Context, Result, bail};
 use evorec_core::board::{CameraController, Error as _, ErrorKind};
 use evorec_firmware::host::{HilSession, Reply};
 use evorec_firmware::protocol::{Frame, Setup};
-use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH};
+use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, IMAGE_BYTES};
 
 use crate::experiment::{self, INITIAL_SPREAD, RunOutput, Summary};
 use crate::scenario::Scenario;
@@ -41,8 +42,7 @@ pub fn run(s: &Scenario, firmware: &Path, workdir: &Path, mut on_frame: impl FnM
         .map_err(|e| anyhow::anyhow!("firmware setup: {e:?}"))?;
     let mut session = HilSession::start(firmware, workdir, &setup).map_err(|e| anyhow::anyhow!("{e}"))?;
     let mut board = SimBoard::new(world);
-    let n = usize::from(FRAME_WIDTH) * usize::from(FRAME_HEIGHT);
-    let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
+    let (mut left, mut right) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
     let mut rejected = 0u32;
     loop {
         let info = match board.next_frame(&mut left, &mut right) {

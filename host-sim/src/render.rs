@@ -23,6 +23,7 @@
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::MIN_DEPTH_M;
 use evorec_core::hue::rgb_to_hue;
+use evorec_core::image::rgb888_to_rgb565;
 use evorec_core::model::{Block, FACES};
 use image::{Rgb, RgbImage};
 use nalgebra::{Isometry3, Point2, Vector3};
@@ -476,6 +477,17 @@ pub fn hue_into(img: &RgbImage, out: &mut [u8]) {
     }
 }
 
+/// `img` as the RGB565 pixels a camera sensor delivers (2 bytes per pixel, little-endian,
+/// each channel truncated to its top 5/6/5 bits by the core's [`rgb888_to_rgb565`]) into a
+/// caller's buffer (the first `2·width·height` bytes; a shorter buffer gets as many whole
+/// pixels as it holds). The simulator's boards hand these bytes to the tracker, on the host
+/// and over the firmware link alike.
+pub fn rgb565_into(img: &RgbImage, out: &mut [u8]) {
+    for (d, p) in out.chunks_exact_mut(2).zip(img.as_raw().chunks_exact(3)) {
+        d.copy_from_slice(&rgb888_to_rgb565(p[0], p[1], p[2]).to_le_bytes());
+    }
+}
+
 /// Draws a small `+` mark (3 × 3 pixels) of `colour` at each point given in continuous pixel
 /// coordinates (pixel `(i, j)` covers `[i, i+1) × [j, j+1)`); points outside the image or not
 /// finite are skipped, marks are clipped at the border. Used to overlay the projected search
@@ -745,6 +757,28 @@ mod tests {
         // right.
         let d = centroid(&pair.left) - centroid(&pair.right);
         assert!((d - 80.0 / 0.7).abs() < 0.5, "{d}");
+    }
+
+    #[test]
+    fn rgb565_frame_is_the_truncated_pixels_and_keeps_face_hues() {
+        let opts = RenderOptions::default().with_antialias(AntiAlias::Off);
+        let img = render(&cam(), &pose(), &Block::PAPER, &opts, &mut rng());
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let mut out = vec![0u8; 2 * w * h];
+        rgb565_into(&img, &mut out);
+        let hue = hue_image(&img);
+        let mut face_pixels = 0;
+        for (i, (px, rgb)) in out.chunks_exact(2).zip(img.pixels()).enumerate() {
+            let v = u16::from_le_bytes([px[0], px[1]]);
+            assert_eq!(v, rgb888_to_rgb565(rgb[0], rgb[1], rgb[2]));
+            // Truncation to 5/6/5 bits moves a face pixel's hue by at most a unit or two.
+            let h565 = evorec_core::image::rgb565_to_hue(v);
+            if hue[i] != NO_HUE && h565 != NO_HUE {
+                assert!(evorec_core::hue::hue_distance(hue[i], h565) <= 2, "pixel {i}: {} vs {h565}", hue[i]);
+                face_pixels += 1;
+            }
+        }
+        assert!(face_pixels > 1000, "{face_pixels}");
     }
 
     #[test]

@@ -2,9 +2,10 @@
 //! rotating block, seen by the tracker only through [`CameraController`].
 //!
 //! Time runs in 1 ms joint-control steps ([`crate::arm::CONTROL_PERIOD_S`]); frame `n` is
-//! captured at `t = n · frame_period_s`, rendered in RGB for both cameras, converted to hue
-//! with the core's `rgb_to_hue`, and handed over together with the joint sample `q, q̇` of that
-//! instant. Each published estimate is stored with the ground truth of its frame.
+//! captured at `t = n · frame_period_s`, rendered in RGB for both cameras, packed into the
+//! RGB565 pixels a camera sensor delivers ([`render::rgb565_into`]), and handed over together
+//! with the joint sample `q, q̇` of that instant; the tracker computes the hue of the pixels it
+//! samples, as the board does (`evorec run` and `evorec hil` see the same bytes). Each published estimate is stored with the ground truth of its frame.
 
 use anyhow::{Context, Result, bail};
 use evorec_core::board::{CameraController, Error as BoardError, ErrorKind, ErrorType, FrameInfo};
@@ -238,21 +239,21 @@ impl ErrorType for SimBoard {
 }
 
 impl CameraController<DOF> for SimBoard {
-    type Format = evorec_core::image::Hue;
+    type Format = evorec_core::image::Rgb565;
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SimError> {
         if self.next >= self.frames {
             return Err(SimError::EndOfStream);
         }
         let cam = self.world.rig().right;
-        let n = usize::from(cam.width()) * usize::from(cam.height());
+        let n = usize::from(cam.width()) * usize::from(cam.height()) * 2;
         if left.len() < n || right.len() < n {
             return Err(SimError::BufferTooSmall);
         }
         let t = f64::from(self.next) * self.world.scenario().frame_period_s;
         self.world.advance_to(t);
         let images = self.world.render();
-        render::hue_into(&images.left, left);
-        render::hue_into(&images.right, right);
+        render::rgb565_into(&images.left, left);
+        render::rgb565_into(&images.right, right);
         let joints = self.world.arm().joint_sample();
         self.current = Some((t, self.world.truth(), joints));
         let info = FrameInfo {
@@ -282,6 +283,12 @@ impl CameraController<DOF> for SimBoard {
         }
         Ok(())
     }
+}
+
+/// Bytes of one of a scenario's RGB565 images (2 per pixel), the size of the buffers
+/// [`SimBoard`] fills.
+pub fn image_bytes(s: &Scenario) -> usize {
+    usize::from(s.camera.width) * usize::from(s.camera.height) * 2
 }
 
 /// Frames of a run: `round(duration / frame_period) + 1` (frames at `t = 0, T, 2T, …`).

@@ -1,7 +1,10 @@
 //! Host tracker vs. firmware on QEMU: the same frames and setup give bit-identical estimates.
 //!
-//! 120 frames (160×120, 30 frames/s) of the paper's block, rendered with
-//! `evorec_core::synth::render_block`: the block moves in the world while the PA-10 carries
+//! 120 RGB565 frames (160×120, 30 frames/s, 2 bytes per pixel as the cameras deliver them) of
+//! the paper's block, rendered with `evorec_core::synth::render_block`, expanded to RGB565 and
+//! given sensor noise (the lowest bit of every colour field flipped at random, and one pixel
+//! in 16 replaced by a random RGB565 value, so the board's RGB565→hue table is read all over):
+//! the block moves in the world while the PA-10 carries
 //! the cameras along a sinusoidal joint trajectory (`q̇ ≠ 0`), with feedforward on. One frame
 //! is dropped (a 2-period time step) and one has the wrong size (both sides must refuse it).
 //! The host runs the core's `board::run` over the recorded frames; the firmware runs the
@@ -19,11 +22,13 @@ use evorec_core::board::{self, CameraController, ErrorKind, ErrorType, FrameInfo
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::NO_HUE;
 use evorec_core::ga::SearchSpace;
+use evorec_core::image::expand_hue_to_rgb565;
 use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::tracker::{Estimate, Feedforward, JointSample, Tracker, TrackerConfig};
 use evorec_core::{quat, synth};
+use evorec_firmware::IMAGE_BYTES;
 use evorec_firmware::host::{HilSession, Reply, default_firmware_path};
 use evorec_firmware::protocol::{Frame, Setup};
 use evorec_tests::{Failure, fail};
@@ -66,6 +71,25 @@ fn libm_cos(x: f32) -> f32 {
     evorec_core::math::cos(x)
 }
 
+/// xorshift32 step.
+fn next(x: &mut u32) -> u32 {
+    *x ^= *x << 13;
+    *x ^= *x >> 17;
+    *x ^= *x << 5;
+    *x
+}
+
+/// Sensor noise on an RGB565 image: each colour field's lowest bit flipped at random, and one
+/// pixel in 16 replaced by a random value.
+fn sensor_noise(img: &mut [u8], state: &mut u32) {
+    for px in img.chunks_exact_mut(2) {
+        let r = next(state);
+        let v = u16::from_le_bytes([px[0], px[1]]);
+        let v = if r % 16 == 0 { (r >> 16) as u16 } else { v ^ (r as u16 & 0x0821) };
+        px.copy_from_slice(&v.to_le_bytes());
+    }
+}
+
 /// The tracker configuration, the setup sent to the firmware and the recorded frames.
 fn scenario() -> Result<(TrackerConfig<7>, Setup, Vec<Recorded>), Failure> {
     let cam = Pinhole::new_checked(200.0, 200.0, 80.0, 60.0, WIDTH, HEIGHT)?;
@@ -83,6 +107,7 @@ fn scenario() -> Result<(TrackerConfig<7>, Setup, Vec<Recorded>), Failure> {
     let world_from_block0 = world_from_cam(&joints_at(0.0).q) * block_in_cam0;
 
     let n = usize::from(WIDTH) * usize::from(HEIGHT);
+    let mut noise = 0x2545_F491u32;
     let mut frames = Vec::new();
     for k in 0..FRAMES {
         if k == DROPPED {
@@ -97,13 +122,17 @@ fn scenario() -> Result<(TrackerConfig<7>, Setup, Vec<Recorded>), Failure> {
         );
         let block_in_cam = world_from_cam(&joints.q).inverse() * world_from_block0 * drift;
         let (w, h) = if k == WRONG_SIZE { (80, 60) } else { (WIDTH, HEIGHT) };
-        let (mut left, mut right) = (vec![NO_HUE; n], vec![NO_HUE; n]);
+        let (mut left, mut right) = (vec![NO_HUE; 2 * n], vec![NO_HUE; 2 * n]);
         if k != WRONG_SIZE {
             synth::render_block(&Block::PAPER, &rig.right, &block_in_cam, &mut right)?;
             synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * block_in_cam), &mut left)?;
+            for img in [&mut left, &mut right] {
+                expand_hue_to_rgb565(img, n)?;
+                sensor_noise(img, &mut noise);
+            }
         } else {
-            left.truncate(usize::from(w) * usize::from(h));
-            right.truncate(usize::from(w) * usize::from(h));
+            left.truncate(2 * usize::from(w) * usize::from(h));
+            right.truncate(2 * usize::from(w) * usize::from(h));
         }
         let info = FrameInfo { sequence: k, capture_time_us: u64::from(k) * PERIOD_US, width: w, height: h };
         frames.push(Recorded { info, left, right, joints });
@@ -126,7 +155,7 @@ impl ErrorType for ReplayBoard<'_> {
 }
 
 impl CameraController<7> for ReplayBoard<'_> {
-    type Format = evorec_core::image::Hue;
+    type Format = evorec_core::image::Rgb565;
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, ErrorKind> {
         let f = self.frames.next().ok_or(ErrorKind::EndOfStream)?;
         left.get_mut(..f.left.len()).ok_or(ErrorKind::Other)?.copy_from_slice(&f.left);
@@ -164,8 +193,7 @@ fn firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
     // Host reference: the core's loop over the recorded frames.
     let t_host = Instant::now();
     let mut host: Tracker = setup.build_tracker()?;
-    let n = usize::from(WIDTH) * usize::from(HEIGHT);
-    let (mut lb, mut rb) = (vec![0u8; n], vec![0u8; n]);
+    let (mut lb, mut rb) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
     let mut replay = ReplayBoard { frames: frames.iter(), current: None, published: Vec::new() };
     let stats = board::run(&mut replay, &mut host, setup.feedforward, &mut lb, &mut rb, u32::MAX)
         .map_err(|e| fail(format!("host loop: {e:?}")))?;

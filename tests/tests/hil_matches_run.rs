@@ -1,9 +1,13 @@
 //! `evorec hil` equals `evorec run`: the same scenario at the firmware's 160x120 frames gives
 //! bit-identical traces whether the tracker runs on the host or in the firmware under QEMU.
+//! Both get the simulated board's RGB565 frames (the cameras' own format); each computes the
+//! hue of the pixels it samples.
 //!
 //! Needs the firmware built (`cd hil-stubs && cargo build --release`) and qemu-system-arm;
 //! `EVOREC_SKIP_HIL=1` skips the test.
 
+use evorec_core::board::CameraController;
+use evorec_core::image::{PixelFormat, Rgb565};
 use evorec_firmware::host::default_firmware_path;
 use evorec_sim::{experiment, hil, scenario::Scenario};
 
@@ -13,6 +17,9 @@ fn hil_trace_equals_host_trace() {
         println!("EVOREC_SKIP_HIL is set: skipped");
         return;
     }
+    // The simulated board (behind `evorec run` and `evorec hil`) delivers RGB565.
+    type SimFormat = <evorec_sim::sim::SimBoard as CameraController<7>>::Format;
+    assert_eq!(SimFormat::NAME, Rgb565::NAME);
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_b_ff.toml");
     let text = std::fs::read_to_string(path).expect("scenario");
     let mut s = Scenario::from_toml_str(&text).expect("valid scenario");

@@ -5,7 +5,8 @@
 use evorec_core::board::CameraController;
 use evorec_core::config::DEFAULT_GRID;
 use evorec_core::fitness::Evaluator;
-use evorec_core::hue::{HueImage, HueLut};
+use evorec_core::hue::HueLut;
+use evorec_core::image::Rgb565Image;
 use evorec_core::kinematics::PA10;
 use evorec_core::model::SurfaceStrips;
 use evorec_sim::experiment::{self, Accuracy};
@@ -67,15 +68,15 @@ fn model_at_the_true_pose_fits_clean_rendered_frames() {
         let lut = HueLut::new(&model.faces().map(|f| f.hue), evorec_core::config::DEFAULT_HUE_TOLERANCE);
         let eval = Evaluator::new(&model, &lut, &rig);
         let mut board = SimBoard::new(World::new(&s).expect("world"));
-        let n = usize::from(s.camera.width) * usize::from(s.camera.height);
+        let n = sim::image_bytes(&s);
         let (mut l, mut r) = (vec![0u8; n], vec![0u8; n]);
         let mut worst = 1.0f32;
         for _ in 0..board.frames() {
             board.next_frame(&mut l, &mut r).expect("frame");
             let truth = board.world().truth();
             let (w, h) = (s.camera.width, s.camera.height);
-            let left = HueImage::new_checked(&l[..], w, h).expect("image");
-            let right = HueImage::new_checked(&r[..], w, h).expect("image");
+            let left = Rgb565Image::new_checked(&l[..], w, h).expect("image");
+            let right = Rgb565Image::new_checked(&r[..], w, h).expect("image");
             let f = eval.evaluate_psi(&truth, &left, &right);
             if f.total < 0.95 {
                 println!("t={:.3} {:?} {:?} truth {:?}", board.world().time(), f.left, f.right, truth);

@@ -20,7 +20,7 @@ mod probe {
     use core::hint::black_box;
 
     use cortex_m_rt::entry;
-    use evorec_core::hue::HueImage;
+    use evorec_core::image::Rgb565Image;
     use evorec_core::tracker::{Estimate, Feedforward, JointSample, StereoFrame};
     use evorec_firmware::protocol::{ReadError, SliceSource, Truncated, read_message};
     use evorec_firmware::selftest;
@@ -50,8 +50,8 @@ mod probe {
     ) -> Option<Estimate> {
         let (w, h) = (black_box(FRAME_WIDTH), black_box(FRAME_HEIGHT));
         let frame = StereoFrame {
-            left: HueImage::new_checked(left, w, h).ok()?,
-            right: HueImage::new_checked(right, w, h).ok()?,
+            left: Rgb565Image::new_checked(left, w, h).ok()?,
+            right: Rgb565Image::new_checked(right, w, h).ok()?,
         };
         tracker.step(&frame, joints, dt, Feedforward::On).ok()
     }

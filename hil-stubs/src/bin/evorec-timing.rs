@@ -3,7 +3,8 @@
 //! `evorec_firmware::timing`) and prints one `GEN` line per generation through semihosting.
 //!
 //! Runs, in order: the default configuration (population 40, 5 points per row) on
-//! `timing::FULL_FRAMES` frames of every kind, then the sweep (populations 20/40/60 × rows of
+//! `timing::FULL_FRAMES` RGB565 frames of every kind (the hue of every sampled pixel is
+//! looked up in the core's `RGB565_HUE` table inside the measured window), then the sweep (populations 20/40/60 × rows of
 //! 4/8/12 points, `Tracker<7, P, G>` monomorphised for each) on `timing::SWEEP_FRAMES` frames
 //! each. Every frame is made on the board before its generation, so the measured window
 //! holds only `Tracker::step_probed` (feedforward on). Before each generation the free stack
@@ -21,7 +22,7 @@
 mod firmware {
     use cortex_m_rt::entry;
     use cortex_m_semihosting::hprintln;
-    use evorec_core::hue::HueImage;
+    use evorec_core::image::{Rgb565, Rgb565Image};
     use evorec_core::model::SurfaceStrips;
     use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker};
     use evorec_firmware::cmsdk_timer::{self, Timer0};
@@ -42,11 +43,15 @@ mod firmware {
     /// (`<evorec_timing::firmware::P40G5 as evorec_timing::firmware::Timed>::generation`): the
     /// static stack analysis (`evorec timing`) uses it as the root of "one generation".
     trait Timed<const P: usize, const G: usize> {
+        /// This configuration's tracker slot inside the shared [`Slot`] (emptied and switched
+        /// to this configuration if it held another one).
+        fn slot(slot: &mut Slot) -> Option<&mut Option<Tracker<7, P, G>>>;
+
         /// One generation, timed: ticks of the whole `step_probed` call, of each phase, and
         /// the fitness; `None` if the tracker refused the input.
         fn generation(
             tracker: &mut Tracker<7, P, G>,
-            frame: &StereoFrame<'_>,
+            frame: &StereoFrame<'_, Rgb565>,
             joints: &JointSample<7>,
             dt_s: f32,
             timer: &Timer0,
@@ -54,16 +59,38 @@ mod firmware {
     }
 
     macro_rules! configs {
-        ($($marker:ident / $slot:ident: $p:literal x $g:literal),* $(,)?) => {
+        ($($marker:ident: $p:literal x $g:literal),* $(,)?) => {
+            /// The tracker of the configuration being measured. Configurations run one after
+            /// the other, so they share one static (the size of the largest tracker) instead
+            /// of one each: with two RGB565 frames the ten would not fit 128 KiB of RAM.
+            enum Slot {
+                /// Before the first run.
+                Empty,
+                $(
+                    /// The tracker of one configuration.
+                    $marker(Option<Tracker<7, $p, $g>>),
+                )*
+            }
+
             $(
                 /// Marker of one configuration.
                 struct $marker;
 
                 impl Timed<$p, $g> for $marker {
+                    fn slot(slot: &mut Slot) -> Option<&mut Option<Tracker<7, $p, $g>>> {
+                        if !matches!(slot, Slot::$marker(_)) {
+                            *slot = Slot::$marker(None);
+                        }
+                        match slot {
+                            Slot::$marker(t) => Some(t),
+                            _ => None,
+                        }
+                    }
+
                     #[inline(never)]
                     fn generation(
                         tracker: &mut Tracker<7, $p, $g>,
-                        frame: &StereoFrame<'_>,
+                        frame: &StereoFrame<'_, Rgb565>,
                         joints: &JointSample<7>,
                         dt_s: f32,
                         timer: &Timer0,
@@ -71,25 +98,25 @@ mod firmware {
                         timed_generation(tracker, frame, joints, dt_s, timer)
                     }
                 }
-
-                /// The tracker of this configuration (a static, as in the firmware).
-                static $slot: ConstStaticCell<Option<Tracker<7, $p, $g>>> = ConstStaticCell::new(None);
             )*
         };
     }
 
     configs!(
-        P20G4 / P20_G4: 20 x 4, P20G8 / P20_G8: 20 x 8, P20G12 / P20_G12: 20 x 12,
-        P40G4 / P40_G4: 40 x 4, P40G5 / P40_G5: 40 x 5, P40G8 / P40_G8: 40 x 8, P40G12 / P40_G12: 40 x 12,
-        P60G4 / P60_G4: 60 x 4, P60G8 / P60_G8: 60 x 8, P60G12 / P60_G12: 60 x 12,
+        P20G4: 20 x 4, P20G8: 20 x 8, P20G12: 20 x 12,
+        P40G4: 40 x 4, P40G5: 40 x 5, P40G8: 40 x 8, P40G12: 40 x 12,
+        P60G4: 60 x 4, P60G8: 60 x 8, P60G12: 60 x 12,
     );
+
+    /// The one tracker slot of all configurations (see [`Slot`]).
+    static SLOT: ConstStaticCell<Slot> = ConstStaticCell::new(Slot::Empty);
 
     /// The body of every [`Timed::generation`]: TIMER0 read before and after
     /// `Tracker::step_probed` (feedforward on), and at each phase boundary by the probe.
     #[inline(always)]
     fn timed_generation<const P: usize, const G: usize>(
         tracker: &mut Tracker<7, P, G>,
-        frame: &StereoFrame<'_>,
+        frame: &StereoFrame<'_, Rgb565>,
         joints: &JointSample<7>,
         dt_s: f32,
         timer: &Timer0,
@@ -102,11 +129,11 @@ mod firmware {
         Some((t0.wrapping_sub(t1), probe.phases()?, estimate.fitness))
     }
 
-    /// Runs `frames` generations of a fresh `Tracker<7, P, G>` built into `slot`; false on
-    /// any failure (printed).
+    /// Runs `frames` generations of a fresh `Tracker<7, P, G>` built into its place in
+    /// `slot`; false on any failure (printed).
     fn run_config<C: Timed<P, G>, const P: usize, const G: usize>(
         name: &str,
-        slot: &mut Option<Tracker<7, P, G>>,
+        slot: &mut Slot,
         frames: u32,
         timer: &Timer0,
         left: &mut [u8],
@@ -118,6 +145,7 @@ mod firmware {
         let Ok(setup) = Setup::from_tracker_config(&config, Feedforward::On, &start, &selftest::SPREAD) else {
             return false;
         };
+        let Some(slot) = C::slot(slot) else { return false };
         let Ok(tracker) = setup.build_tracker_in(slot) else {
             hprintln!("ERROR tracker {}x{} refused", P, G);
             return false;
@@ -139,8 +167,8 @@ mod firmware {
                 return false;
             };
             let (Ok(l), Ok(r)) = (
-                HueImage::new_checked(&*left, FRAME_WIDTH, FRAME_HEIGHT),
-                HueImage::new_checked(&*right, FRAME_WIDTH, FRAME_HEIGHT),
+                Rgb565Image::new_checked(&*left, FRAME_WIDTH, FRAME_HEIGHT),
+                Rgb565Image::new_checked(&*right, FRAME_WIDTH, FRAME_HEIGHT),
             ) else {
                 return false;
             };
@@ -172,18 +200,18 @@ mod firmware {
         const {
             assert!(evorec_core::config::DEFAULT_POPULATION == 40 && evorec_core::config::DEFAULT_GRID == 5);
         };
-        let default = P40_G5.take();
-        let ok = run_config::<P40G5, 40, 5>("full", default, FULL_FRAMES, &timer, left, right)
-            && run_config::<P20G4, 20, 4>("sweep", P20_G4.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P20G8, 20, 8>("sweep", P20_G8.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P20G12, 20, 12>("sweep", P20_G12.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G4, 40, 4>("sweep", P40_G4.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G5, 40, 5>("sweep", default, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G8, 40, 8>("sweep", P40_G8.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G12, 40, 12>("sweep", P40_G12.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P60G4, 60, 4>("sweep", P60_G4.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P60G8, 60, 8>("sweep", P60_G8.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P60G12, 60, 12>("sweep", P60_G12.take(), SWEEP_FRAMES, &timer, left, right);
+        let Some(slot) = SLOT.try_take() else { rt::exit(false) };
+        let ok = run_config::<P40G5, 40, 5>("full", slot, FULL_FRAMES, &timer, left, right)
+            && run_config::<P20G4, 20, 4>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P20G8, 20, 8>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P20G12, 20, 12>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G4, 40, 4>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G5, 40, 5>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G8, 40, 8>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G12, 40, 12>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P60G4, 60, 4>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P60G8, 60, 8>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P60G12, 60, 12>("sweep", slot, SWEEP_FRAMES, &timer, left, right);
         hprintln!("END {}", if ok { "ok" } else { "failed" });
         rt::exit(ok)
     }

@@ -23,7 +23,8 @@
 //! |---------------|-----|-----------------------------------------------------------------|
 //! | `CONFIG`   1  | h→f | [`Setup`], [`CONFIG_LEN`] bytes                                 |
 //! | `FRAME`    2  | h→f | width u16, height u16, joint time u64, q\[7\], q̇\[7\] f32,       |
-//! |               |     | then `w·h` left and `w·h` right hue bytes (row-major)           |
+//! |               |     | then the left and the right image, `w·h` RGB565 pixels each     |
+//! |               |     | (row-major, 2 bytes per pixel, little-endian `rrrrrggggggbbbbb`) |
 //! | `ESTIMATE` 3  | f→h | ψ\[6\] f32, fitness F f32, generation u32                         |
 //! | `END`      4  | h→f | empty: no more frames                                           |
 //! | `ACK`      5  | f→h | status u32 answering CONFIG: 0 = tracker built, else a [`crate::setup::SetupError`] code |
@@ -62,8 +63,14 @@ pub const DOF: usize = PA10_DOF;
 
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
-/// Protocol version carried in every header.
-pub const VERSION: u8 = 1;
+/// Protocol version carried in every header (2: frames carry the sensor's RGB565 pixels;
+/// version 1 carried hue bytes).
+pub const VERSION: u8 = 2;
+/// The pixel format of a frame's images on the link: the camera sensor's own RGB565, so the
+/// hue is computed on the board (see [`evorec_core::image::Rgb565`]).
+pub type LinkFormat = evorec_core::image::Rgb565;
+/// Bytes per pixel of a frame's images on the link.
+pub const BYTES_PER_PIXEL: usize = <LinkFormat as evorec_core::image::PixelFormat>::BYTES_PER_PIXEL;
 /// Header size in bytes.
 pub const HEADER_LEN: usize = 24;
 /// CRC trailer size in bytes.
@@ -282,9 +289,9 @@ pub struct Frame<'a> {
     pub height: u16,
     /// Joint positions and velocities and their sample time.
     pub joints: JointSample<DOF>,
-    /// Left hue image, exactly `width · height` bytes.
+    /// Left RGB565 image, exactly `width · height · `[`BYTES_PER_PIXEL`] bytes.
     pub left: &'a [u8],
-    /// Right hue image, exactly `width · height` bytes.
+    /// Right RGB565 image, exactly `width · height · `[`BYTES_PER_PIXEL`] bytes.
     pub right: &'a [u8],
 }
 

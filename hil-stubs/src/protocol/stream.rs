@@ -5,8 +5,8 @@ use evorec_core::tracker::JointSample;
 
 use super::payload::{Dec, decode_small, encode_payload};
 use super::{
-    CRC_LEN, DOF, DecodeError, Envelope, FRAME_FIXED_LEN, Frame, HEADER_LEN, Header, MAX_SMALL_PAYLOAD, Message,
-    MsgType,
+    BYTES_PER_PIXEL, CRC_LEN, DOF, DecodeError, Envelope, FRAME_FIXED_LEN, Frame, HEADER_LEN, Header,
+    MAX_SMALL_PAYLOAD, Message, MsgType,
 };
 use crate::crc::Crc32;
 
@@ -165,9 +165,9 @@ impl<E: core::error::Error + 'static> core::error::Error for ReadError<E> {
 pub enum WriteError<E> {
     /// The link failed.
     Link(E),
-    /// A frame's image slices are not `width · height` bytes each.
+    /// A frame's image slices are not `width · height · BYTES_PER_PIXEL` bytes each.
     ImageSize {
-        /// `width · height`.
+        /// `width · height · BYTES_PER_PIXEL`.
         expected: usize,
         /// Left image length.
         left: usize,
@@ -181,7 +181,7 @@ impl<E: core::fmt::Display> core::fmt::Display for WriteError<E> {
         match self {
             Self::Link(e) => write!(f, "link: {e}"),
             Self::ImageSize { expected, left, right } => {
-                write!(f, "frame images have {left} and {right} bytes, width·height is {expected}")
+                write!(f, "frame images have {left} and {right} bytes, width·height·{BYTES_PER_PIXEL} is {expected}")
             }
         }
     }
@@ -212,8 +212,8 @@ fn check_trailer<S: ByteSource + ?Sized>(src: &mut S, crc: &Crc32) -> Result<(),
 
 /// Reads one message from `src`.
 ///
-/// A `FRAME`'s images are written into `left[..w·h]` and `right[..w·h]` and the returned
-/// [`Frame`] borrows them; pass empty buffers where no frame is expected (a frame then fails
+/// A `FRAME`'s RGB565 images are written into `left[..2·w·h]` and `right[..2·w·h]` and the
+/// returned [`Frame`] borrows them; pass empty buffers where no frame is expected (a frame then fails
 /// with [`DecodeError::FrameTooLarge`]). The header is checked before any payload is read, the
 /// CRC after the whole message; on an error the buffers' contents are unspecified and the
 /// stream is out of step (the conversation cannot continue).
@@ -240,11 +240,13 @@ pub fn read_message<'b, S: ByteSource + ?Sized>(
         let q = d.f32s::<DOF>();
         let qd = d.f32s::<DOF>();
         let pixels = u32::from(width) * u32::from(height);
-        if u64::from(header.payload_len) != FRAME_FIXED_LEN as u64 + 2 * u64::from(pixels) {
+        let image_bytes = u64::from(pixels) * BYTES_PER_PIXEL as u64;
+        if u64::from(header.payload_len) != FRAME_FIXED_LEN as u64 + 2 * image_bytes {
             return Err(DecodeError::BadLength { kind: MsgType::Frame, len: header.payload_len }.into());
         }
-        let n = pixels as usize;
-        let capacity = left.len().min(right.len());
+        // A frame whose bytes do not fit usize (32-bit target) cannot fit the buffers either.
+        let n = usize::try_from(image_bytes).unwrap_or(usize::MAX);
+        let capacity = left.len().min(right.len()) / BYTES_PER_PIXEL;
         let too_large = DecodeError::FrameTooLarge { pixels, capacity: u32::try_from(capacity).unwrap_or(u32::MAX) };
         let (Some(l), Some(r)) = (left.get_mut(..n), right.get_mut(..n)) else {
             return Err(too_large.into());
@@ -282,8 +284,8 @@ pub fn decode<'b>(
 /// Writes one message to `sink` (header, payload, CRC).
 ///
 /// # Errors
-/// [`WriteError::ImageSize`] for a frame whose images are not `width · height` bytes (nothing is
-/// written then), else [`WriteError::Link`].
+/// [`WriteError::ImageSize`] for a frame whose images are not `width · height ·`
+/// [`BYTES_PER_PIXEL`] bytes (nothing is written then), else [`WriteError::Link`].
 pub fn write_message<S: ByteSink + ?Sized>(sink: &mut S, env: &Envelope<'_>) -> Result<(), WriteError<S::Error>> {
     let mut small = [0u8; MAX_SMALL_PAYLOAD];
     let (len, images) = encode_payload(&env.message, &mut small);
@@ -292,7 +294,7 @@ pub fn write_message<S: ByteSink + ?Sized>(sink: &mut S, env: &Envelope<'_>) -> 
         None => (&[], &[]),
     };
     if let Message::Frame(f) = &env.message {
-        let expected = usize::from(f.width) * usize::from(f.height);
+        let expected = usize::from(f.width) * usize::from(f.height) * BYTES_PER_PIXEL;
         if left.len() != expected || right.len() != expected {
             return Err(WriteError::ImageSize { expected, left: left.len(), right: right.len() });
         }
@@ -317,7 +319,7 @@ pub fn write_message<S: ByteSink + ?Sized>(sink: &mut S, env: &Envelope<'_>) -> 
 /// The encoded size of a message (header, payload and CRC).
 pub fn encoded_len(message: &Message<'_>) -> usize {
     let payload = match message {
-        Message::Frame(f) => FRAME_FIXED_LEN + 2 * usize::from(f.width) * usize::from(f.height),
+        Message::Frame(f) => FRAME_FIXED_LEN + 2 * BYTES_PER_PIXEL * usize::from(f.width) * usize::from(f.height),
         m => m.kind().fixed_payload_len().unwrap_or(0),
     };
     HEADER_LEN + payload + CRC_LEN

@@ -99,8 +99,9 @@ fn nan_bits_cross_unchanged() {
     assert_eq!(e.fitness.to_bits(), 0xFFA0_0001);
 }
 
+/// Two RGB565 images of `w × h` pixels (2 bytes each).
 fn frame_bytes(w: u16, h: u16) -> (Vec<u8>, Vec<u8>) {
-    let n = usize::from(w) * usize::from(h);
+    let n = usize::from(w) * usize::from(h) * BYTES_PER_PIXEL;
     ((0..n).map(|i| (i % 181) as u8).collect(), (0..n).map(|i| (i % 7) as u8 + 60).collect())
 }
 
@@ -117,8 +118,8 @@ fn frame_round_trip_into_receive_buffers() {
         message: Message::Frame(Frame { width: 16, height: 9, joints: joints(), left: &l, right: &r }),
     };
     let bytes = encode(&env);
-    assert_eq!(bytes.len(), HEADER_LEN + FRAME_FIXED_LEN + 2 * 144 + CRC_LEN);
-    let (mut lb, mut rb) = ([0u8; 200], [0u8; 200]);
+    assert_eq!(bytes.len(), HEADER_LEN + FRAME_FIXED_LEN + 2 * 2 * 144 + CRC_LEN);
+    let (mut lb, mut rb) = ([0u8; 400], [0u8; 400]);
     let (back, used) = decode(&bytes, &mut lb, &mut rb).unwrap();
     assert_eq!(used, bytes.len());
     assert_eq!(back, env);
@@ -129,10 +130,17 @@ fn frame_larger_than_buffers_is_refused() {
     let (l, r) = frame_bytes(16, 9);
     let env = Envelope::bare(Message::Frame(Frame { width: 16, height: 9, joints: joints(), left: &l, right: &r }));
     let bytes = encode(&env);
-    let (mut lb, mut rb) = ([0u8; 143], [0u8; 200]);
+    // 287 bytes hold 143 RGB565 pixels (and a half).
+    let (mut lb, mut rb) = ([0u8; 287], [0u8; 400]);
     assert_eq!(
         decode(&bytes, &mut lb, &mut rb).unwrap_err(),
         ReadError::Decode(DecodeError::FrameTooLarge { pixels: 144, capacity: 143 })
+    );
+    // Hue-sized buffers (1 byte per pixel, the protocol before version 2) are too small.
+    let (mut lb, mut rb) = ([0u8; 144], [0u8; 144]);
+    assert_eq!(
+        decode(&bytes, &mut lb, &mut rb).unwrap_err(),
+        ReadError::Decode(DecodeError::FrameTooLarge { pixels: 144, capacity: 72 })
     );
 }
 
@@ -142,7 +150,7 @@ fn frame_with_wrong_image_slices_is_not_written() {
     let env = Envelope::bare(Message::Frame(Frame { width: 4, height: 5, joints: joints(), left: &l, right: &r }));
     let mut buf = [0u8; 512];
     let mut sink = SliceSink::new(&mut buf);
-    assert!(matches!(write_message(&mut sink, &env), Err(WriteError::ImageSize { expected: 20, .. })));
+    assert!(matches!(write_message(&mut sink, &env), Err(WriteError::ImageSize { expected: 40, .. })));
     assert!(sink.written().is_empty());
 }
 
@@ -153,8 +161,8 @@ fn bad_magic_version_type_and_length_are_rejected() {
     b[0] = b'X';
     assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadMagic(*b"XVRC")));
     let mut b = good.clone();
-    b[4] = 2;
-    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadVersion(2)));
+    b[4] = 1; // version 1: hue frames
+    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadVersion(1)));
     let mut b = good.clone();
     b[5] = 99;
     assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::UnknownType(99)));
@@ -186,7 +194,7 @@ fn truncated_input_is_rejected() {
     let env = Envelope::bare(Message::Frame(Frame { width: 8, height: 8, joints: joints(), left: &l, right: &r }));
     let good = encode(&env);
     for cut in [0, 1, HEADER_LEN - 1, HEADER_LEN, HEADER_LEN + 30, good.len() - 5, good.len() - 1] {
-        let (mut lb, mut rb) = ([0u8; 64], [0u8; 64]);
+        let (mut lb, mut rb) = ([0u8; 128], [0u8; 128]);
         assert_eq!(decode(&good[..cut], &mut lb, &mut rb).unwrap_err(), ReadError::Link(Truncated), "cut {cut}");
     }
 }
@@ -251,7 +259,7 @@ mod prop {
             w in 1u16..24, h in 1u16..24, seed in any::<u8>(),
             q in proptest::array::uniform7(any_f32()), time in any::<u64>(),
         ) {
-            let n = usize::from(w) * usize::from(h);
+            let n = usize::from(w) * usize::from(h) * BYTES_PER_PIXEL;
             let l: Vec<u8> = (0..n).map(|i| (i as u8).wrapping_mul(seed)).collect();
             let r: Vec<u8> = (0..n).map(|i| (i as u8) ^ seed).collect();
             let joints = JointSample { q, qd: q, time_us: time };

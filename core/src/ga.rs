@@ -299,6 +299,17 @@ impl<const P: usize> Ga<P> {
         self.fitness = [0.0; P];
     }
 
+    /// Replaces individual `index` by `psi` clamped into `space` (seeded immigrants; an index
+    /// out of range is ignored). Its stored fitness is cleared to 0 until the next evaluation.
+    pub fn set_individual(&mut self, index: usize, psi: Psi, space: &SearchSpace) {
+        if let (Some(ind), Some(f)) = (self.pop.get_mut(index), self.fitness.get_mut(index)) {
+            let mut p = psi;
+            space.clamp(&mut p);
+            *ind = p;
+            *f = 0.0;
+        }
+    }
+
     /// Applies `f` to every individual, then clamps it into `space` (used for the
     /// feedforward shift, eq. 36).
     pub fn shift_all(&mut self, space: &SearchSpace, mut f: impl FnMut(&mut Psi)) {

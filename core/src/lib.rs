@@ -18,6 +18,7 @@
 //! - [`model`]: the surface-strips block model; [`fitness`]: eq. 34–35.
 //! - [`ga`]: the 1-step GA; [`kinematics`]: DH chains, the PA-10, Jacobians;
 //!   [`feedforward`]: eq. 15–25.
+//! - [`status`]: searching / tracking / lost; [`acquire`]: the colour-blob pose seed.
 //! - [`tracker`]: one generation per frame pair; [`board`]: the camera-controller trait and
 //!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.
 //!
@@ -70,6 +71,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod acquire;
 pub mod board;
 pub mod camera;
 pub mod config;
@@ -82,6 +84,7 @@ pub mod math;
 pub mod model;
 pub mod pose;
 pub mod quat;
+pub mod status;
 pub mod synth;
 pub mod tracker;
 

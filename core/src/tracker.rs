@@ -8,6 +8,7 @@ use nalgebra::Isometry3;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
+use crate::acquire::{self, AcquireConfig, AcquireError, HueBlobs};
 use crate::camera::{Pinhole, StereoRig};
 use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, DEFAULT_POPULATION, HUE_UNITS, PA10_DOF};
 use crate::feedforward;
@@ -17,6 +18,7 @@ use crate::hue::{HueImage, HueLut};
 use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
+use crate::status::{Status, StatusConfig, StatusError, StatusMonitor};
 
 /// Whether the arm's motion is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -56,6 +58,8 @@ pub struct Estimate {
     pub fitness: f32,
     /// Generation number (1 after the first frame).
     pub generation: u32,
+    /// Whether the tracker has the block (decided after this generation's evaluation).
+    pub status: Status,
 }
 
 /// Why a tracker configuration was rejected.
@@ -72,6 +76,10 @@ pub enum ConfigError {
     MaxDt,
     /// The flange-to-camera transform is not finite.
     NonFiniteTransform,
+    /// Acquisition settings.
+    Acquire(AcquireError),
+    /// Status thresholds.
+    Status(StatusError),
 }
 
 impl core::fmt::Display for ConfigError {
@@ -82,6 +90,8 @@ impl core::fmt::Display for ConfigError {
             Self::HueTolerance => f.write_str("hue tolerance must be below 90 units"),
             Self::MaxDt => f.write_str("max_dt_s must be finite and positive"),
             Self::NonFiniteTransform => f.write_str("flange-to-camera transform is not finite"),
+            Self::Acquire(e) => write!(f, "acquisition: {e}"),
+            Self::Status(e) => write!(f, "status: {e}"),
         }
     }
 }
@@ -194,11 +204,15 @@ pub struct TrackerConfig<const DOF: usize> {
     pub seed: u64,
     /// Largest accepted time step between frames (s); larger steps are refused.
     pub max_dt_s: f32,
+    /// Acquisition from the colour blobs ([`crate::acquire`]).
+    pub acquire: AcquireConfig,
+    /// Status thresholds ([`crate::status`]).
+    pub status: StatusConfig,
 }
 
 impl TrackerConfig<PA10_DOF> {
-    /// A PA-10 configuration with default GA settings, hue tolerance, seed 0 and
-    /// `max_dt_s = 0.5`.
+    /// A PA-10 configuration with default GA settings, hue tolerance, acquisition and status
+    /// thresholds, seed 0 and `max_dt_s = 0.5`.
     pub fn pa10(rig: StereoRig, block: Block, flange_to_camera: Isometry3<f32>, search: SearchSpace) -> Self {
         Self {
             rig,
@@ -210,6 +224,8 @@ impl TrackerConfig<PA10_DOF> {
             hue_tolerance: DEFAULT_HUE_TOLERANCE,
             seed: 0,
             max_dt_s: 0.5,
+            acquire: AcquireConfig::DEFAULT,
+            status: StatusConfig::DEFAULT,
         }
     }
 }
@@ -239,6 +255,7 @@ pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = DEFAULT_POPULAT
     ga: Ga<P>,
     rng: Xoshiro128PlusPlus,
     generation: u32,
+    monitor: StatusMonitor,
 }
 
 impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
@@ -255,6 +272,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         if !config.max_dt_s.is_finite() || config.max_dt_s <= 0.0 {
             return Err(ConfigError::MaxDt);
         }
+        config.acquire.validate(P).map_err(ConfigError::Acquire)?;
+        config.status.validate().map_err(ConfigError::Status)?;
         let ft = &config.flange_to_camera;
         if !ft.translation.vector.iter().chain(ft.rotation.coords.iter()).all(|v| v.is_finite()) {
             return Err(ConfigError::NonFiniteTransform);
@@ -264,7 +283,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
         let mut ga = Ga::new(Psi::IDENTITY);
         ga.reset_uniform(&config.search, &mut rng);
-        Ok(Self { config, model, lut, ga, rng, generation: 0 })
+        Ok(Self { config, model, lut, ga, rng, generation: 0, monitor: StatusMonitor::new(Status::Searching) })
     }
 
     /// The configuration.
@@ -287,8 +306,21 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.generation
     }
 
+    /// The status after the last generation ([`Status::Searching`] after [`Tracker::new`]).
+    pub fn status(&self) -> Status {
+        self.monitor.status()
+    }
+
+    /// Puts the tracker in `status` with cleared status counters, leaving the population as it
+    /// is. Meant for tests and for measuring the worst-case work of each status on a board
+    /// (`evorec timing`); the tracker decides its status itself otherwise.
+    pub fn set_status(&mut self, status: Status) {
+        self.monitor = StatusMonitor::new(status);
+    }
+
     /// Re-seeds the population around a known pose (the paper starts with the true pose
-    /// known): the elite at `psi`, the others within `±spread` per gene.
+    /// known): the elite at `psi`, the others within `±spread` per gene. The status becomes
+    /// [`Status::Tracking`]: the pose is known.
     ///
     /// # Errors
     /// [`StepError::Pose`] if `psi` is invalid or `spread` not finite (state unchanged).
@@ -298,12 +330,25 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             return Err(StepError::Pose(PoseError::NonFinite));
         }
         self.ga.reset_around(psi, spread, &self.config.search, &mut self.rng);
+        self.monitor = StatusMonitor::new(Status::Tracking);
         Ok(())
     }
 
-    /// Re-seeds the population uniformly over the search space.
+    /// Re-seeds the population uniformly over the search space; the status becomes
+    /// [`Status::Searching`].
     pub fn reset_uniform(&mut self) {
         self.ga.reset_uniform(&self.config.search, &mut self.rng);
+        self.monitor = StatusMonitor::new(Status::Searching);
+    }
+
+    /// The colour blobs of a frame pair as the acquisition scan sees them (left, right).
+    ///
+    /// # Errors
+    /// [`StepError::ImageSize`].
+    pub fn blobs_of(&self, frame: &StereoFrame<'_>) -> Result<(HueBlobs, HueBlobs), StepError> {
+        self.check_frame(frame)?;
+        let stride = self.config.acquire.scan_stride;
+        Ok((acquire::scan(&frame.left, &self.lut, stride), acquire::scan(&frame.right, &self.lut, stride)))
     }
 
     /// `F(ψ)` of any pose on a frame pair (diagnostics; no state change).
@@ -342,8 +387,13 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
 
     /// One generation: with [`Feedforward::On`] every individual is first moved by
     /// `J_m(q) q̇ · dt` (eq. 36), then the population is evaluated on `frame`, the best is the
-    /// estimate, and the next population is bred. `dt_s` is the time since the previous frame
-    /// (0 for the first). `probe` is told when each [`Phase`] begins.
+    /// estimate, its fitness updates the [`Status`], and the next population is bred. While
+    /// the status is not [`Status::Tracking`], the last
+    /// [`AcquireConfig::seed_immigrants`] children are replaced by poses seeded from the
+    /// colour blobs of the frame ([`crate::acquire`]; the scan runs in every status, inside
+    /// the evaluation phase, so the work per generation is bounded the same way in all of
+    /// them). `dt_s` is the time since the previous frame (0 for the first). `probe` is told
+    /// when each [`Phase`] begins.
     ///
     /// # Errors
     /// [`StepError::ImageSize`], [`StepError::NonFiniteJoint`] or [`StepError::BadDt`]; the
@@ -375,14 +425,39 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
 
         probe.mark(Phase::Evaluate);
+        let stride = self.config.acquire.scan_stride;
+        let (left, right) =
+            (acquire::scan(&frame.left, &self.lut, stride), acquire::scan(&frame.right, &self.lut, stride));
         let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
         let best: Best = self.ga.evaluate(|psi| eval.evaluate_psi(psi, &frame.left, &frame.right).total);
+        let status = self.monitor.update(best.fitness, &self.config.status);
 
         probe.mark(Phase::Breed);
         self.ga.breed(&best, &self.config.ga, &self.config.search, &mut self.rng);
+        if status != Status::Tracking {
+            self.seed_from_blobs(&left, &right);
+        }
         self.generation = self.generation.wrapping_add(1);
         probe.mark(Phase::Done);
 
-        Ok(Estimate { psi: best.psi, fitness: best.fitness, generation: self.generation })
+        Ok(Estimate { psi: best.psi, fitness: best.fitness, generation: self.generation, status })
+    }
+
+    /// Replaces the last [`AcquireConfig::seed_immigrants`] individuals (never the elite) by
+    /// poses seeded from the blobs; does nothing when the blobs give no pose.
+    fn seed_from_blobs(&mut self, left: &HueBlobs, right: &HueBlobs) {
+        let cfg = &self.config.acquire;
+        let half = self.model.half_size();
+        let Some(seed) =
+            acquire::seed_pose(&self.config.rig, &[half.x, half.y, half.z], left, right, cfg.min_face_hits)
+        else {
+            return;
+        };
+        let n = cfg.seed_immigrants.min(P - 1);
+        for k in 0..n {
+            if let Some(psi) = acquire::seed_immigrant(&seed, k, cfg, &mut self.rng) {
+                self.ga.set_individual(P - n + k, psi, &self.config.search);
+            }
+        }
     }
 }

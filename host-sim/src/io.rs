@@ -18,6 +18,8 @@ pub fn trace_header() -> Vec<String> {
         }
     }
     h.push("F".to_owned());
+    h.push("status".to_owned());
+    h.push("hidden".to_owned());
     h
 }
 
@@ -29,7 +31,7 @@ pub fn write_trace(path: &Path, rows: &[TraceRow]) -> Result<()> {
     let mut w = csv::Writer::from_path(path).with_context(|| format!("creating {}", path.display()))?;
     w.write_record(trace_header())?;
     for r in rows {
-        let mut rec: Vec<String> = Vec::with_capacity(34);
+        let mut rec: Vec<String> = Vec::with_capacity(36);
         rec.push(format!("{:.3}", r.t));
         rec.extend(r.q.iter().chain(r.qd.iter()).map(|v| format!("{v:.6}")));
         for psi in [&r.truth, &r.estimate] {
@@ -37,6 +39,8 @@ pub fn write_trace(path: &Path, rows: &[TraceRow]) -> Result<()> {
             rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
         }
         rec.push(format!("{:.5}", r.fitness));
+        rec.push(r.status.as_str().to_owned());
+        rec.push(u8::from(r.hidden).to_string());
         w.write_record(&rec)?;
     }
     w.flush()?;

@@ -6,14 +6,17 @@
 //! world — the same trait and loop as on the firmware —, runs and their summaries
 //! ([`experiment`]), the paper's experiment grid ([`paper`]), single-frame rendering
 //! ([`frame`]), the same runs with the tracker in the firmware on QEMU ([`hil`]), output
-//! files ([`io`]) and plots ([`plot`]).
+//! files ([`io`]) and plots ([`plot`]); unknown starts and occlusions ([`occlusion`]) and the
+//! acquisition statistics ([`acquire`]).
 
+pub mod acquire;
 pub mod arm;
 pub mod experiment;
 pub mod frame;
 pub mod hil;
 pub mod io;
 pub mod motion;
+pub mod occlusion;
 pub mod paper;
 pub mod plot;
 pub mod render;

@@ -26,10 +26,10 @@ pub const PANEL_PLOT_SIZE: (u32, u32) = (1000, 900);
 pub const FITNESS_PLOT_SIZE: (u32, u32) = (1000, 380);
 
 /// Font family name under which the embedded font is registered with plotters.
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 /// Registers the embedded DejaVu Sans with plotters once per process.
-fn ensure_font() -> anyhow::Result<()> {
+pub(crate) fn ensure_font() -> anyhow::Result<()> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         let normal = plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular()).is_ok();

@@ -39,6 +39,8 @@
 //! [ga]
 //! population = 40          # one of SUPPORTED_POPULATIONS
 //! ```
+//! Acquisition keys (`[tracker] initial`, `[target] placement`, `[[occlusion]]`) are
+//! described in [`crate::occlusion`].
 //! All tables and all keys except `seed`, `duration_s` and `method` are optional; the values
 //! shown are the defaults (`robot.motion` defaults to `"static"`).
 
@@ -48,6 +50,7 @@ use serde::Serialize;
 use toml::{Table, Value};
 
 use crate::motion::MotionKind;
+use crate::occlusion::{self, Initial, Occlusions, Placement};
 
 /// Population sizes the core is compiled for; `ga.population` must be one of them.
 pub const SUPPORTED_POPULATIONS: &[usize] = &[40];
@@ -180,6 +183,8 @@ pub struct TargetConfig {
     pub omega_rad_s: f64,
     /// Initial yaw about world z (degrees).
     pub yaw0_deg: f64,
+    /// Where the block stands: fixed (`distance_m`, `yaw0_deg`) or a random pose.
+    pub placement: Placement,
 }
 
 impl Default for TargetConfig {
@@ -191,6 +196,7 @@ impl Default for TargetConfig {
             amplitude_deg: 15.0,
             omega_rad_s: 0.125,
             yaw0_deg: 25.0,
+            placement: Placement::Fixed,
         }
     }
 }
@@ -227,6 +233,13 @@ impl Default for GaConfig {
     }
 }
 
+/// `[tracker]`: how the tracker starts.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct TrackerStart {
+    /// Around the true pose, or unknown.
+    pub initial: Initial,
+}
+
 /// One validated experiment description. See the module documentation for the file format.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Scenario {
@@ -246,6 +259,11 @@ pub struct Scenario {
     pub robot: RobotConfig,
     /// GA settings.
     pub ga: GaConfig,
+    /// How the tracker starts.
+    pub tracker: TrackerStart,
+    /// Times when the block is hidden.
+    #[serde(skip_serializing_if = "Occlusions::is_empty")]
+    pub occlusion: Occlusions,
 }
 
 impl Scenario {
@@ -260,6 +278,8 @@ impl Scenario {
             target: TargetConfig::default(),
             robot: RobotConfig::default(),
             ga: GaConfig::default(),
+            tracker: TrackerStart::default(),
+            occlusion: Occlusions::default(),
         }
     }
 
@@ -274,12 +294,26 @@ impl Scenario {
         let top = Section::new(
             "",
             &table,
-            &["seed", "duration_s", "frame_period_s", "method", "camera", "target", "robot", "ga"],
+            &[
+                "seed",
+                "duration_s",
+                "frame_period_s",
+                "method",
+                "camera",
+                "target",
+                "robot",
+                "ga",
+                "tracker",
+                "occlusion",
+            ],
         )?;
         let camera = parse_camera(&top.subtable("camera")?)?;
         let target = parse_target(&top.subtable("target")?)?;
         let robot = parse_robot(&top.subtable("robot")?)?;
         let ga = parse_ga(&top.subtable("ga")?)?;
+        let tracker_section = top.subtable("tracker")?;
+        tracker_section.check_keys(&["initial"])?;
+        let tracker = TrackerStart { initial: occlusion::parse_initial(tracker_section.get("initial"))? };
 
         let seed = top.int("seed", None)?;
         let seed = u64::try_from(seed).map_err(|_| invalid("seed", format!("must be ≥ 0, got {seed}")))?;
@@ -298,7 +332,8 @@ impl Scenario {
             "ff" => Method::Ff,
             other => return Err(invalid("method", format!("expected \"ga\" or \"ff\", got \"{other}\""))),
         };
-        Ok(Self { seed, duration_s, frame_period_s, method, camera, target, robot, ga })
+        let occlusion = occlusion::parse_occlusions(top.get("occlusion"), duration_s)?;
+        Ok(Self { seed, duration_s, frame_period_s, method, camera, target, robot, ga, tracker, occlusion })
     }
 
     /// Reads, parses and validates a scenario file.
@@ -363,7 +398,7 @@ fn parse_camera(s: &Section<'_>) -> Result<CameraConfig> {
 }
 
 fn parse_target(s: &Section<'_>) -> Result<TargetConfig> {
-    s.check_keys(&["size_m", "face_hues_deg", "distance_m", "amplitude_deg", "omega_rad_s", "yaw0_deg"])?;
+    s.check_keys(&["size_m", "face_hues_deg", "distance_m", "amplitude_deg", "omega_rad_s", "yaw0_deg", "placement"])?;
     let d = TargetConfig::default();
     let size_m: [f64; 3] = s.floats("size_m", d.size_m)?;
     for (i, x) in size_m.iter().enumerate() {
@@ -390,7 +425,8 @@ fn parse_target(s: &Section<'_>) -> Result<TargetConfig> {
     let amplitude_deg = s.float_in("amplitude_deg", d.amplitude_deg, Bound::Closed(0.0), 180.0)?;
     let omega_rad_s = s.float_in("omega_rad_s", d.omega_rad_s, Bound::Closed(0.0), 10.0)?;
     let yaw0_deg = s.float_in("yaw0_deg", d.yaw0_deg, Bound::Closed(-180.0), 180.0)?;
-    Ok(TargetConfig { size_m, face_hues_deg, distance_m, amplitude_deg, omega_rad_s, yaw0_deg })
+    let placement = occlusion::parse_placement(s.get("placement"))?;
+    Ok(TargetConfig { size_m, face_hues_deg, distance_m, amplitude_deg, omega_rad_s, yaw0_deg, placement })
 }
 
 fn parse_robot(s: &Section<'_>) -> Result<RobotConfig> {

@@ -11,6 +11,7 @@ use evorec_core::board::{CameraController, Error as BoardError, ErrorKind, Error
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
+use evorec_core::status::Status;
 use evorec_core::tracker::{Estimate, JointSample};
 use nalgebra::Isometry3;
 use rand_core::SeedableRng;
@@ -18,6 +19,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::arm::{self, ArmSim, CONTROL_PERIOD_S, DOF};
 use crate::motion::{FlangeTrajectory, TargetMotion};
+use crate::occlusion::{self, OcclusionKind};
 use crate::render::{self, AntiAlias, RenderOptions, StereoImages};
 use crate::scenario::Scenario;
 
@@ -125,10 +127,31 @@ impl World {
         Psi::from_isometry(&iso)
     }
 
-    /// Renders both cameras' RGB images at the current time.
+    /// The occlusion hiding the block now, if any (`[[occlusion]]` of the scenario).
+    pub fn occlusion(&self) -> Option<OcclusionKind> {
+        self.scenario.occlusion.at(self.arm.time())
+    }
+
+    /// Renders both cameras' RGB images at the current time, with the scenario's occlusions:
+    /// a removed block is not drawn, an occluder is painted over the block's image.
     pub fn render(&mut self) -> StereoImages {
         let pose: Isometry3<f32> = self.target_in_camera().cast();
-        render::render_stereo(&self.rig, &pose, &self.block, &self.render, &mut self.rng)
+        match self.occlusion() {
+            None => render::render_stereo(&self.rig, &pose, &self.block, &self.render, &mut self.rng),
+            Some(OcclusionKind::Removed) => {
+                // A block behind the cameras renders as the background alone.
+                let gone = Isometry3::translation(0.0, 0.0, -10.0);
+                render::render_stereo(&self.rig, &gone, &self.block, &self.render, &mut self.rng)
+            }
+            Some(OcclusionKind::Occluder) => {
+                let mut images = render::render_stereo(&self.rig, &pose, &self.block, &self.render, &mut self.rng);
+                let right = occlusion::corners_in(&pose, &self.block);
+                let left = occlusion::corners_in(&(self.rig.left_from_right * pose), &self.block);
+                occlusion::paint_occluder(&mut images.right, &self.rig.right, &right);
+                occlusion::paint_occluder(&mut images.left, &self.rig.left, &left);
+                images
+            }
+        }
     }
 }
 
@@ -147,6 +170,10 @@ pub struct TraceRow {
     pub estimate: Psi,
     /// Its fitness.
     pub fitness: f32,
+    /// The tracker's status.
+    pub status: Status,
+    /// The block was hidden (occluded or removed) in this frame.
+    pub hidden: bool,
 }
 
 /// Why the simulated board stopped.
@@ -172,7 +199,7 @@ pub struct SimBoard {
     world: World,
     frames: u32,
     next: u32,
-    current: Option<(f64, Psi, JointSample<DOF>)>,
+    current: Option<(f64, Psi, JointSample<DOF>, bool)>,
     rows: Vec<TraceRow>,
 }
 
@@ -224,7 +251,7 @@ impl CameraController<DOF> for SimBoard {
         render::hue_into(&images.left, left);
         render::hue_into(&images.right, right);
         let joints = self.world.arm().joint_sample();
-        self.current = Some((t, self.world.truth(), joints));
+        self.current = Some((t, self.world.truth(), joints, self.world.occlusion().is_some()));
         let info = FrameInfo {
             sequence: self.next,
             capture_time_us: (t * 1e6).round() as u64,
@@ -240,7 +267,7 @@ impl CameraController<DOF> for SimBoard {
     }
 
     fn publish(&mut self, _frame: &FrameInfo, estimate: &Estimate) -> Result<(), SimError> {
-        if let Some((t, truth, joints)) = self.current.take() {
+        if let Some((t, truth, joints, hidden)) = self.current.take() {
             self.rows.push(TraceRow {
                 t,
                 q: joints.q,
@@ -248,6 +275,8 @@ impl CameraController<DOF> for SimBoard {
                 truth,
                 estimate: estimate.psi,
                 fitness: estimate.fitness,
+                status: estimate.status,
+                hidden,
             });
         }
         Ok(())

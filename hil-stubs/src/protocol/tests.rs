@@ -49,6 +49,7 @@ fn small_messages() -> Vec<Envelope<'static>> {
                 psi: Psi::new([0.01, -0.02, 0.7], [f32::MIN_POSITIVE, -0.0, 1.0e-30]),
                 fitness: 0.875,
                 generation: 42,
+                status: evorec_core::status::Status::Lost,
             }),
         },
         Envelope::bare(Message::End),
@@ -89,6 +90,7 @@ fn nan_bits_cross_unchanged() {
         psi: Psi::new([odd_nan, 0.0, 0.0], [0.0; 3]),
         fitness: f32::from_bits(0xFFA0_0001),
         generation: 1,
+        status: evorec_core::status::Status::Searching,
     }));
     let bytes = encode(&env);
     let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
@@ -233,7 +235,7 @@ mod prop {
             let env = Envelope {
                 sequence,
                 capture_time_us: time,
-                message: Message::Estimate(Estimate { psi: Psi(psi), fitness, generation }),
+                message: Message::Estimate(Estimate { psi: Psi(psi), fitness, generation, status: evorec_core::status::Status::Tracking }),
             };
             let bytes = encode(&env);
             let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();

@@ -35,7 +35,7 @@
 use nalgebra::{Matrix3, Point2, Vector3};
 use rand_core::Rng;
 
-use crate::camera::StereoRig;
+use crate::camera::{Pinhole, StereoRig};
 use crate::config::{DEFAULT_SCAN_STRIDE, DEFAULT_SEED_IMMIGRANTS};
 use crate::ga::unit_f32;
 use crate::hue::{HueImage, HueLut};
@@ -332,6 +332,163 @@ pub fn seed_pose(rig: &StereoRig, half: &[f32; 3], left: &HueBlobs, right: &HueB
         return None;
     }
     Some(Seed { centre, rotation, faces, free_axis })
+}
+
+/// Gauss–Newton iterations of [`refine`].
+pub const REFINE_ITERATIONS: usize = 6;
+
+/// Area (px²) and area centroid of the image of face `k` of a block with half sizes `half`
+/// at `(r, t)` in `cam`'s frame, or zero area when the face is turned away; `None` when a
+/// corner is behind the camera.
+fn face_image(
+    cam: &Pinhole,
+    r: &Matrix3<f32>,
+    t: &Vector3<f32>,
+    half: &[f32; 3],
+    k: usize,
+) -> Option<(f32, Point2<f32>)> {
+    let a = k % 3;
+    let sign = if k < 3 { 1.0 } else { -1.0 };
+    let n = r.column(a) * sign;
+    let centre = t + n * half.get(a).copied().unwrap_or(0.0);
+    if n.dot(&centre) >= 0.0 {
+        return Some((0.0, Point2::origin()));
+    }
+    let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+    let eb = r.column(b) * half.get(b).copied().unwrap_or(0.0);
+    let ec = r.column(c) * half.get(c).copied().unwrap_or(0.0);
+    let mut p = [Point2::origin(); 4];
+    for (q, (sb, sc)) in p.iter_mut().zip([(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]) {
+        let x = centre + eb * sb + ec * sc;
+        if !(x.z > 1e-3) {
+            return None;
+        }
+        *q = Point2::new(cam.fx() * x.x / x.z + cam.cx(), cam.fy() * x.y / x.z + cam.cy());
+    }
+    let (mut area2, mut cx, mut cy) = (0.0f32, 0.0f32, 0.0f32);
+    for i in 0..4 {
+        let (p0, p1) = (p[i], p[(i + 1) % 4]);
+        let cross = p0.x * p1.y - p1.x * p0.y;
+        area2 += cross;
+        cx += (p0.x + p1.x) * cross;
+        cy += (p0.y + p1.y) * cross;
+    }
+    if area2.abs() < 1e-6 {
+        return Some((0.0, Point2::origin()));
+    }
+    Some((0.5 * area2.abs(), Point2::new(cx / (3.0 * area2), cy / (3.0 * area2))))
+}
+
+/// Number of residuals of [`residuals`]: per camera and axis, the centroid (2) and the
+/// square root of the area (1).
+const RESIDUALS: usize = 2 * 3 * 3;
+
+/// Measured minus predicted face images of the pose `(r, t)` in `Σ_CR`: centroid
+/// differences (px) for axes seen in that image, square-root-of-area differences (px) for all.
+fn residuals(
+    rig: &StereoRig,
+    half: &[f32; 3],
+    blobs: [&HueBlobs; 2],
+    min_hits: u32,
+    pixel_area: f32,
+    r: &Matrix3<f32>,
+    t: &Vector3<f32>,
+) -> Option<[f32; RESIDUALS]> {
+    let lr = quat::to_rotation_matrix(&rig.left_from_right.rotation);
+    let poses = [(*r, *t, &rig.right), (lr * r, lr * t + rig.left_from_right.translation.vector, &rig.left)];
+    let mut out = [0.0f32; RESIDUALS];
+    let mut slots = out.iter_mut();
+    for ((rc, tc, cam), blob) in poses.iter().zip(blobs) {
+        for a in 0..3 {
+            // The face of the pair that faces the camera (the other one has zero area).
+            let (fa, fc) = face_image(cam, rc, tc, half, a)?;
+            let (fb, fd) = face_image(cam, rc, tc, half, a + 3)?;
+            let (area, centroid) = if fa >= fb { (fa, fc) } else { (fb, fd) };
+            let hits = blob.count.get(a).copied().unwrap_or(0);
+            let measured = math::sqrt(hits as f32 * pixel_area);
+            let (du, dv) = match blob.centroid(a) {
+                Some(m) if hits >= min_hits && area > 0.0 => (m.x - centroid.x, m.y - centroid.y),
+                _ => (0.0, 0.0),
+            };
+            for v in [du, dv, measured - math::sqrt(area)] {
+                if let Some(slot) = slots.next() {
+                    *slot = v;
+                }
+            }
+        }
+    }
+    Some(out)
+}
+
+fn cost(r: &[f32; RESIDUALS]) -> f32 {
+    r.iter().map(|x| x * x).sum()
+}
+
+/// The pose `(r, t)` moved by `d = [δt; δθ]` (`δθ` a rotation vector applied on the left).
+fn moved(r: &Matrix3<f32>, t: &Vector3<f32>, d: &[f32; 6]) -> (Matrix3<f32>, Vector3<f32>) {
+    let w = Vector3::new(d[3], d[4], d[5]) * 0.5;
+    let n = math::sqrt(1.0 + w.dot(&w));
+    let q = nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(1.0 / n, w.x / n, w.y / n, w.z / n));
+    (quat::to_rotation_matrix(&q) * r, t + Vector3::new(d[0], d[1], d[2]))
+}
+
+/// Refines a seed by damped Gauss–Newton on the face images: the pose whose faces project
+/// with the measured centroids and areas in both images (the solver's triangulated face
+/// centroids are biased by perspective, a few millimetres and degrees). Fixed work:
+/// [`REFINE_ITERATIONS`] iterations of 7 residual evaluations (numeric Jacobian) and one
+/// 6×6 solve; a step is kept only when it lowers the squared residual.
+pub fn refine(
+    rig: &StereoRig,
+    half: &[f32; 3],
+    left: &HueBlobs,
+    right: &HueBlobs,
+    stride: u16,
+    min_hits: u32,
+    seed: &Seed,
+) -> Seed {
+    let pixel_area = f32::from(stride) * f32::from(stride);
+    let blobs = [right, left];
+    let (mut r, mut t) = (seed.rotation, seed.centre);
+    let Some(mut res) = residuals(rig, half, blobs, min_hits, pixel_area, &r, &t) else { return *seed };
+    let mut lambda = 1e-2f32;
+    const STEP: [f32; 6] = [1e-3, 1e-3, 1e-3, 2e-3, 2e-3, 2e-3];
+    for _ in 0..REFINE_ITERATIONS {
+        let mut jac = nalgebra::SMatrix::<f32, RESIDUALS, 6>::zeros();
+        for (j, h) in STEP.iter().enumerate() {
+            let mut d = [0.0f32; 6];
+            if let Some(x) = d.get_mut(j) {
+                *x = *h;
+            }
+            let (rj, tj) = moved(&r, &t, &d);
+            let Some(rp) = residuals(rig, half, blobs, min_hits, pixel_area, &rj, &tj) else { return *seed };
+            for (i, (a, b)) in rp.iter().zip(res.iter()).enumerate() {
+                jac[(i, j)] = (a - b) / h;
+            }
+        }
+        let rv = nalgebra::SVector::<f32, RESIDUALS>::from_column_slice(&res);
+        let jtj = jac.transpose() * jac;
+        let jtr = jac.transpose() * rv;
+        let mut a = jtj;
+        for k in 0..6 {
+            a[(k, k)] += lambda * (jtj[(k, k)] + 1e-6);
+        }
+        let Some(inv) = a.try_inverse() else { break };
+        let step = -(inv * jtr);
+        let d: [f32; 6] = core::array::from_fn(|k| step[k]);
+        let (rn, tn) = moved(&r, &t, &d);
+        match residuals(rig, half, blobs, min_hits, pixel_area, &rn, &tn) {
+            Some(new) if cost(&new) < cost(&res) && d.iter().all(|x| x.is_finite()) => {
+                (r, t, res) = (rn, tn, new);
+                lambda *= 0.3;
+            }
+            _ => lambda *= 10.0,
+        }
+    }
+    // Re-orthonormalise (the small rotations are exact up to rounding).
+    match quat::from_rotation_matrix(&r) {
+        Ok(q) => Seed { centre: t, rotation: quat::to_rotation_matrix(&q), ..*seed },
+        Err(_) => *seed,
+    }
 }
 
 /// The half turn about block axis `k − 1` (`k = 0`: identity) as a column sign pattern.

@@ -448,11 +448,11 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     fn seed_from_blobs(&mut self, left: &HueBlobs, right: &HueBlobs) {
         let cfg = &self.config.acquire;
         let half = self.model.half_size();
-        let Some(seed) =
-            acquire::seed_pose(&self.config.rig, &[half.x, half.y, half.z], left, right, cfg.min_face_hits)
-        else {
+        let half = [half.x, half.y, half.z];
+        let Some(seed) = acquire::seed_pose(&self.config.rig, &half, left, right, cfg.min_face_hits) else {
             return;
         };
+        let seed = acquire::refine(&self.config.rig, &half, left, right, cfg.scan_stride, cfg.min_face_hits, &seed);
         let n = cfg.seed_immigrants.min(P - 1);
         for k in 0..n {
             if let Some(psi) = acquire::seed_immigrant(&seed, k, cfg, &mut self.rng) {

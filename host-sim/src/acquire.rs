@@ -56,6 +56,10 @@ pub const OCCLUSION_START_S: f64 = 1.0;
 pub const OCCLUSION_S: f64 = 1.0;
 /// Length of a recovery run (s).
 pub const RECOVERY_DURATION_S: f64 = 4.0;
+/// Points per sample row of the tracker the statistics use by default (the firmware's
+/// planned `Tracker<7, 40, 8>`); 5 is the other supported value.
+pub const DEFAULT_POINTS: usize = 8;
+
 /// Motion A's ω in the moving case (rad/s).
 pub const MOTION_OMEGA: f64 = 0.5;
 
@@ -188,9 +192,13 @@ fn wrong_tracking(rows: &[TraceRow]) -> (usize, usize) {
 ///
 /// # Errors
 /// A run's error.
-pub fn run_trial(seed: u64, case: Case, on_frame: &(impl Fn() + Sync)) -> Result<Trial> {
-    let a = experiment::run(&scenario(seed, case, false), on_frame)?;
-    let b = experiment::run(&scenario(seed, case, true), on_frame)?;
+pub fn run_trial(seed: u64, case: Case, points: usize, on_frame: &(impl Fn() + Sync)) -> Result<Trial> {
+    let go = |s: &Scenario| match points {
+        5 => experiment::run_with_rows::<5>(s, on_frame),
+        _ => experiment::run_with_rows::<8>(s, on_frame),
+    };
+    let a = go(&scenario(seed, case, false))?;
+    let b = go(&scenario(seed, case, true))?;
     let reappear = b.rows.iter().rposition(|r| r.hidden).map_or(b.rows.len(), |i| i + 1);
     let (w1, t1) = wrong_tracking(&a.rows);
     let (w2, t2) = wrong_tracking(&b.rows);
@@ -277,16 +285,20 @@ pub struct Report {
     pub trials: Vec<Trial>,
     /// First seed.
     pub first_seed: u64,
+    /// Points per sample row of the tracker.
+    pub points_per_row: usize,
     /// Simulator version.
     pub evorec_version: &'static str,
 }
 
-/// Runs `trials` trials from seed `first_seed` in parallel with a progress bar and writes
-/// `acquire.json`, `acquire.md` and `acquire_cdf.png` into `out`.
+/// Runs `trials` trials from seed `first_seed` in parallel with a progress bar, with a
+/// tracker of `points` (5 or 8) points per sample row, and writes `acquire.json`,
+/// `acquire.md` and `acquire_cdf.png` into `out`.
 ///
 /// # Errors
-/// Any run's or file's error.
-pub fn run(trials: usize, first_seed: u64, out: &Path, show_progress: bool) -> Result<Report> {
+/// Any run's or file's error; `points` other than 5 or 8.
+pub fn run(trials: usize, first_seed: u64, points: usize, out: &Path, show_progress: bool) -> Result<Report> {
+    anyhow::ensure!(points == 5 || points == 8, "--points must be 5 or 8, got {points}");
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let jobs: Vec<(u64, Case)> = (0..trials as u64).flat_map(|i| Case::ALL.map(|c| (first_seed + i, c))).collect();
     let frames: u64 = jobs
@@ -304,7 +316,7 @@ pub fn run(trials: usize, first_seed: u64, out: &Path, show_progress: bool) -> R
     );
     let done = Mutex::new(Vec::new());
     jobs.par_iter().try_for_each(|(seed, case)| -> Result<()> {
-        let t = run_trial(*seed, *case, &|| bar.inc(1))?;
+        let t = run_trial(*seed, *case, points, &|| bar.inc(1))?;
         done.lock().map_err(|_| anyhow::anyhow!("poisoned"))?.push(t);
         Ok(())
     })?;
@@ -315,6 +327,7 @@ pub fn run(trials: usize, first_seed: u64, out: &Path, show_progress: bool) -> R
         cases: Case::ALL.iter().map(|c| stats(&all, *c)).collect(),
         trials: all,
         first_seed,
+        points_per_row: points,
         evorec_version: env!("CARGO_PKG_VERSION"),
     };
     crate::io::write_json(&out.join("acquire.json"), &report)?;
@@ -332,7 +345,11 @@ fn frames(x: Option<usize>) -> String {
 pub fn markdown(r: &Report) -> String {
     let mut s = String::new();
     let n = r.cases.first().map_or(0, |c| c.trials);
-    let _ = writeln!(s, "# Acquisition and recovery, {n} trials per case (seeds {}..)\n", r.first_seed);
+    let _ = writeln!(
+        s,
+        "# Acquisition and recovery, {n} trials per case (seeds {}..), population 40, {} points per row\n",
+        r.first_seed, r.points_per_row
+    );
     let _ = writeln!(
         s,
         "Acquired = within {ACQUIRED_MM} mm and {ACQUIRED_DEG}° (modulo the colour symmetry) for {ACQUIRED_FRAMES} frames in a row.\n"

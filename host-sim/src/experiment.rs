@@ -174,10 +174,20 @@ pub struct RunOutput {
 ///
 /// # Errors
 /// If the world or the tracker cannot be built.
-pub fn run(s: &Scenario, mut on_frame: impl FnMut()) -> Result<RunOutput> {
+pub fn run(s: &Scenario, on_frame: impl FnMut()) -> Result<RunOutput> {
+    run_with_rows::<DEFAULT_GRID>(s, on_frame)
+}
+
+/// [`run`] with rows of `G` points per sample row (the default tracker uses
+/// [`DEFAULT_GRID`]).
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -> Result<RunOutput> {
     let world = World::new(s)?;
     let truth0 = world.truth();
-    let mut tracker = SimTracker::new(tracker_config(s)?).map_err(|e| anyhow::anyhow!("tracker: {e}"))?;
+    let mut tracker = Tracker::<PA10_DOF, DEFAULT_POPULATION, G>::new(tracker_config(s)?)
+        .map_err(|e| anyhow::anyhow!("tracker: {e}"))?;
     if s.tracker.initial == Initial::Truth {
         tracker.reset_around(&truth0, &INITIAL_SPREAD).map_err(|e| anyhow::anyhow!("initial pose: {e}"))?;
     }

@@ -72,6 +72,9 @@ enum Command {
         /// First seed.
         #[arg(long, default_value_t = 1)]
         first_seed: u64,
+        /// Points per sample row of the tracker (5 or 8).
+        #[arg(long, default_value_t = evorec_sim::acquire::DEFAULT_POINTS)]
+        points: usize,
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
@@ -144,9 +147,9 @@ fn main() -> Result<()> {
             report(&output.summary.accuracy, t0);
             println!("wrote {}", out.display());
         }
-        Command::Acquire { trials, first_seed, out, quiet } => {
+        Command::Acquire { trials, first_seed, points, out, quiet } => {
             let t0 = Instant::now();
-            let report = evorec_sim::acquire::run(trials, first_seed, &out, !quiet)?;
+            let report = evorec_sim::acquire::run(trials, first_seed, points, &out, !quiet)?;
             println!("{}", evorec_sim::acquire::markdown(&report));
             println!("{} trials per case in {:.1} s; wrote {}", trials, t0.elapsed().as_secs_f64(), out.display());
         }

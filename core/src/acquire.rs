@@ -273,6 +273,18 @@ fn three_spheres(p: &[Vector3<f32>; 3], r: &[f32; 3], eye: &Vector3<f32>) -> Opt
 /// The pose of the block from the blobs of both images, or `None` when no face is seen in
 /// both (too few hits) or the geometry is degenerate. `half` are the block's half sizes.
 pub fn seed_pose(rig: &StereoRig, half: &[f32; 3], left: &HueBlobs, right: &HueBlobs, min_hits: u32) -> Option<Seed> {
+    seed_pose_from(rig, half, left, right, min_hits, 3)
+}
+
+/// [`seed_pose`] using at most `max_faces` of the seen faces (those with most hits).
+pub fn seed_pose_from(
+    rig: &StereoRig,
+    half: &[f32; 3],
+    left: &HueBlobs,
+    right: &HueBlobs,
+    min_hits: u32,
+    max_faces: usize,
+) -> Option<Seed> {
     let min_hits = min_hits.max(1);
     let mut points: [Option<Vector3<f32>>; 3] = [None; 3];
     for (a, p) in points.iter_mut().enumerate() {
@@ -287,7 +299,7 @@ pub fn seed_pose(rig: &StereoRig, half: &[f32; 3], left: &HueBlobs, right: &HueB
         _ => 0,
     };
     order.sort_unstable_by(|x, y| weight(*y).cmp(&weight(*x)));
-    let seen = order.iter().filter(|a| weight(**a) > 0).count();
+    let seen = order.iter().filter(|a| weight(**a) > 0).count().min(max_faces);
     let eye = rig.left_center_in_right() * 0.5;
     let h = |a: usize| half.get(a).copied().unwrap_or(0.0);
     let pt = |a: usize| points.get(a).copied().flatten();
@@ -446,10 +458,26 @@ pub fn refine(
     min_hits: u32,
     seed: &Seed,
 ) -> Seed {
+    refine_with_cost(rig, half, left, right, stride, min_hits, seed).0
+}
+
+/// [`refine`] and the final sum of squared residuals (px²; infinite if the pose cannot be
+/// projected).
+pub fn refine_with_cost(
+    rig: &StereoRig,
+    half: &[f32; 3],
+    left: &HueBlobs,
+    right: &HueBlobs,
+    stride: u16,
+    min_hits: u32,
+    seed: &Seed,
+) -> (Seed, f32) {
     let pixel_area = f32::from(stride) * f32::from(stride);
     let blobs = [right, left];
     let (mut r, mut t) = (seed.rotation, seed.centre);
-    let Some(mut res) = residuals(rig, half, blobs, min_hits, pixel_area, &r, &t) else { return *seed };
+    let Some(mut res) = residuals(rig, half, blobs, min_hits, pixel_area, &r, &t) else {
+        return (*seed, f32::INFINITY);
+    };
     let mut lambda = 1e-2f32;
     const STEP: [f32; 6] = [1e-3, 1e-3, 1e-3, 2e-3, 2e-3, 2e-3];
     for _ in 0..REFINE_ITERATIONS {
@@ -460,7 +488,9 @@ pub fn refine(
                 *x = *h;
             }
             let (rj, tj) = moved(&r, &t, &d);
-            let Some(rp) = residuals(rig, half, blobs, min_hits, pixel_area, &rj, &tj) else { return *seed };
+            let Some(rp) = residuals(rig, half, blobs, min_hits, pixel_area, &rj, &tj) else {
+                return (*seed, cost(&res));
+            };
             for (i, (a, b)) in rp.iter().zip(res.iter()).enumerate() {
                 jac[(i, j)] = (a - b) / h;
             }
@@ -486,9 +516,31 @@ pub fn refine(
     }
     // Re-orthonormalise (the small rotations are exact up to rounding).
     match quat::from_rotation_matrix(&r) {
-        Ok(q) => Seed { centre: t, rotation: quat::to_rotation_matrix(&q), ..*seed },
-        Err(_) => *seed,
+        Ok(q) => (Seed { centre: t, rotation: quat::to_rotation_matrix(&q), ..*seed }, cost(&res)),
+        Err(_) => (*seed, f32::INFINITY),
     }
+}
+
+/// The seed of a frame pair: the solutions from all seen faces and from the two with most
+/// hits (a small third face's centroid is the least reliable), each refined ([`refine`]);
+/// the one whose face images fit best. Fixed work: at most two solves and two refinements.
+pub fn best_seed(
+    rig: &StereoRig,
+    half: &[f32; 3],
+    left: &HueBlobs,
+    right: &HueBlobs,
+    stride: u16,
+    min_hits: u32,
+) -> Option<Seed> {
+    let mut best: Option<(Seed, f32)> = None;
+    for faces in [3, 2] {
+        let Some(s) = seed_pose_from(rig, half, left, right, min_hits, faces) else { continue };
+        let (s, c) = refine_with_cost(rig, half, left, right, stride, min_hits, &s);
+        if best.is_none_or(|(_, b)| c < b) {
+            best = Some((s, c));
+        }
+    }
+    best.map(|(s, _)| s)
 }
 
 /// The half turn about block axis `k − 1` (`k = 0`: identity) as a column sign pattern.

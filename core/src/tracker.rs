@@ -449,10 +449,10 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let cfg = &self.config.acquire;
         let half = self.model.half_size();
         let half = [half.x, half.y, half.z];
-        let Some(seed) = acquire::seed_pose(&self.config.rig, &half, left, right, cfg.min_face_hits) else {
+        let Some(seed) = acquire::best_seed(&self.config.rig, &half, left, right, cfg.scan_stride, cfg.min_face_hits)
+        else {
             return;
         };
-        let seed = acquire::refine(&self.config.rig, &half, left, right, cfg.scan_stride, cfg.min_face_hits, &seed);
         let n = cfg.seed_immigrants.min(P - 1);
         for k in 0..n {
             if let Some(psi) = acquire::seed_immigrant(&seed, k, cfg, &mut self.rng) {

@@ -12,6 +12,7 @@ fn main() -> anyhow::Result<()> {
     let seed: u64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(3);
     let case = if args.get(2).map(String::as_str) == Some("a") { Case::MotionA } else { Case::Static };
     let frames: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(60);
+    let timing = args.get(4).map(String::as_str) == Some("timing");
     let s = scenario(seed, case, false);
     let mut world = World::new(&s)?;
     let mut tracker = SimTracker::new(tracker_config(&s)?).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -41,6 +42,21 @@ fn main() -> anyhow::Result<()> {
         let seed_err = seed_pose.and_then(|sp| sp.psi()).map(|p| pose_error(&p, &truth));
         let f_truth = tracker.fitness_of(&truth, &frame).map_err(|e| anyhow::anyhow!("{e}"))?.total;
         let joints = world.arm().joint_sample();
+        if timing {
+            // Host time of one generation forced into each status on this frame (the state is
+            // restored by cloning), min over repetitions.
+            for status in evorec_core::status::Status::ALL {
+                let mut best = f64::MAX;
+                for _ in 0..200 {
+                    let mut c = tracker.clone();
+                    c.set_status(status);
+                    let t0 = std::time::Instant::now();
+                    let _ = std::hint::black_box(c.step(&frame, &joints, 0.033, feedforward(s.method)));
+                    best = best.min(t0.elapsed().as_secs_f64());
+                }
+                println!("frame {k}: {:9} {:.1} us per generation (min of 200)", status.as_str(), best * 1e6);
+            }
+        }
         let dt = if k == 0 { 0.0 } else { s.frame_period_s as f32 };
         let est = tracker.step(&frame, &joints, dt, feedforward(s.method)).map_err(|e| anyhow::anyhow!("{e}"))?;
         let (mm, deg) = pose_error(&est.psi, &truth);

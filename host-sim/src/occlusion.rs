@@ -286,4 +286,76 @@ mod tests {
         assert_eq!(parse_placement(None).ok(), Some(Placement::Fixed));
         assert!(parse_placement(Some(&Value::String("anywhere".into()))).is_err());
     }
+
+    #[test]
+    fn scenario_keys_round_trip_and_are_checked() {
+        use crate::scenario::Scenario;
+        let text = "seed = 3\nduration_s = 4.0\nmethod = \"ff\"\n[tracker]\ninitial = \"unknown\"\n[target]\nplacement = \"random\"\n[[occlusion]]\nstart_s = 1.0\nduration_s = 1.0\nkind = \"removed\"\n";
+        let s = Scenario::from_toml_str(text).unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(s.tracker.initial, Initial::Unknown);
+        assert_eq!(s.target.placement, Placement::Random);
+        assert_eq!(s.occlusion.at(1.5), Some(OcclusionKind::Removed));
+        let back = Scenario::from_toml_str(&s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}")))
+            .unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(back, s);
+        let err = |t: &str| {
+            Scenario::from_toml_str(&format!("seed = 1\nduration_s = 2\nmethod = \"ff\"\n{t}"))
+                .err()
+                .map(|e| e.to_string())
+        };
+        assert_eq!(
+            err("[tracker]\ninitial = \"maybe\"\n").as_deref(),
+            Some("tracker.initial: expected \"truth\" or \"unknown\", got \"maybe\"")
+        );
+        assert!(err("[tracker]\nstart = 1\n").is_some_and(|e| e.starts_with("tracker.start: unknown key")));
+        assert!(
+            err("[[occlusion]]\nstart_s = 3\nduration_s = 1\n").is_some_and(|e| e.starts_with("occlusion[0].start_s"))
+        );
+    }
+
+    #[test]
+    fn a_hidden_block_has_no_hue_and_random_poses_differ() {
+        use crate::scenario::{Method, Scenario};
+        use crate::sim::World;
+        let mut s = Scenario::new(5, 3.0, Method::Ff);
+        s.camera.width = 160;
+        s.camera.height = 120;
+        s.camera.fx = 200.0;
+        s.camera.fy = 200.0;
+        s.camera.cx = 80.0;
+        s.camera.cy = 60.0;
+        s.occlusion = Occlusions::from_slice(&[
+            Occlusion { start_s: 0.0, duration_s: 1.0, kind: OcclusionKind::Occluder },
+            Occlusion { start_s: 1.0, duration_s: 1.0, kind: OcclusionKind::Removed },
+        ]);
+        let mut world = World::new(&s).unwrap_or_else(|e| unreachable!("{e}"));
+        let hues = |w: &mut World| {
+            let img = w.render();
+            [img.left, img.right]
+                .iter()
+                .map(|i| crate::render::hue_image(i).iter().filter(|h| **h != evorec_core::config::NO_HUE).count())
+                .sum::<usize>()
+        };
+        assert!(world.occlusion().is_some());
+        assert_eq!(hues(&mut world), 0);
+        world.advance_to(1.5);
+        assert_eq!(world.occlusion(), Some(OcclusionKind::Removed));
+        assert_eq!(hues(&mut world), 0);
+        world.advance_to(2.5);
+        assert_eq!(world.occlusion(), None);
+        assert!(hues(&mut world) > 500);
+        // Random placements: different seeds, different poses, centres in the search space.
+        s.target.placement = Placement::Random;
+        let space = crate::experiment::search_space();
+        let mut truths = Vec::new();
+        for seed in [1, 2] {
+            s.seed = seed;
+            let t = World::new(&s).unwrap_or_else(|e| unreachable!("{e}")).truth();
+            for i in 0..3 {
+                assert!(t.0[i] >= space.t_min()[i] - 1e-3 && t.0[i] <= space.t_max()[i] + 1e-3, "{t:?}");
+            }
+            truths.push(t);
+        }
+        assert_ne!(truths[0], truths[1]);
+    }
 }

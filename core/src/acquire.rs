@@ -38,7 +38,8 @@ use rand_core::Rng;
 use crate::camera::{Pinhole, StereoRig};
 use crate::config::{DEFAULT_SCAN_STRIDE, DEFAULT_SEED_IMMIGRANTS};
 use crate::ga::unit_f32;
-use crate::hue::{HueImage, HueLut};
+use crate::hue::HueLut;
+use crate::image::{Image, PixelFormat};
 use crate::math;
 use crate::pose::Psi;
 use crate::quat;
@@ -151,7 +152,8 @@ impl HueBlobs {
 
 /// Scans every `stride`-th pixel (offset `stride/2`) of every `stride`-th row of `image`.
 /// Reads exactly `⌈(W − o)/s⌉·⌈(H − o)/s⌉` pixels, `o = s/2`; a stride of 0 reads nothing.
-pub fn scan<B: AsRef<[u8]>>(image: &HueImage<B>, lut: &HueLut, stride: u16) -> HueBlobs {
+/// Pixels of any [`PixelFormat`] are converted to a hue only where the grid reads them.
+pub fn scan<B: AsRef<[u8]>, F: PixelFormat>(image: &Image<B, F>, lut: &HueLut, stride: u16) -> HueBlobs {
     let mut blobs = HueBlobs::default();
     if stride == 0 {
         return blobs;
@@ -159,8 +161,8 @@ pub fn scan<B: AsRef<[u8]>>(image: &HueImage<B>, lut: &HueLut, stride: u16) -> H
     let (w, s) = (usize::from(image.width()), usize::from(stride));
     let pixels = image.pixels();
     for (v, row) in pixels.chunks_exact(w.max(1)).enumerate().skip(s / 2).step_by(s) {
-        for (u, &h) in row.iter().enumerate().skip(s / 2).step_by(s) {
-            let m = lut.mask(h);
+        for (u, &px) in row.iter().enumerate().skip(s / 2).step_by(s) {
+            let m = lut.mask(F::hue(px));
             let axes = (m | (m >> 3)) & 0b111;
             for a in 0..3 {
                 let hit = u32::from((axes >> a) & 1);
@@ -597,6 +599,7 @@ mod tests {
     use crate::camera::Pinhole;
     use crate::config::{DEFAULT_HUE_TOLERANCE, NO_HUE};
     use crate::model::{Block, SurfaceStrips};
+    use crate::hue::HueImage;
     use crate::synth;
     use rand_core::SeedableRng;
     use rand_xoshiro::Xoshiro128PlusPlus;

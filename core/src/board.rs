@@ -5,8 +5,9 @@
 //! DCMI cameras and a joint-state bus) implements [`CameraController`]:
 //!
 //! - [`CameraController::next_frame`] blocks until the next synchronised stereo pair, writes
-//!   its hue bytes into the caller's two buffers (row-major, `width·height` bytes each) and
-//!   returns its [`FrameInfo`] (size, sequence number, capture time). Frames arrive in
+//!   its pixels in the board's [`CameraController::Format`] (hue bytes, or the sensor's raw
+//!   RGB565) into the caller's two buffers (row-major, `width·height·BYTES_PER_PIXEL` bytes
+//!   each) and returns its [`FrameInfo`] (size, sequence number, capture time). Frames arrive in
 //!   capture order; a board that dropped frames says so through the sequence number.
 //! - [`CameraController::joint_sample`] returns the newest joint sample `q, q̇` with its time;
 //!   the loop asks for it right after each frame.
@@ -16,7 +17,7 @@
 //! Errors follow embedded-hal's pattern: a board's error type implements [`Error`], whose
 //! [`ErrorKind`] generic code can act on ([`ErrorKind::EndOfStream`] ends [`run`] normally).
 
-use crate::hue::HueImage;
+use crate::image::{Image, PixelFormat};
 use crate::tracker::{Estimate, Feedforward, JointSample, NoProbe, PhaseProbe, StereoFrame, Tracker};
 
 /// What went wrong on a board, for generic code.
@@ -80,7 +81,11 @@ pub struct FrameInfo {
 
 /// A camera-controller board with `DOF` arm joints.
 pub trait CameraController<const DOF: usize>: ErrorType {
-    /// Waits for the next stereo pair and writes it into `left` and `right`.
+    /// The pixel format of the frames ([`crate::image::Hue`] or [`crate::image::Rgb565`]).
+    type Format: PixelFormat;
+
+    /// Waits for the next stereo pair and writes it into `left` and `right`
+    /// (`width · height · Format::BYTES_PER_PIXEL` bytes each).
     ///
     /// # Errors
     /// The board's error; [`ErrorKind::EndOfStream`] when there are no more frames.
@@ -100,6 +105,7 @@ pub trait CameraController<const DOF: usize>: ErrorType {
 }
 
 impl<T: CameraController<DOF> + ?Sized, const DOF: usize> CameraController<DOF> for &mut T {
+    type Format = T::Format;
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, Self::Error> {
         T::next_frame(self, left, right)
     }
@@ -174,8 +180,8 @@ where
             Some(t0) => info.capture_time_us.saturating_sub(t0) as f32 * 1e-6,
             None => 0.0,
         };
-        let left = HueImage::new_checked(&left_buf[..], info.width, info.height);
-        let right = HueImage::new_checked(&right_buf[..], info.width, info.height);
+        let left = Image::<_, B::Format>::new_checked(&left_buf[..], info.width, info.height);
+        let right = Image::<_, B::Format>::new_checked(&right_buf[..], info.width, info.height);
         let (left, right) = match (left, right) {
             (Ok(l), Ok(r)) => (l, r),
             (Err(e), _) | (_, Err(e)) => {

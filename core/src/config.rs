@@ -55,7 +55,7 @@ pub const MIN_VALUE: u8 = 40;
 /// Minimum saturation `(max − min) / max`, in 1/255 steps, for a pixel to have a hue.
 pub const MIN_SATURATION: u8 = 80;
 
-/// Largest image side accepted by [`crate::hue::HueImage`] and [`crate::camera::Pinhole`]:
+/// Largest image side accepted by [`crate::image::Image`] and [`crate::camera::Pinhole`]:
 /// pixel coordinates stay below 2²² so the fitness can round them exactly (see
 /// `fitness::View::index`).
 pub const MAX_IMAGE_SIDE: u16 = 2048;

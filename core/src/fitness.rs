@@ -18,15 +18,30 @@
 //! camera evaluates three faces (the one of each pair on the camera's side),
 //! [`SurfaceStrips::POINTS_PER_CAMERA`] points, whether or not a face is visible or a strip
 //! is on the silhouette: the visibility only masks the counts. Points outside the image read as "no hue"; nothing is ever read
-//! out of bounds. Per point: three additions (grid walk in homogeneous coordinates), one
-//! division, two multiplications, two float→int conversions, a bounds test, two table loads.
+//! out of bounds.
+//!
+//! **Per point** (plain pinhole): three additions (the row is walked in homogeneous
+//! coordinates), one division, two multiplications, two truncating float→int conversions, one
+//! unsigned compare per axis, the slice's bounds check, the pixel load, for RGB565 one load
+//! from the 64 KiB hue table ([`crate::image::RGB565_HUE`]), and one load from the hue match
+//! table. **Per pose** the block's axis-aligned structure is used: every row start, step and
+//! offset is a multiple of one projected model axis, precomputed once per camera and pose.
+//!
+//! **Lens distortion.** A camera with [`crate::camera::Distortion`] ≠ 0 takes the distorted
+//! kernel, chosen once per camera and pose (a camera without distortion pays nothing): rows are
+//! walked in normalised coordinates and every point goes through the plumb_bob polynomial and
+//! `K` (about 20 more float operations). Points beyond the calibrated field (see
+//! `distortion_field_r2`) read as outside the image.
 
 use nalgebra::{Matrix3, Vector3};
 
 use crate::camera::{Pinhole, StereoRig};
-use crate::config::{INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX, MIN_VISIBLE_COS, NO_HUE, OUTER_OFFSETS_M};
-use crate::hue::{HueImage, HueLut};
-use crate::model::SurfaceStrips;
+use crate::config::{
+    INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX, MIN_VISIBLE_COS, NO_HUE, OUTER_OFFSETS_M, ROWS_PER_EDGE,
+};
+use crate::hue::HueLut;
+use crate::image::{Image, PixelFormat};
+use crate::model::{FACES, ROW_DISTANCES_M, SurfaceStrips};
 use crate::pose::Psi;
 
 /// Match counts of one camera.
@@ -64,48 +79,57 @@ pub struct Fitness {
     pub right: Counts,
 }
 
-/// A borrowed hue image reduced to what the inner loop needs.
+/// A borrowed image reduced to what the inner loop needs.
 #[derive(Clone, Copy)]
-struct View<'a> {
-    pixels: &'a [u8],
+struct View<'a, F: PixelFormat> {
+    pixels: &'a [F::Pixel],
     width: u32,
+    height: u32,
 }
 
-impl<'a> View<'a> {
-    fn of<B: AsRef<[u8]>>(img: &'a HueImage<B>) -> Self {
-        Self { pixels: img.pixels(), width: u32::from(img.width()) }
+impl<'a, F: PixelFormat> View<'a, F> {
+    fn of<B: AsRef<[u8]>>(img: &'a Image<B, F>) -> Self {
+        Self { pixels: img.pixels(), width: u32::from(img.width()), height: u32::from(img.height()) }
     }
 
-    /// 1 if pixel `(u, v)` (wrapping values from [`round_bits`]) is inside the image and its
-    /// hue mask intersects `want`, else 0.
+    /// The hue byte at the point whose pixel coordinates plus one are `(u1, v1)`, or `NO_HUE`
+    /// outside the image.
     ///
-    /// Rounding uses the exact float trick `(v + 1.5·2²³).to_bits() − bits(1.5·2²³)`, which is
-    /// the round-to-nearest integer for |v| < 2²²; every value outside that range, negative,
-    /// infinite or NaN lands far outside `0..width` as an unsigned number, so one unsigned
-    /// compare per axis rejects it. Branch-free, no saturating conversion, and the same IEEE
-    /// operations on every target.
+    /// Pixel `(i, j)` covers `[i, i+1) × [j, j+1)`. The projector adds 1 to both coordinates,
+    /// so for every point inside the image `u1, v1 ≥ 1` and the truncating conversion
+    /// `as i32` (saturating, NaN → 0: the same definition on every target, one `VCVT` on the
+    /// M4) gives `i + 1` and `j + 1` exactly, while every point left of or above the image
+    /// gives 0 or less. Minus 1, as unsigned numbers, they are `i` and `j` inside the image and
+    /// `≥ width` / `≥ height` everywhere else: one compare per axis.
     #[inline(always)]
-    fn hit(&self, lut: &HueLut, want: u8, u: u32, v: u32) -> u32 {
-        // Row-major index in 64 bits (no wrap-around); the slice's own bounds check then rejects
-        // every v outside the image, so only u needs a test of its own.
-        let index = if u < self.width { u64::from(v) * u64::from(self.width) + u64::from(u) } else { u64::MAX };
-        let h = match usize::try_from(index).ok().and_then(|i| self.pixels.get(i)) {
-            Some(&h) => h,
+    fn hue(&self, u1: f32, v1: f32) -> u8 {
+        let col = (u1 as i32 as u32).wrapping_sub(1);
+        let row = (v1 as i32 as u32).wrapping_sub(1);
+        if col >= self.width || row >= self.height {
+            return NO_HUE;
+        }
+        match self.pixels.get((row * self.width + col) as usize) {
+            Some(&px) => F::hue(px),
             None => NO_HUE,
-        };
-        u32::from(lut.mask(h) & want != 0)
+        }
     }
 }
 
-/// Counts the points of one row whose hue mask intersects `want`. The row has `G` points
-/// `start + i·step`, walked by adding `step` (three additions per point).
+/// Sums `score(hue)` over the `G` points `start + i·step` of one row, walked by adding
+/// `step` (three additions per point).
 #[inline(always)]
-fn count_row<const G: usize>(view: &View<'_>, lut: &HueLut, want: u8, start: [f32; 3], step: [f32; 3]) -> u32 {
+fn count_row<const G: usize, F: PixelFormat>(
+    view: &View<'_, F>,
+    to_pixel: impl Fn(f32, f32, f32) -> (f32, f32),
+    score: impl Fn(u8) -> u32,
+    start: [f32; 3],
+    step: [f32; 3],
+) -> u32 {
     let [mut x, mut y, mut w] = start;
     let mut hits = 0u32;
     for _ in 0..G {
-        let inv = 1.0 / w;
-        hits += view.hit(lut, want, round_bits(x * inv), round_bits(y * inv));
+        let (u1, v1) = to_pixel(x, y, w);
+        hits += score(view.hue(u1, v1));
         x += step[0];
         y += step[1];
         w += step[2];
@@ -113,14 +137,9 @@ fn count_row<const G: usize>(view: &View<'_>, lut: &HueLut, want: u8, start: [f3
     hits
 }
 
-/// `1.5 · 2²³`: adding it to a float of magnitude below 2²² leaves the rounded integer in the
-/// low mantissa bits.
-const ROUND_MAGIC: f32 = 12_582_912.0;
-
-/// Round-to-nearest of `v` as a wrapping `u32` (see [`View::sample`]).
 #[inline(always)]
-fn round_bits(v: f32) -> u32 {
-    (v + ROUND_MAGIC).to_bits().wrapping_sub(ROUND_MAGIC.to_bits())
+fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 #[inline(always)]
@@ -128,16 +147,16 @@ fn add(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
-/// `K'·R` and `K'·t`, the pose composed with the intrinsics (principal point shifted by −½
-/// pixel for [`View::sample`]'s rounding).
+/// `K'·R` and `K'·t`, the pose composed with the intrinsics (principal point shifted by +1
+/// pixel for [`View::hue`]'s truncation).
 struct Projector {
     m: [[f32; 3]; 3],
     c: [f32; 3],
 }
 
 impl Projector {
-    fn new(cam: &Pinhole, r: &Matrix3<f32>, t: &Vector3<f32>) -> Self {
-        let (fx, fy, cx, cy) = (cam.fx(), cam.fy(), cam.cx() - 0.5, cam.cy() - 0.5);
+    /// `K' = [fx 0 cx; 0 fy cy; 0 0 1]`.
+    fn new([fx, fy, cx, cy]: [f32; 4], r: &Matrix3<f32>, t: &Vector3<f32>) -> Self {
         let row = |i: usize| [r[(i, 0)], r[(i, 1)], r[(i, 2)]];
         let (r0, r1, r2) = (row(0), row(1), row(2));
         let m = [
@@ -148,37 +167,21 @@ impl Projector {
         let c = [fx * t.x + cx * t.z, fy * t.y + cy * t.z, t.z];
         Self { m, c }
     }
-
-    #[inline(always)]
-    fn dir(&self, v: &Vector3<f32>) -> [f32; 3] {
-        let [a, b, c] = self.m;
-        [
-            a[0] * v.x + a[1] * v.y + a[2] * v.z,
-            b[0] * v.x + b[1] * v.y + b[2] * v.z,
-            c[0] * v.x + c[1] * v.y + c[2] * v.z,
-        ]
-    }
-
-    #[inline(always)]
-    fn point(&self, v: &Vector3<f32>) -> [f32; 3] {
-        add(self.dir(v), self.c)
-    }
 }
 
 /// Counts of one camera for the model at `(r, t)` in that camera's frame.
 ///
 /// The work is the same for every pose: see the module docs.
-pub fn camera_counts<const G: usize, B: AsRef<[u8]>>(
+pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
     model: &SurfaceStrips<G>,
     lut: &HueLut,
     cam: &Pinhole,
-    image: &HueImage<B>,
+    image: &Image<B, F>,
     r: &Matrix3<f32>,
     t: &Vector3<f32>,
 ) -> Counts {
     let view = View::of(image);
     let half = model.half_size();
-    let proj = Projector::new(cam, r, t);
     let focal = cam.fx().min(cam.fy());
 
     // Nearest depth of the block inflated by the outer rows (every sample point is inside it).
@@ -219,28 +222,110 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>>(
         }
     }
 
+    let faces = FacePlan { chosen, visible_mask, front: core::array::from_fn(|k| front(k as u8)) };
+    // K' with the principal point moved by +1 pixel for `View::hue`.
+    let (fx, fy, cx1, cy1) = (cam.fx(), cam.fy(), cam.cx() + 1.0, cam.cy() + 1.0);
+    if cam.distortion().is_none() {
+        let proj = Projector::new([fx, fy, cx1, cy1], r, t);
+        count_faces(model, lut, &view, &proj, &faces, |x, y, w| {
+            let inv = 1.0 / w;
+            (x * inv, y * inv)
+        })
+    } else {
+        // Normalised coordinates, then the lens, then K'. Beyond `r2_max` the plumb_bob
+        // polynomial is outside the calibrated field (and may fold back into the image):
+        // such points read as outside.
+        distorted_counts(model, lut, &view, cam, r, t, &faces)
+    }
+}
+
+/// [`count_faces`] through the lens of `cam` (kept out of line so the plain kernel's code and
+/// its unrolling do not change with it).
+#[inline(never)]
+fn distorted_counts<const G: usize, F: PixelFormat>(
+    model: &SurfaceStrips<G>,
+    lut: &HueLut,
+    view: &View<'_, F>,
+    cam: &Pinhole,
+    r: &Matrix3<f32>,
+    t: &Vector3<f32>,
+    faces: &FacePlan,
+) -> Counts {
+    let (fx, fy, cx1, cy1) = (cam.fx(), cam.fy(), cam.cx() + 1.0, cam.cy() + 1.0);
+    let (d, r2_max) = (*cam.distortion(), distortion_field_r2(cam));
+    let proj = Projector::new([1.0, 1.0, 0.0, 0.0], r, t);
+    count_faces(model, lut, view, &proj, faces, move |x, y, w| {
+        let inv = 1.0 / w;
+        let (xn, yn) = (x * inv, y * inv);
+        let (xd, yd) = d.apply(xn, yn);
+        if xn * xn + yn * yn <= r2_max { (fx * xd + cx1, fy * yd + cy1) } else { (-1.0, -1.0) }
+    })
+}
+
+/// The squared normalised radius within which a distorted camera's model is used: twice the
+/// squared radius of the farthest image corner seen through the undistorted pinhole (so
+/// 41 % beyond it in radius, more than any plumb_bob lens of a usable calibration compresses
+/// its corners).
+fn distortion_field_r2(cam: &Pinhole) -> f32 {
+    let dx = (cam.cx().max(f32::from(cam.width()) - cam.cx())) / cam.fx();
+    let dy = (cam.cy().max(f32::from(cam.height()) - cam.cy())) / cam.fy();
+    2.0 * (dx * dx + dy * dy)
+}
+
+/// The faces one camera evaluates, which of them are visible, and which faces face it.
+struct FacePlan {
+    chosen: [usize; 3],
+    visible_mask: u8,
+    front: [bool; FACES],
+}
+
+/// The counts of the planned faces, with `to_pixel(x, y, w)` mapping a projected homogeneous
+/// point to its pixel coordinates plus one.
+#[inline(always)]
+fn count_faces<const G: usize, F: PixelFormat>(
+    model: &SurfaceStrips<G>,
+    lut: &HueLut,
+    view: &View<'_, F>,
+    proj: &Projector,
+    faces: &FacePlan,
+    to_pixel: impl Fn(f32, f32, f32) -> (f32, f32) + Copy,
+) -> Counts {
+    // The block is axis-aligned in Σ_M, so every row vector is a multiple of one column of
+    // `proj.m` (the projected axis): per axis, its half size, row start, step and row offsets.
+    let (half, reach, row_step) = (model.half_size(), model.row_reach(), model.row_step());
+    let axes: [AxisRows; 3] = core::array::from_fn(|x| AxisRows::new(proj, x, half[x], reach[x], row_step[x]));
+    let visible_mask = faces.visible_mask;
+
     let mut counts = Counts { visible: visible_mask, ..Counts::default() };
-    for &k in &chosen {
-        let Some(face) = model.faces().get(k) else { continue };
+    for &k in &faces.chosen {
         let bit = 1u8 << k;
+        let plane = lut.plane(k);
+        let a = k % 3;
+        let centre = if k < 3 { add(proj.c, axes[a].half) } else { sub(proj.c, axes[a].half) };
         let (mut inner, mut outer) = (0u32, 0u32);
-        for edge in &face.edges {
-            let step = proj.dir(&edge.step);
-            let base = proj.point(&edge.base);
-            let inward = proj.dir(&edge.inward);
-            let row_start = |dist: f32| -> [f32; 3] {
-                [base[0] + dist * inward[0], base[1] + dist * inward[1], base[2] + dist * inward[2]]
-            };
-            for &dist in &INNER_INSETS_M {
-                inner += count_row::<G>(&view, lut, bit, row_start(dist), step);
-            }
-            let mut hits = 0u32;
-            for &dist in &OUTER_OFFSETS_M {
-                hits += count_row::<G>(&view, lut, visible_mask, row_start(-dist), step);
-            }
-            // Outer rows count only on silhouette edges (the face across is hidden).
-            if !front(edge.neighbour) {
-                outer += hits;
+        // Edges on the ±b sides run along c, those on the ±c sides along b (as `model::Edge`).
+        for (side, along) in [((a + 1) % 3, (a + 2) % 3), ((a + 2) % 3, (a + 1) % 3)] {
+            let (s, l) = (&axes[side], &axes[along]);
+            for positive in [true, false] {
+                let (base, neighbour) = if positive {
+                    (add(add(centre, s.half), l.start), side)
+                } else {
+                    (add(sub(centre, s.half), l.start), side + 3)
+                };
+                // The inward direction is −side on the + side, +side on the − side.
+                let row = |r: usize| if positive { sub(base, s.rows[r]) } else { add(base, s.rows[r]) };
+                for r in 0..INNER_INSETS_M.len() {
+                    inner += count_row::<G, F>(view, to_pixel, |h| u32::from(plane[usize::from(h)]), row(r), l.step);
+                }
+                let mut hits = 0u32;
+                for r in INNER_INSETS_M.len()..ROWS_PER_EDGE {
+                    let score = |h| u32::from(lut.mask(h) & visible_mask != 0);
+                    hits += count_row::<G, F>(view, to_pixel, score, row(r), l.step);
+                }
+                // Outer rows count only on silhouette edges (the face across is hidden).
+                if !faces.front.get(neighbour).copied().unwrap_or(false) {
+                    outer += hits;
+                }
             }
         }
         if visible_mask & bit != 0 {
@@ -250,6 +335,28 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>>(
         }
     }
     counts
+}
+
+/// The projection of the rows that run along, or are offset along, one model axis `x`:
+/// every vector is a multiple of `m·e_x`, the `x` column of the projector.
+struct AxisRows {
+    /// `h_x · m·e_x`: face centre offset and edge offset.
+    half: [f32; 3],
+    /// `−reach_x · m·e_x`: first point of a row along `x`, relative to its edge's midpoint.
+    start: [f32; 3],
+    /// `step_x · m·e_x`: step between the points of a row along `x`.
+    step: [f32; 3],
+    /// `d_r · m·e_x` for every row distance `d_r` of [`ROW_DISTANCES_M`].
+    rows: [[f32; 3]; ROWS_PER_EDGE],
+}
+
+impl AxisRows {
+    #[inline(always)]
+    fn new(proj: &Projector, x: usize, half: f32, reach: f32, step: f32) -> Self {
+        let col = [proj.m[0][x], proj.m[1][x], proj.m[2][x]];
+        let scale = |f: f32| col.map(|v| f * v);
+        Self { half: scale(half), start: scale(-reach), step: scale(step), rows: ROW_DISTANCES_M.map(scale) }
+    }
 }
 
 /// Evaluates poses against a stereo pair: the model, its hue table and the rig, bundled.
@@ -270,12 +377,12 @@ impl<'m, const G: usize> Evaluator<'m, G> {
     }
 
     /// `F(ψ)` (eq. 35) for a pose given as rotation `r` and translation `t` in `Σ_CR`.
-    pub fn evaluate<B: AsRef<[u8]>>(
+    pub fn evaluate<B: AsRef<[u8]>, F: PixelFormat>(
         &self,
         r: &Matrix3<f32>,
         t: &Vector3<f32>,
-        left: &HueImage<B>,
-        right: &HueImage<B>,
+        left: &Image<B, F>,
+        right: &Image<B, F>,
     ) -> Fitness {
         let right_counts = camera_counts(self.model, self.lut, &self.rig.right, right, r, t);
         let (r_left, t_left) = (self.left_r * r, self.left_r * t + self.left_t);
@@ -284,7 +391,12 @@ impl<'m, const G: usize> Evaluator<'m, G> {
     }
 
     /// `F(ψ)` for a 6-parameter pose (assumed valid: finite, `|ε| ≤ 1`).
-    pub fn evaluate_psi<B: AsRef<[u8]>>(&self, psi: &Psi, left: &HueImage<B>, right: &HueImage<B>) -> Fitness {
+    pub fn evaluate_psi<B: AsRef<[u8]>, F: PixelFormat>(
+        &self,
+        psi: &Psi,
+        left: &Image<B, F>,
+        right: &Image<B, F>,
+    ) -> Fitness {
         self.evaluate(&psi.rotation_unchecked(), &psi.translation(), left, right)
     }
 }
@@ -294,6 +406,7 @@ mod tests {
     use super::*;
     use crate::camera::Pinhole;
     use crate::config::DEFAULT_HUE_TOLERANCE;
+    use crate::hue::HueImage;
     use crate::model::Block;
     use crate::synth;
     use std::vec;
@@ -348,6 +461,77 @@ mod tests {
         // A pose behind the camera scores 0 without reading out of bounds.
         let behind = Psi::new([0.0, 0.0, -0.5], [0.0; 3]);
         assert_eq!(eval.evaluate_psi(&behind, &left, &right).total, 0.0);
+    }
+
+    /// A fully saturated, bright RGB565 colour of hue byte `h` (black for `NO_HUE`).
+    fn hue_to_rgb565(h: u8) -> [u8; 2] {
+        if h == NO_HUE {
+            return [0, 0];
+        }
+        let deg = 2.0 * f32::from(h);
+        let f = |n: f32| {
+            let k = (n + deg / 60.0) % 6.0;
+            (255.0 * (1.0 - k.min(4.0 - k).clamp(0.0, 1.0))) as u8
+        };
+        crate::image::rgb888_to_rgb565(f(5.0), f(3.0), f(1.0)).to_le_bytes()
+    }
+
+    #[test]
+    fn rgb565_frames_score_as_their_hue_frames() {
+        use crate::image::{Rgb565, Rgb565Image};
+        let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
+        let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
+        let rig = rig();
+        let eval = Evaluator::new(&model, &lut, &rig);
+        let q = crate::quat::from_angle_axis(2.0, &Vector3::new(-1.0, 1.0, 0.1)).unwrap();
+        let truth = Psi::from_parts(&Vector3::new(0.02, -0.01, 0.75), &q);
+        let (l, r) = scene(&truth);
+        let to565 = |img: &[u8]| img.iter().flat_map(|&h| hue_to_rgb565(h)).collect::<std::vec::Vec<u8>>();
+        let (l5, r5) = (to565(&l), to565(&r));
+        for (h, px) in l.iter().zip(l5.chunks(2)) {
+            assert_eq!(crate::image::rgb565_to_hue(u16::from_le_bytes([px[0], px[1]])), *h);
+        }
+        let (left, right) =
+            (HueImage::new_checked(&l[..], W, H).unwrap(), HueImage::new_checked(&r[..], W, H).unwrap());
+        let left5: Rgb565Image<&[u8]> = Rgb565Image::new_checked(&l5[..], W, H).unwrap();
+        let right5 = crate::image::Image::<_, Rgb565>::new_checked(&r5[..], W, H).unwrap();
+        for i in 0..12 {
+            let mut p = truth;
+            p.0[i % 6] += if i < 6 { 0.004 } else { -0.02 };
+            assert_eq!(eval.evaluate_psi(&p, &left, &right), eval.evaluate_psi(&p, &left5, &right5), "{i}");
+        }
+        assert_eq!(eval.evaluate_psi(&truth, &left5, &right5).total, 1.0);
+    }
+
+    #[test]
+    fn distorted_kernel_samples_where_the_lens_projects() {
+        use crate::camera::Distortion;
+        let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
+        let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
+        let q = crate::quat::from_angle_axis(2.0, &Vector3::new(-1.0, 1.0, 0.1)).unwrap();
+        let truth = Psi::from_parts(&Vector3::new(0.02, -0.01, 0.75), &q);
+        let (_, img) = scene(&truth);
+        let image = HueImage::new_checked(&img[..], W, H).unwrap();
+        let (r, t) = (truth.rotation_unchecked(), truth.translation());
+        let plain = rig().right;
+        let plain_counts = camera_counts(&model, &lut, &plain, &image, &r, &t);
+        // A negligible lens takes the distorted kernel and must count (almost) the same.
+        let tiny = plain.with_distortion(Distortion::plumb_bob([1e-7, 0.0, 0.0, 0.0, 0.0]).unwrap());
+        let tiny_counts = camera_counts(&model, &lut, &tiny, &image, &r, &t);
+        assert_eq!(tiny_counts.visible, plain_counts.visible);
+        assert!(
+            tiny_counts.inner_matched.abs_diff(plain_counts.inner_matched) <= 2,
+            "{tiny_counts:?} {plain_counts:?}"
+        );
+        // A real lens moves the samples: on the undistorted image, the match drops.
+        let barrel = plain.with_distortion(Distortion::plumb_bob([-0.3, 0.1, 0.0, 0.0, 0.0]).unwrap());
+        let barrel_counts = camera_counts(&model, &lut, &barrel, &image, &r, &t);
+        assert!(barrel_counts.score() < plain_counts.score(), "{barrel_counts:?} {plain_counts:?}");
+        assert!(barrel_counts.strip_matched > 0, "{barrel_counts:?}");
+        // A point far outside the field never reads a pixel, whatever the polynomial does.
+        let p = Psi::new([5.0, 0.0, 0.5], [0.0; 3]);
+        let far = camera_counts(&model, &lut, &barrel, &image, &p.rotation_unchecked(), &p.translation());
+        assert_eq!(far.inner_matched + far.strip_matched, 0);
     }
 
     #[test]

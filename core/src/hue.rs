@@ -4,107 +4,11 @@
 //! of `2·h` degrees (red 0, green 60 ≙ 120°, blue 120 ≙ 240°); [`NO_HUE`] marks pixels too
 //! dark or too grey to have a hue. Bytes `HUE_UNITS..=254` are tolerated and never match.
 //!
-//! [`HueImage`] validates its size once, in [`HueImage::new_checked`]; after that no accessor
-//! can panic. It borrows or owns any `AsRef<[u8]>`, so a camera DMA buffer and a simulator's
-//! `Vec<u8>` are the same type.
+//! Images themselves (hue bytes or raw RGB565 sensor pixels) live in [`crate::image`];
+//! [`HueImage`] and [`ImageError`] are re-exported here.
 
-use crate::config::{HUE_UNITS, MAX_IMAGE_SIDE, MIN_SATURATION, MIN_VALUE, NO_HUE};
-
-/// Why a buffer is not a hue image of the given size.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum ImageError {
-    /// Width or height is 0 or above [`MAX_IMAGE_SIDE`].
-    BadSize {
-        /// Requested width.
-        width: u16,
-        /// Requested height.
-        height: u16,
-    },
-    /// The buffer is shorter than `width · height`.
-    TooShort {
-        /// Bytes needed.
-        needed: u32,
-        /// Bytes given.
-        got: u32,
-    },
-}
-
-impl core::fmt::Display for ImageError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match *self {
-            Self::BadSize { width, height } => write!(f, "bad hue image size {width}x{height}"),
-            Self::TooShort { needed, got } => write!(f, "hue buffer has {got} bytes, needs {needed}"),
-        }
-    }
-}
-
-impl core::error::Error for ImageError {}
-
-/// A validated `width × height` hue image over a byte buffer.
-#[derive(Debug, Clone, Copy)]
-pub struct HueImage<B: AsRef<[u8]>> {
-    buf: B,
-    width: u16,
-    height: u16,
-}
-
-impl<B: AsRef<[u8]>> HueImage<B> {
-    /// Wraps `buf` as a `width × height` hue image (extra trailing bytes are ignored).
-    ///
-    /// # Errors
-    /// [`ImageError::BadSize`] or [`ImageError::TooShort`].
-    ///
-    /// # Examples
-    /// ```
-    /// use evorec_core::hue::{HueImage, ImageError};
-    /// let img = HueImage::new_checked([0u8; 12], 4, 3).unwrap();
-    /// assert_eq!(img.get(3, 2), Some(0));
-    /// assert_eq!(img.get(4, 0), None);
-    /// assert!(matches!(HueImage::new_checked([0u8; 11], 4, 3), Err(ImageError::TooShort { .. })));
-    /// ```
-    pub fn new_checked(buf: B, width: u16, height: u16) -> Result<Self, ImageError> {
-        if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
-            return Err(ImageError::BadSize { width, height });
-        }
-        let needed = u32::from(width) * u32::from(height);
-        let got = u32::try_from(buf.as_ref().len()).unwrap_or(u32::MAX);
-        if got < needed {
-            return Err(ImageError::TooShort { needed, got });
-        }
-        Ok(Self { buf, width, height })
-    }
-
-    /// Width in pixels.
-    pub fn width(&self) -> u16 {
-        self.width
-    }
-
-    /// Height in pixels.
-    pub fn height(&self) -> u16 {
-        self.height
-    }
-
-    /// The `width · height` pixel bytes, row-major.
-    pub fn pixels(&self) -> &[u8] {
-        let n = usize::from(self.width) * usize::from(self.height);
-        let b = self.buf.as_ref();
-        b.get(..n).unwrap_or(b)
-    }
-
-    /// The hue byte at column `x`, row `y`, or `None` outside the image.
-    pub fn get(&self, x: u16, y: u16) -> Option<u8> {
-        if x >= self.width || y >= self.height {
-            return None;
-        }
-        self.pixels().get(usize::from(y) * usize::from(self.width) + usize::from(x)).copied()
-    }
-
-    /// Gives the buffer back.
-    pub fn into_inner(self) -> B {
-        self.buf
-    }
-}
+use crate::config::{HUE_UNITS, MIN_SATURATION, MIN_VALUE, NO_HUE};
+pub use crate::image::{HueImage, ImageError};
 
 /// Converts an 8-bit RGB pixel to a hue byte, with integer arithmetic only (cheap on an MCU).
 ///
@@ -121,14 +25,17 @@ impl<B: AsRef<[u8]>> HueImage<B> {
 /// assert_eq!(rgb_to_hue(128, 128, 128), NO_HUE);
 /// assert_eq!(rgb_to_hue(10, 0, 0), NO_HUE); // too dark
 /// ```
-pub fn rgb_to_hue(r: u8, g: u8, b: u8) -> u8 {
-    let max = r.max(g).max(b);
-    let min = r.min(g).min(b);
-    let delta = i32::from(max) - i32::from(min);
-    if max < MIN_VALUE || delta * 255 < i32::from(MIN_SATURATION) * i32::from(max) || delta == 0 {
+pub const fn rgb_to_hue(r: u8, g: u8, b: u8) -> u8 {
+    // `const`: the RGB565 table of `crate::image` is built from this at compile time.
+    let max = if r > g { r } else { g };
+    let max = if max > b { max } else { b };
+    let min = if r < g { r } else { g };
+    let min = if min < b { min } else { b };
+    let delta = max as i32 - min as i32;
+    if max < MIN_VALUE || delta * 255 < MIN_SATURATION as i32 * max as i32 || delta == 0 {
         return NO_HUE;
     }
-    let (r, g, b) = (i32::from(r), i32::from(g), i32::from(b));
+    let (r, g, b) = (r as i32, g as i32, b as i32);
     // Sector offset (in 2° units) and signed position inside it, in [-delta, delta].
     let (offset, diff) = if r >= g && r >= b {
         (0, g - b)
@@ -137,10 +44,10 @@ pub fn rgb_to_hue(r: u8, g: u8, b: u8) -> u8 {
     } else {
         (120, r - g)
     };
-    let units = i32::from(HUE_UNITS);
     // 30·diff/delta units = 60°·diff/delta, rounded half up; then wrapped into 0..180.
     let h = offset + (60 * diff + delta).div_euclid(2 * delta);
-    u8::try_from(h.rem_euclid(units)).unwrap_or(NO_HUE)
+    // In 0..HUE_UNITS after the wrap, so the cast is exact.
+    h.rem_euclid(HUE_UNITS as i32) as u8
 }
 
 /// Converts hue degrees to the nearest hue unit (any real angle, wrapped into `0..HUE_UNITS`).
@@ -166,6 +73,7 @@ pub fn hue_distance(a: u8, b: u8) -> u8 {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HueLut {
     table: [u8; 256],
+    planes: [[u8; 256]; 8],
 }
 
 impl HueLut {
@@ -180,7 +88,15 @@ impl HueLut {
                 }
             }
         }
-        Self { table }
+        let planes = core::array::from_fn(|k| table.map(|m| (m >> k) & 1));
+        Self { table, planes }
+    }
+
+    /// Bit `k` of every entry, as 0 or 1: `plane(k)[h] == (mask(h) >> k) & 1` (one load and
+    /// one addition per point when counting matches of a single face). `k ≥ 8` gives bit 7's.
+    #[inline(always)]
+    pub fn plane(&self, k: usize) -> &[u8; 256] {
+        &self.planes[k.min(7)]
     }
 
     /// The face bitmask of hue byte `h`.
@@ -245,6 +161,11 @@ mod tests {
         assert_eq!(lut.mask(66), 0);
         assert_eq!(lut.mask(NO_HUE), 0);
         assert_eq!(lut.mask(200), 0);
+        for h in 0..=255u8 {
+            for k in 0..8 {
+                assert_eq!(lut.plane(k)[usize::from(h)], (lut.mask(h) >> k) & 1);
+            }
+        }
     }
 
     #[test]
@@ -255,17 +176,5 @@ mod tests {
         assert_eq!(degrees_to_units(359.2), 0);
         assert_eq!(degrees_to_units(720.0 + 120.0), 60);
         assert_eq!(hue_distance(2, 178), 4);
-    }
-
-    #[test]
-    fn image_view_is_checked() {
-        assert_eq!(
-            HueImage::new_checked(&[0u8; 4][..], 0, 4).unwrap_err(),
-            ImageError::BadSize { width: 0, height: 4 }
-        );
-        let img = HueImage::new_checked(&[1u8, 2, 3, 4, 5, 6, 7][..], 3, 2).unwrap();
-        assert_eq!(img.pixels().len(), 6);
-        assert_eq!(img.get(2, 1), Some(6));
-        assert_eq!(img.get(0, 2), None);
     }
 }

@@ -170,6 +170,8 @@ pub const ROW_DISTANCES_M: [f32; crate::config::ROWS_PER_EDGE] = {
 pub struct SurfaceStrips<const G: usize> {
     block: Block,
     half: Vector3<f32>,
+    row_reach: [f32; 3],
+    row_step: [f32; 3],
     faces: [FaceSamples; FACES],
 }
 
@@ -219,7 +221,20 @@ impl<const G: usize> SurfaceStrips<G> {
             ];
             face.hue = hue::degrees_to_units(*hue_deg);
         }
-        Ok(Self { block: *block, half, faces })
+        let row_reach = [half.x - m0, half.y - m0, half.z - m0];
+        let row_step = row_reach.map(|r| 2.0 * r / steps);
+        Ok(Self { block: *block, half, row_reach, row_step, faces })
+    }
+
+    /// Per axis `x`: a row running along `x` starts at coordinate `−row_reach[x]` (and ends at
+    /// `+row_reach[x]`), i.e. the smallest inner inset inside the block's corners.
+    pub fn row_reach(&self) -> [f32; 3] {
+        self.row_reach
+    }
+
+    /// Per axis `x`: the step between consecutive points of a row running along `x`.
+    pub fn row_step(&self) -> [f32; 3] {
+        self.row_step
     }
 
     /// The block this model samples.

@@ -14,19 +14,25 @@ use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, DEFAULT_POPULATION, HUE
 use crate::feedforward;
 use crate::fitness::{Evaluator, Fitness};
 use crate::ga::{Best, Ga, GaError, GaParams, SearchSpace};
-use crate::hue::{HueImage, HueLut};
+use crate::hue::HueLut;
+use crate::image::{Hue, Image, PixelFormat};
 use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
 use crate::status::{Status, StatusConfig, StatusError, StatusMonitor};
+use crate::target_motion::{self, PredictError, Prediction, TargetFilter};
 
-/// Whether the arm's motion is fed forward to the population (eq. 36).
+/// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Feedforward {
     /// Plain 1-step GA.
     Off,
-    /// 1-step GA + motion feedforward.
+    /// 1-step GA + motion feedforward of the arm (`J_m q̇`, eq. 24).
     On,
+    /// 1-step GA + feedforward of the arm's and the target's motion
+    /// (`J_m q̇ + J_n ^W ψ̇_M`, eq. 23), the target's velocity from the tracker's
+    /// [`TargetFilter`] once it is trusted (until then as [`Feedforward::On`]).
+    OnWithTarget,
 }
 
 /// Joint positions (rad) and velocities (rad/s) sampled at `time_us`.
@@ -40,13 +46,13 @@ pub struct JointSample<const DOF: usize> {
     pub time_us: u64,
 }
 
-/// A synchronised stereo pair of hue images.
+/// A synchronised stereo pair of images in pixel format `F` (hue bytes by default).
 #[derive(Debug, Clone, Copy)]
-pub struct StereoFrame<'a> {
+pub struct StereoFrame<'a, F: PixelFormat = Hue> {
     /// Left image.
-    pub left: HueImage<&'a [u8]>,
+    pub left: Image<&'a [u8], F>,
     /// Right image.
-    pub right: HueImage<&'a [u8]>,
+    pub right: Image<&'a [u8], F>,
 }
 
 /// The tracker's output for one frame pair.
@@ -60,6 +66,9 @@ pub struct Estimate {
     pub generation: u32,
     /// Whether the tracker has the block (decided after this generation's evaluation).
     pub status: Status,
+    /// Capture time of the frame pair (µs, the board's clock): the time of the joint sample
+    /// the estimate was computed with, which the board takes with the frame.
+    pub capture_time_us: u64,
 }
 
 /// Why a tracker configuration was rejected.
@@ -256,6 +265,7 @@ pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = DEFAULT_POPULAT
     rng: Xoshiro128PlusPlus,
     generation: u32,
     monitor: StatusMonitor,
+    target: TargetFilter,
 }
 
 impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
@@ -264,6 +274,75 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// # Errors
     /// [`ConfigError`] for an invalid block, GA parameters, tolerance or `max_dt_s`.
     pub fn new(config: TrackerConfig<DOF>) -> Result<Self, ConfigError> {
+        let (model, lut) = Self::checked_parts(&config)?;
+        let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
+        let mut ga = Ga::new(Psi::IDENTITY);
+        ga.reset_uniform(&config.search, &mut rng);
+        Ok(Self {
+            config,
+            model,
+            lut,
+            ga,
+            rng,
+            generation: 0,
+            monitor: StatusMonitor::new(Status::Searching),
+            target: TargetFilter::with_defaults(),
+        })
+    }
+
+    /// [`Tracker::new`] built in `slot` (e.g. a board's static), so that no whole tracker is
+    /// assembled on the stack and copied: a tracker already in the slot is re-initialised field
+    /// by field, an empty slot gets the model and hue table moved in and the population filled
+    /// in place. On error the slot is unchanged.
+    ///
+    /// # Errors
+    /// As [`Tracker::new`].
+    #[inline(never)]
+    pub fn new_in(slot: &mut Option<Self>, config: TrackerConfig<DOF>) -> Result<&mut Self, ConfigError> {
+        let (model, lut) = Self::checked_parts(&config)?;
+        let rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
+        let t = match slot {
+            Some(t) => {
+                t.config = config;
+                t.model = model;
+                t.lut = lut;
+                t.rng = rng;
+                t.generation = 0;
+                t.monitor = StatusMonitor::new(Status::Searching);
+                t.target = TargetFilter::with_defaults();
+                t
+            }
+            None => Self::fresh_in(slot, config, model, lut, rng),
+        };
+        t.ga.reset_uniform(&t.config.search, &mut t.rng);
+        Ok(t)
+    }
+
+    /// Puts a tracker of these parts into the empty `slot` (kept out of line: its frame holds
+    /// the one tracker-sized temporary of [`Tracker::new_in`]).
+    #[inline(never)]
+    fn fresh_in(
+        slot: &mut Option<Self>,
+        config: TrackerConfig<DOF>,
+        model: SurfaceStrips<G>,
+        lut: HueLut,
+        rng: Xoshiro128PlusPlus,
+    ) -> &mut Self {
+        slot.insert(Self {
+            config,
+            model,
+            lut,
+            ga: Ga::new(Psi::IDENTITY),
+            rng,
+            generation: 0,
+            monitor: StatusMonitor::new(Status::Searching),
+            target: TargetFilter::with_defaults(),
+        })
+    }
+
+    /// Validates `config` and builds its model and hue table.
+    #[inline(never)]
+    fn checked_parts(config: &TrackerConfig<DOF>) -> Result<(SurfaceStrips<G>, HueLut), ConfigError> {
         let model = SurfaceStrips::<G>::new(&config.block)?;
         config.ga.validate(P)?;
         if config.hue_tolerance >= HUE_UNITS / 2 {
@@ -280,10 +359,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
         let hues: [u8; FACES] = model.faces().map(|f| f.hue);
         let lut = HueLut::new(&hues, config.hue_tolerance);
-        let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
-        let mut ga = Ga::new(Psi::IDENTITY);
-        ga.reset_uniform(&config.search, &mut rng);
-        Ok(Self { config, model, lut, ga, rng, generation: 0, monitor: StatusMonitor::new(Status::Searching) })
+        Ok((model, lut))
     }
 
     /// The configuration.
@@ -318,6 +394,21 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.monitor = StatusMonitor::new(status);
     }
 
+    /// The filter of the target's own motion, updated with every estimate.
+    pub fn target_filter(&self) -> &TargetFilter {
+        &self.target
+    }
+
+    /// Hands the latest estimate over to time `t_us` (e.g. when a controller acts on it):
+    /// see [`TargetFilter::predict`]. `joints` is the newest joint sample.
+    ///
+    /// # Errors
+    /// [`PredictError::NoTrack`] before the first estimate or after the target was lost;
+    /// [`PredictError::NonFiniteJoint`].
+    pub fn predict(&self, joints: &JointSample<DOF>, t_us: u64) -> Result<Prediction, PredictError> {
+        self.target.predict(&self.config.arm, &self.config.flange_to_camera, joints, t_us)
+    }
+
     /// Re-seeds the population around a known pose (the paper starts with the true pose
     /// known): the elite at `psi`, the others within `±spread` per gene. The status becomes
     /// [`Status::Tracking`]: the pose is known.
@@ -331,6 +422,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
         self.ga.reset_around(psi, spread, &self.config.search, &mut self.rng);
         self.monitor = StatusMonitor::new(Status::Tracking);
+        self.target.reset();
         Ok(())
     }
 
@@ -339,13 +431,14 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     pub fn reset_uniform(&mut self) {
         self.ga.reset_uniform(&self.config.search, &mut self.rng);
         self.monitor = StatusMonitor::new(Status::Searching);
+        self.target.reset();
     }
 
     /// The colour blobs of a frame pair as the acquisition scan sees them (left, right).
     ///
     /// # Errors
     /// [`StepError::ImageSize`].
-    pub fn blobs_of(&self, frame: &StereoFrame<'_>) -> Result<(HueBlobs, HueBlobs), StepError> {
+    pub fn blobs_of<F: PixelFormat>(&self, frame: &StereoFrame<'_, F>) -> Result<(HueBlobs, HueBlobs), StepError> {
         self.check_frame(frame)?;
         let stride = self.config.acquire.scan_stride;
         Ok((acquire::scan(&frame.left, &self.lut, stride), acquire::scan(&frame.right, &self.lut, stride)))
@@ -355,15 +448,15 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     ///
     /// # Errors
     /// [`StepError::ImageSize`] or [`StepError::Pose`].
-    pub fn fitness_of(&self, psi: &Psi, frame: &StereoFrame<'_>) -> Result<Fitness, StepError> {
+    pub fn fitness_of<F: PixelFormat>(&self, psi: &Psi, frame: &StereoFrame<'_, F>) -> Result<Fitness, StepError> {
         self.check_frame(frame)?;
         psi.validate().map_err(StepError::Pose)?;
         let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
         Ok(eval.evaluate_psi(psi, &frame.left, &frame.right))
     }
 
-    fn check_frame(&self, frame: &StereoFrame<'_>) -> Result<(), StepError> {
-        let check = |side: Side, img: &HueImage<&[u8]>, cam: &Pinhole| {
+    fn check_frame<F: PixelFormat>(&self, frame: &StereoFrame<'_, F>) -> Result<(), StepError> {
+        let check = |side: Side, img: &Image<&[u8], F>, cam: &Pinhole| {
             let (got, expected) = ((img.width(), img.height()), (cam.width(), cam.height()));
             if got == expected { Ok(()) } else { Err(StepError::ImageSize { side, got, expected }) }
         };
@@ -375,9 +468,9 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     ///
     /// # Errors
     /// As [`Tracker::step_probed`].
-    pub fn step(
+    pub fn step<F: PixelFormat>(
         &mut self,
-        frame: &StereoFrame<'_>,
+        frame: &StereoFrame<'_, F>,
         joints: &JointSample<DOF>,
         dt_s: f32,
         feedforward: Feedforward,
@@ -386,21 +479,21 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     }
 
     /// One generation: with [`Feedforward::On`] every individual is first moved by
-    /// `J_m(q) q̇ · dt` (eq. 36), then the population is evaluated on `frame`, the best is the
-    /// estimate, its fitness updates the [`Status`], and the next population is bred. While
-    /// the status is not [`Status::Tracking`], the last
+    /// `J_m(q) q̇ · dt` (eq. 36), with [`Feedforward::OnWithTarget`] by
+    /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then the population is evaluated on `frame`,
+    /// the best is the estimate, its fitness updates the [`Status`], the next population is
+    /// bred, and the estimate, taken into the world at `joints.q`, updates the target filter.
+    /// While the status is not [`Status::Tracking`], the last
     /// [`AcquireConfig::seed_immigrants`] children are replaced by poses seeded from the
-    /// colour blobs of the frame ([`crate::acquire`]; the scan runs in every status, inside
-    /// the evaluation phase, so the work per generation is bounded the same way in all of
-    /// them). `dt_s` is the time since the previous frame (0 for the first). `probe` is told
-    /// when each [`Phase`] begins.
+    /// colour blobs of the frame ([`crate::acquire`]). `dt_s` is the time since the previous
+    /// frame (0 for the first). `probe` is told when each [`Phase`] begins.
     ///
     /// # Errors
     /// [`StepError::ImageSize`], [`StepError::NonFiniteJoint`] or [`StepError::BadDt`]; the
     /// tracker is then unchanged.
-    pub fn step_probed(
+    pub fn step_probed<F: PixelFormat>(
         &mut self,
-        frame: &StereoFrame<'_>,
+        frame: &StereoFrame<'_, F>,
         joints: &JointSample<DOF>,
         dt_s: f32,
         feedforward: Feedforward,
@@ -415,13 +508,26 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
 
         probe.mark(Phase::Feedforward);
-        if feedforward == Feedforward::On {
-            let twist =
-                feedforward::camera_twist(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
-            self.ga.shift_all(&self.config.search, |psi| {
-                let rate = feedforward::psi_rate(&twist, psi);
-                feedforward::shift(psi, &rate, dt_s);
-            });
+        match feedforward {
+            Feedforward::Off => {}
+            Feedforward::On => {
+                let twist =
+                    feedforward::camera_twist(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
+                self.ga.shift_all(&self.config.search, |psi| {
+                    let rate = feedforward::psi_rate(&twist, psi);
+                    feedforward::shift(psi, &rate, dt_s);
+                });
+            }
+            Feedforward::OnWithTarget => {
+                let motion =
+                    feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
+                let target =
+                    feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &self.target.feedforward_velocity());
+                self.ga.shift_all(&self.config.search, |psi| {
+                    let rate = feedforward::psi_rate_moving(&motion.twist, &target, psi);
+                    feedforward::shift(psi, &rate, dt_s);
+                });
+            }
         }
 
         probe.mark(Phase::Evaluate);
@@ -438,9 +544,22 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             self.seed_from_blobs(&left, &right);
         }
         self.generation = self.generation.wrapping_add(1);
+        // The target filter (one forward kinematics and a data-dependent update) runs only in the
+        // mode that uses it, so the other modes keep the paper's constant work per generation.
+        if feedforward == Feedforward::OnWithTarget {
+            let world =
+                target_motion::world_pose(&self.config.arm, &joints.q, &self.config.flange_to_camera, &best.psi);
+            self.target.update(&world, joints.time_us, best.fitness);
+        }
         probe.mark(Phase::Done);
 
-        Ok(Estimate { psi: best.psi, fitness: best.fitness, generation: self.generation, status })
+        Ok(Estimate {
+            psi: best.psi,
+            fitness: best.fitness,
+            generation: self.generation,
+            status,
+            capture_time_us: joints.time_us,
+        })
     }
 
     /// Replaces the last [`AcquireConfig::seed_immigrants`] individuals (never the elite) by

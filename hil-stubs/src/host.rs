@@ -348,7 +348,10 @@ impl HilSession {
         self.send(&Envelope { sequence, capture_time_us, message: Message::Frame(*frame) })?;
         let env = self.recv("ESTIMATE")?;
         match env.message {
-            Message::Estimate(e) if env.sequence == sequence => Ok(Reply::Estimate(e)),
+            // The firmware's tracker stamps its estimate with the joint sample's time.
+            Message::Estimate(e) if env.sequence == sequence => {
+                Ok(Reply::Estimate(Estimate { capture_time_us: frame.joints.time_us, ..e }))
+            }
             Message::Rejected if env.sequence == sequence => Ok(Reply::Rejected),
             _ => Err(unexpected(&env, "ESTIMATE or REJECTED for the frame just sent")),
         }

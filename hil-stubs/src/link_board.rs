@@ -149,6 +149,8 @@ where
     W: ByteSink<Error = E>,
     E: core::fmt::Debug,
 {
+    type Format = evorec_core::image::Hue;
+
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, Self::Error> {
         self.answer_pending()?;
         let env = read_message(&mut self.rx, left, right)?;

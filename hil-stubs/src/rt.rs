@@ -2,7 +2,6 @@
 //! buffers and the link's FIFO names.
 
 use core::ffi::CStr;
-use core::fmt::Write as _;
 
 use cortex_m_semihosting::{debug, hprintln};
 use static_cell::ConstStaticCell;
@@ -68,11 +67,27 @@ pub fn exit(success: bool) -> ! {
 }
 
 /// Prints the panic and exits QEMU with failure.
+#[cfg(not(feature = "panic-never"))]
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
+    use core::fmt::Write as _;
     // A fresh handle, not `hprintln!`'s shared one: the panic may have happened inside it.
     if let Ok(mut out) = cortex_m_semihosting::hio::hstdout() {
         let _ = writeln!(out, "PANIC: {info}");
     }
     exit(false)
+}
+
+/// The `panic-never` build's handler: it calls a function that is defined nowhere, so linking
+/// fails while any panic survives optimisation (see `scripts/panic-check.sh`).
+#[cfg(feature = "panic-never")]
+#[panic_handler]
+#[allow(unsafe_code)]
+fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
+    unsafe extern "Rust" {
+        /// Defined nowhere on purpose.
+        fn evorec_panic_is_reachable() -> !;
+    }
+    // SAFETY: never executed — an image that still calls this handler does not link.
+    unsafe { evorec_panic_is_reachable() }
 }

@@ -188,6 +188,7 @@ impl ErrorType for SynthBoard {
 }
 
 impl CameraController<7> for SynthBoard {
+    type Format = evorec_core::image::Hue;
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, ErrorKind> {
         if self.next >= self.frames {
             return Err(ErrorKind::EndOfStream);

@@ -133,9 +133,9 @@ impl Setup {
         Ok(tracker)
     }
 
-    /// [`Setup::build_tracker`] into `slot` (the firmware's static): the tracker is moved
-    /// once, straight from [`Tracker::new`] into the slot, which keeps temporary copies off
-    /// the stack. After an error `slot` may hold an unseeded tracker; do not use it.
+    /// [`Setup::build_tracker`] into `slot` (the firmware's static) through
+    /// [`Tracker::new_in`], which builds it in place and keeps whole-tracker copies off the
+    /// stack. After an initial-pose error `slot` holds an unseeded tracker; do not use it.
     ///
     /// # Errors
     /// As [`Setup::build_tracker`].
@@ -143,9 +143,8 @@ impl Setup {
         &self,
         slot: &'s mut Option<Tracker<DOF, P, G>>,
     ) -> Result<&'s mut Tracker<DOF, P, G>, SetupError> {
-        *slot = None;
         let config = self.tracker_config()?;
-        let tracker = slot.insert(Tracker::new(config).map_err(SetupError::Tracker)?);
+        let tracker = Tracker::new_in(slot, config).map_err(SetupError::Tracker)?;
         tracker.reset_around(&self.initial_psi, &self.initial_spread).map_err(SetupError::InitialPose)?;
         Ok(tracker)
     }

@@ -1,7 +1,7 @@
-//! PA-10 arm simulation: the camera mount, inverse kinematics for the start pose, and a 1 kHz
+//! PA-10 arm simulation: inverse kinematics for the start pose and a 1 kHz
 //! resolved-rate joint controller that tracks a desired flange pose.
 //!
-//! Joint state is kept in `f64`; the kinematics come from the core's f32 DH chain
+//! Joint state is kept in `f64`; the kinematics come from the core's f32 chain
 //! ([`PA10`]), called with the state rounded to f32. The linear algebra of the controller
 //! (damped pseudo-inverse, null-space projection) is done in `f64`.
 //!
@@ -22,7 +22,7 @@ use evorec_core::JointSample;
 use evorec_core::kinematics::PA10;
 use nalgebra::{Isometry3, Matrix3, Matrix6, SMatrix, SVector, Translation3, UnitQuaternion, Vector3, Vector6};
 
-use crate::motion::{FlangeTrajectory, Twist, initial_flange_pose};
+use crate::motion::{FlangeTrajectory, Twist, flange_to_camera_f64, initial_flange_pose};
 
 /// Number of joints of the PA-10.
 pub const DOF: usize = 7;
@@ -30,30 +30,14 @@ pub const DOF: usize = 7;
 /// Period of the joint control loop (s).
 pub const CONTROL_PERIOD_S: f64 = 0.001;
 
-/// Height of the right camera's origin above the flange, along the flange `z` axis (m).
-pub const CAMERA_MOUNT_OFFSET_M: f64 = 0.05;
-
 /// An elbow-bent start guess for [`solve_ik`] near the experiment's start pose: shoulder
 /// leaning slightly back, elbow bent ~103°, wrist pitched so the flange `z` looks forward
 /// and down, flange rolled by −90°.
 pub const IK_SEED: [f64; DOF] = [0.0, -0.3, 0.0, 1.8, 0.0, 0.4, -std::f64::consts::FRAC_PI_2];
 
-/// `^H T_CR` in f64: the right camera frame is the flange frame translated by
-/// `[+baseline/2, 0, 0.05]` m (flange coordinates), with the same orientation (optical axis =
-/// flange `z`).
-pub fn flange_to_camera_f64(baseline_m: f64) -> Isometry3<f64> {
-    Isometry3::from_parts(Translation3::new(0.5 * baseline_m, 0.0, CAMERA_MOUNT_OFFSET_M), UnitQuaternion::identity())
-}
-
-/// `^H T_CR` as the core's f32 isometry (see [`flange_to_camera_f64`]); pass it to
-/// `evorec_core::feedforward` and to the tracker configuration.
-pub fn flange_to_camera(baseline_m: f64) -> Isometry3<f32> {
-    flange_to_camera_f64(baseline_m).cast::<f32>()
-}
-
-/// Joint limits `(q_min, q_max)` of the PA-10 (rad), from the core's DH table.
+/// Joint limits `(q_min, q_max)` of the PA-10 (rad), from the core's chain.
 pub fn joint_limits() -> [(f64, f64); DOF] {
-    std::array::from_fn(|i| (f64::from(PA10.links[i].q_min), f64::from(PA10.links[i].q_max)))
+    std::array::from_fn(|i| (f64::from(PA10.joints[i].q_min), f64::from(PA10.joints[i].q_max)))
 }
 
 /// Flange pose `^W T_H(q)` from the core's forward kinematics.
@@ -358,7 +342,7 @@ impl ArmSim {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::{MotionKind, target_centre};
+    use crate::motion::{MotionKind, flange_to_camera, target_centre};
 
     fn q0() -> [f64; DOF] {
         match initial_joint_angles() {

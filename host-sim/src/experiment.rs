@@ -212,6 +212,7 @@ impl<F: FnMut()> board::ErrorType for ProgressBoard<'_, F> {
 }
 
 impl<F: FnMut()> board::CameraController<PA10_DOF> for ProgressBoard<'_, F> {
+    type Format = <sim::SimBoard as board::CameraController<PA10_DOF>>::Format;
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<board::FrameInfo, sim::SimError> {
         let r = self.inner.next_frame(left, right);
         if r.is_ok() {

@@ -71,7 +71,7 @@ pub fn render_frame(s: &Scenario, n: u32, out: &Path) -> Result<Vec<PathBuf>> {
         [("left", &images.left, rig.left, rig.left_from_right * pose), ("right", &images.right, rig.right, pose)]
     {
         let path = out.join(format!("{name}.png"));
-        img.save(&path)?;
+        crate::io::write_png(&path, img)?;
         written.push(path);
         let mut overlay = img.clone();
         let project = |p: Point3<f32>| cam.project(&(cam_from_model * p)).ok().map(|uv| (uv.x, uv.y));
@@ -88,7 +88,7 @@ pub fn render_frame(s: &Scenario, n: u32, out: &Path) -> Result<Vec<PathBuf>> {
             render::draw_points(&mut overlay, &outer, [0, 0, 0]);
         }
         let path = out.join(format!("{name}_model.png"));
-        overlay.save(&path)?;
+        crate::io::write_png(&path, &overlay)?;
         written.push(path);
     }
     let joints = world.arm().joint_sample();

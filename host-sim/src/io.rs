@@ -1,11 +1,81 @@
-//! File output: the trace CSV and JSON documents. The only module that writes files.
+//! File output: the trace CSV, JSON documents, PNG images, text. The only module that writes
+//! output files, and it writes every one atomically ([`write_atomic`]).
+//!
+//! An output file appears complete or not at all: its bytes go to a temporary file in the same
+//! directory (`.NAME.XXXXXX.tmp`), which is flushed, synced to disk and then renamed over
+//! `NAME` in one step. A run that fails or is killed midway leaves any earlier `NAME` as it was,
+//! never a truncated file that looks complete. The temporary file comes from
+//! [`tempfile::NamedTempFile`] (the `tempfile` crate: widely used, already in the dependency
+//! graph; it deletes the temporary file when the write fails and renames with
+//! [`NamedTempFile::persist`](tempfile::NamedTempFile::persist)); the `atomic-write-file` crate
+//! does the same with fewer users and would be one more dependency.
 
+use std::io::{BufWriter, Write};
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, anyhow};
 use serde::Serialize;
 
 use crate::sim::TraceRow;
+
+/// Creates the output directory `dir` (and its parents) and checks that a file can be created
+/// in it, so a command fails before its work rather than after it.
+///
+/// # Errors
+/// `cannot create output directory DIR: …` or `cannot write into output directory DIR: …`.
+pub fn create_out_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create output directory {}", dir.display()))?;
+    tempfile::Builder::new()
+        .prefix(".evorec-probe")
+        .tempfile_in(dir)
+        .with_context(|| format!("cannot write into output directory {}", dir.display()))?;
+    Ok(())
+}
+
+/// Writes the file `path` atomically (see the [module docs](self)): `write` fills a buffered
+/// temporary file in the same directory, which replaces `path` only if `write` and the flush
+/// succeed. On any error `path` is untouched and the temporary file is removed.
+///
+/// # Errors
+/// `path` has no file name, the temporary file cannot be created, `write` fails, or the
+/// flush, sync or rename fails; the message names `path`.
+pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
+    let name = path.file_name().ok_or_else(|| anyhow!("cannot write {}: not a file name", path.display()))?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut builder = tempfile::Builder::new();
+    let prefix = format!(".{}.", name.to_string_lossy());
+    builder.prefix(&prefix).suffix(".tmp");
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+    let mut tmp = builder.tempfile_in(dir).with_context(|| format!("cannot create a file in {}", dir.display()))?;
+    {
+        let mut w = BufWriter::new(tmp.as_file_mut());
+        write(&mut w).with_context(|| format!("cannot write {}", path.display()))?;
+        w.flush().with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    tmp.as_file().sync_all().with_context(|| format!("cannot write {}", path.display()))?;
+    tmp.persist(path).map_err(|e| e.error).with_context(|| format!("cannot replace {}", path.display()))?;
+    Ok(())
+}
+
+/// Writes `bytes` as the file `path`, atomically ([`write_atomic`]).
+///
+/// # Errors
+/// As [`write_atomic`].
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic(path, |w| Ok(w.write_all(bytes)?))
+}
+
+/// Writes `img` as a PNG file, atomically ([`write_atomic`]).
+///
+/// # Errors
+/// As [`write_atomic`], or PNG encoding errors.
+pub fn write_png(path: &Path, img: &image::RgbImage) -> Result<()> {
+    write_atomic(path, |w| Ok(img.write_with_encoder(image::codecs::png::PngEncoder::new(w))?))
+}
 
 /// Header of `trace.csv`.
 pub fn trace_header() -> Vec<String> {
@@ -23,35 +93,144 @@ pub fn trace_header() -> Vec<String> {
     h
 }
 
-/// Writes `rows` as `trace.csv` (one row per frame; see [`trace_header`]).
+/// Writes `rows` as `trace.csv` (one row per frame; see [`trace_header`]), atomically.
 ///
 /// # Errors
 /// I/O errors.
 pub fn write_trace(path: &Path, rows: &[TraceRow]) -> Result<()> {
-    let mut w = csv::Writer::from_path(path).with_context(|| format!("creating {}", path.display()))?;
+    write_atomic(path, |out| write_trace_to(out, rows))
+}
+
+fn write_trace_to(out: &mut dyn Write, rows: &[TraceRow]) -> Result<()> {
+    let mut w = csv::Writer::from_writer(out);
     w.write_record(trace_header())?;
     for r in rows {
-        let mut rec: Vec<String> = Vec::with_capacity(36);
-        rec.push(format!("{:.3}", r.t));
-        rec.extend(r.q.iter().chain(r.qd.iter()).map(|v| format!("{v:.6}")));
-        for psi in [&r.truth, &r.estimate] {
-            rec.extend(psi.0[..3].iter().map(|v| format!("{:.4}", v * 1e3)));
-            rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
-        }
-        rec.push(format!("{:.5}", r.fitness));
-        rec.push(r.status.as_str().to_owned());
-        rec.push(u8::from(r.hidden).to_string());
-        w.write_record(&rec)?;
+        w.write_record(trace_record(r))?;
     }
     w.flush()?;
     Ok(())
 }
 
-/// Writes `value` as pretty JSON.
+/// The fields of one row of `trace.csv` (see [`trace_header`]).
+pub fn trace_record(r: &TraceRow) -> Vec<String> {
+    let mut rec: Vec<String> = Vec::with_capacity(34);
+    rec.push(format!("{:.3}", r.t));
+    rec.extend(r.q.iter().chain(r.qd.iter()).map(|v| format!("{v:.6}")));
+    for psi in [&r.truth, &r.estimate] {
+        rec.extend(psi.0[..3].iter().map(|v| format!("{:.4}", v * 1e3)));
+        rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
+    }
+    rec.push(format!("{:.5}", r.fitness));
+    rec.push(r.status.as_str().to_owned());
+    rec.push(u8::from(r.hidden).to_string());
+    rec
+}
+
+/// Writes `trace.csv` of a closed-loop run: the columns of [`trace_header`] followed by
+/// `extra_header`, one row of `rows` with its `extra` fields per frame.
+///
+/// # Errors
+/// I/O errors, or `extra` shorter than `rows`.
+pub fn write_trace_with(path: &Path, rows: &[TraceRow], extra_header: &[&str], extra: &[Vec<String>]) -> Result<()> {
+    anyhow::ensure!(extra.len() >= rows.len(), "{} extra rows for {} trace rows", extra.len(), rows.len());
+    let mut w = csv::Writer::from_path(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut header = trace_header();
+    header.extend(extra_header.iter().map(|h| (*h).to_owned()));
+    w.write_record(header)?;
+    for (r, x) in rows.iter().zip(extra) {
+        let mut rec = trace_record(r);
+        rec.extend(x.iter().cloned());
+        w.write_record(rec)?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
+/// Writes `value` as pretty JSON, atomically.
 ///
 /// # Errors
 /// I/O or serialisation errors.
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
     let text = serde_json::to_string_pretty(value)?;
-    std::fs::write(path, text + "\n").with_context(|| format!("writing {}", path.display()))
+    write_bytes(path, (text + "\n").as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("evorec-io-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| unreachable!("{e}"));
+        dir
+    }
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap_or_else(|e| unreachable!("{e}"))
+            .map(|e| e.unwrap_or_else(|e| unreachable!("{e}")).file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    /// A writer that fails after half of its output, as a full disk or a crash would.
+    fn half_then_fail(w: &mut dyn Write) -> Result<()> {
+        w.write_all(&[b'x'; 100_000])?;
+        Err(anyhow!("disk full (simulated)"))
+    }
+
+    #[test]
+    fn failed_write_leaves_no_file_with_the_final_name() {
+        let dir = scratch("fresh");
+        let path = dir.join("trace.csv");
+        let err = write_atomic(&path, half_then_fail).err().map(|e| format!("{e:#}"));
+        assert!(err.as_deref().is_some_and(|e| e.contains("trace.csv") && e.contains("disk full")), "{err:?}");
+        assert!(!path.exists(), "a failed write created {}", path.display());
+        assert!(entries(&dir).is_empty(), "temporary files left: {:?}", entries(&dir));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn failed_write_keeps_the_complete_file() {
+        let dir = scratch("keep");
+        let path = dir.join("summary.json");
+        write_json(&path, &serde_json::json!({"frames": 90})).unwrap_or_else(|e| unreachable!("{e}"));
+        let before = std::fs::read(&path).unwrap_or_else(|e| unreachable!("{e}"));
+        assert!(write_atomic(&path, half_then_fail).is_err());
+        assert_eq!(std::fs::read(&path).unwrap_or_else(|e| unreachable!("{e}")), before);
+        assert_eq!(entries(&dir), vec!["summary.json".to_owned()]);
+        // A successful write replaces it completely.
+        write_bytes(&path, b"{}\n").unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(std::fs::read(&path).unwrap_or_else(|e| unreachable!("{e}")), b"{}\n");
+        assert_eq!(entries(&dir), vec!["summary.json".to_owned()]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn writers_produce_readable_files() {
+        let dir = scratch("formats");
+        let png = dir.join("p.png");
+        write_png(&png, &image::RgbImage::from_pixel(3, 2, image::Rgb([1, 2, 3])))
+            .unwrap_or_else(|e| unreachable!("{e}"));
+        let back = image::open(&png).unwrap_or_else(|e| unreachable!("{e}")).to_rgb8();
+        assert_eq!((back.width(), back.height(), back.get_pixel(2, 1).0), (3, 2, [1, 2, 3]));
+        write_trace(&dir.join("trace.csv"), &[]).unwrap_or_else(|e| unreachable!("{e}"));
+        let text = std::fs::read_to_string(dir.join("trace.csv")).unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(text.trim_end(), trace_header().join(","));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn output_dir_that_cannot_exist_is_reported() {
+        let dir = scratch("blocked");
+        let file = dir.join("f");
+        std::fs::write(&file, "x").unwrap_or_else(|e| unreachable!("{e}"));
+        let err = create_out_dir(&file.join("out")).err().map(|e| format!("{e:#}"));
+        assert!(err.as_deref().is_some_and(|e| e.contains("cannot create output directory")), "{err:?}");
+        create_out_dir(&dir.join("new/deeper")).unwrap_or_else(|e| unreachable!("{e}"));
+        assert!(entries(&dir.join("new/deeper")).is_empty(), "the write probe was not removed");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

@@ -6,12 +6,16 @@
 //! world — the same trait and loop as on the firmware —, runs and their summaries
 //! ([`experiment`]), the paper's experiment grid ([`paper`]), single-frame rendering
 //! ([`frame`]), the same runs with the tracker in the firmware on QEMU ([`hil`]), output
-//! files ([`io`]) and plots ([`plot`]); unknown starts and occlusions ([`occlusion`]) and the
+//! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]); recorded stereo sequences
+//! (`evorec-seq/1`): the reader ([`sequence`]), tracking them ([`track`]) and writing a
+//! scenario as one ([`export`]); unknown starts and occlusions ([`occlusion`]) and the
 //! acquisition statistics ([`acquire`]).
 
 pub mod acquire;
 pub mod arm;
+pub mod closed_loop;
 pub mod experiment;
+pub mod export;
 pub mod frame;
 pub mod hil;
 pub mod io;
@@ -20,6 +24,10 @@ pub mod occlusion;
 pub mod paper;
 pub mod plot;
 pub mod render;
+pub mod robot;
 pub mod scenario;
+pub mod sequence;
+pub mod servo;
 pub mod sim;
 pub mod timing;
+pub mod track;

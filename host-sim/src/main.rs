@@ -1,12 +1,15 @@
 //! `evorec`: the host simulator's command line.
 
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use evorec_core::tracker::Feedforward;
 use evorec_sim::scenario::{Method, Scenario};
-use evorec_sim::{experiment, frame, hil, paper};
+use evorec_sim::sequence::Sequence;
+use evorec_sim::{closed_loop, experiment, export, frame, hil, io, paper, servo, track};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -54,6 +57,30 @@ enum Command {
         #[arg(long)]
         firmware: Option<PathBuf>,
     },
+    /// Closed-loop experiments (position-based visual servoing from the tracker's estimates):
+    /// conveyor 0/0.05/0.1/0.2 m/s and turning block × (ga, ff, ff+target) × gains × delays,
+    /// in parallel; writes DIR/servo_table.csv, DIR/servo_table.md, DIR/stability_*.png and
+    /// DIR/runs/*/servo_error.csv.
+    Servo {
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Simulated seconds per run.
+        #[arg(long, default_value_t = 10.0)]
+        duration: f64,
+        /// Servo gains (1/s), comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = [1.0, 2.0, 4.0, 8.0])]
+        gains: Vec<f64>,
+        /// Processing delays (frame periods), comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = [0, 1, 2, 3])]
+        delays: Vec<u32>,
+        /// Conveyor speeds (m/s), comma-separated (the turning block is always added).
+        #[arg(long, value_delimiter = ',', default_values_t = [0.0, 0.05, 0.1, 0.2])]
+        speeds: Vec<f64>,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Worst-case timing and memory per GA generation on the Cortex-M4: runs the timing
     /// firmware under QEMU with -icount and writes DIR/timing.json and DIR/timing.md. Builds
     /// nothing: build the firmware first (`cd hil-stubs && cargo build --release`).
@@ -61,6 +88,50 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
+    },
+    /// Track a recorded stereo sequence (`evorec-seq/1` directory): writes DIR/trace.csv,
+    /// DIR/estimate.tum (TUM format), DIR/summary.json, plots and DIR/overlay_<N>.png. Nothing is
+    /// written unless the whole sequence was tracked.
+    Track {
+        /// Sequence directory (holds sequence.toml).
+        seq: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Plain 1-step GA (no motion feedforward).
+        #[arg(long)]
+        no_ff: bool,
+        /// Seed of the GA.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// GA population size.
+        #[arg(long)]
+        population: Option<usize>,
+        /// Sample points per row of the surface-strips model.
+        #[arg(long)]
+        points_per_row: Option<usize>,
+        /// Track only the first N frames.
+        #[arg(long)]
+        frames: Option<usize>,
+        /// Frame indices (frames.csv `index`) to draw the model at its estimate over, e.g. 0,90.
+        #[arg(long, value_delimiter = ',')]
+        overlay: Vec<u64>,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Write a simulator scenario as a recorded sequence (`evorec-seq/1`): the PA-10's URDF,
+    /// camera_info YAMLs, PNGs, joints at 1 kHz, ground truth, sequence.toml with the initial
+    /// pose; `evorec track SEQ` then reads it back.
+    Export {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Sequence directory to create (must not exist or be empty).
+        #[arg(long)]
+        out: PathBuf,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
     },
     /// Acquisition statistics: N random block poses (seeds FIRST_SEED..), each from an unknown
     /// start and through a 1 s occlusion, static arm and motion A at 0.5 rad/s with FF, in
@@ -115,12 +186,94 @@ fn report(a: &experiment::Accuracy, t0: Instant) {
     );
 }
 
-fn main() -> Result<()> {
-    let cli = Cli::parse();
+/// Runs the command; on failure prints ONE line `error: …` (the error chain, de-duplicated: see
+/// [`error_line`]) to stderr and exits with status 1. No backtrace is printed: `anyhow`'s
+/// `Debug` output (which `fn main() -> Result` would use) is not involved.
+fn main() -> ExitCode {
+    match execute(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", error_line(&e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The error and its causes joined by `": "`, leaving out every cause whose text the line
+/// already holds (a wrapper such as `ScenarioError::InFile` prints its source in its own message).
+fn error_line(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
+}
+
+fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<()> {
+    let seq = Sequence::load(dir)?;
+    let t0 = Instant::now();
+    let output = track::run(&seq, opts)?;
+    let ev = track::output::evaluate(&seq, &output);
+    track::output::write_all(&seq, &output, &ev, out)?;
+    let s = &ev.summary;
+    print!(
+        "{} frames in {:.1} s ({:.0} frames/s): F_mean {:.4}",
+        s.frames,
+        t0.elapsed().as_secs_f64(),
+        s.frames_per_s,
+        s.f_mean
+    );
+    if let Some(a) = &s.all {
+        print!(
+            ", RMS x/y/z {:.2}/{:.2}/{:.2} mm, RMS rotation {:.2} deg (max {:.2})",
+            a.rms_x_mm, a.rms_y_mm, a.rms_z_mm, a.rms_rot_deg, a.max_rot_deg
+        );
+        match s.within_from_frame {
+            Some(f) => print!(", within 10 mm/5 deg from frame {f}"),
+            None => print!(", never stays within 10 mm/5 deg"),
+        }
+    }
+    println!("\nwrote {}", out.display());
+    Ok(())
+}
+
+fn report_servo(s: &closed_loop::ServoSummary) {
+    println!(
+        "servo (t >= {:.1} s): RMS error {:.2} mm / {:.3} deg, spread {:.2} mm / {:.3} deg, {} frames not tracking, \
+         max camera speed {:.3} m/s: {}",
+        s.steady_from_s,
+        s.rms_err_mm,
+        s.rms_err_deg,
+        s.spread_mm,
+        s.spread_deg,
+        s.frames_not_tracking,
+        s.max_camera_speed_m_s,
+        s.outcome.as_str()
+    );
+}
+
+fn execute(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Run { scenario, out } => {
             let s = load(&scenario)?;
+            io::create_out_dir(&out)?;
             let t0 = Instant::now();
+            if s.servo.is_some() {
+                let output = closed_loop::run(&s, &closed_loop::LoopOptions::for_scenario(&s), || {})?;
+                let title = format!("{} ({}, closed loop)", scenario.display(), s.method.as_str());
+                closed_loop::write_outputs(&output, &out, &title)?;
+                report(&output.run.summary.accuracy, t0);
+                report_servo(&output.servo_summary);
+                println!("wrote {}", out.display());
+                return Ok(());
+            }
             let output = experiment::run(&s, || {})?;
             let title = format!("{} ({})", scenario.display(), s.method.as_str());
             experiment::write_outputs(&output, &out, &title)?;
@@ -132,6 +285,7 @@ fn main() -> Result<()> {
                 Some(p) => load(&p)?,
                 None => Scenario::new(1, paper::DURATION_S, Method::Ff),
             };
+            io::create_out_dir(&out)?;
             let t0 = Instant::now();
             let results = paper::run_grid(&base, &out, !quiet)?;
             println!("{}", paper::markdown(&results));
@@ -139,6 +293,7 @@ fn main() -> Result<()> {
         }
         Command::Hil { scenario, out, firmware } => {
             let s = load(&scenario)?;
+            io::create_out_dir(&out)?;
             let firmware = firmware.unwrap_or_else(evorec_firmware::host::default_firmware_path);
             let t0 = Instant::now();
             let output = hil::run(&s, &firmware, &out.join("qemu"), || {})?;
@@ -147,6 +302,41 @@ fn main() -> Result<()> {
             report(&output.summary.accuracy, t0);
             println!("wrote {}", out.display());
         }
+        Command::Track { seq, out, no_ff, seed, population, points_per_row, frames, overlay, quiet } => {
+            let opts = track::TrackOptions {
+                feedforward: if no_ff { Feedforward::Off } else { Feedforward::On },
+                seed,
+                population,
+                points_per_row,
+                frames,
+                overlay: overlay.into_iter().collect(),
+                progress: !quiet,
+            };
+            track_sequence(&seq, &out, &opts)?;
+        }
+        Command::Export { scenario, out, quiet } => {
+            let s = load(&scenario)?;
+            let name = scenario.file_stem().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            let bar = (!quiet).then(|| indicatif::ProgressBar::new(u64::from(evorec_sim::sim::frame_total(&s))));
+            let stats = export::export(&s, &name, &out, bar.clone())?;
+            if let Some(b) = bar {
+                b.finish_and_clear();
+            }
+            println!("wrote {} ({} frames, {} joint samples)", out.display(), stats.frames, stats.joint_samples);
+        }
+        Command::Servo { out, duration, gains, delays, speeds, quiet } => {
+            anyhow::ensure!(duration > 0.0 && duration <= 3600.0, "--duration: must be in (0, 3600], got {duration}");
+            anyhow::ensure!(gains.iter().all(|g| *g > 0.0 && *g <= 50.0), "--gains: each must be in (0, 50]");
+            anyhow::ensure!(delays.iter().all(|d| *d <= 10), "--delays: each must be in 0..=10");
+            anyhow::ensure!(speeds.iter().all(|v| (0.0..=0.3).contains(v)), "--speeds: each must be in [0, 0.3]");
+            let mut g = servo::GridSettings { duration_s: duration, gains, delays, ..servo::GridSettings::default() };
+            g.targets = speeds.iter().map(|&speed_m_s| servo::TargetCase::Conveyor { speed_m_s }).collect();
+            g.targets.push(servo::TargetCase::Rotating { omega_rad_s: 0.5 });
+            let t0 = Instant::now();
+            let results = servo::run_grid(&g, &out, !quiet)?;
+            println!("{}", servo::markdown(&results).split("\n\n").next().unwrap_or_default());
+            println!("{} runs in {:.1} s; wrote {}", results.len(), t0.elapsed().as_secs_f64(), out.display());
+        }
         Command::Acquire { trials, first_seed, points, out, quiet } => {
             let t0 = Instant::now();
             let report = evorec_sim::acquire::run(trials, first_seed, points, &out, !quiet)?;
@@ -154,10 +344,12 @@ fn main() -> Result<()> {
             println!("{} trials per case in {:.1} s; wrote {}", trials, t0.elapsed().as_secs_f64(), out.display());
         }
         Command::Timing { out } => {
+            io::create_out_dir(&out)?;
             evorec_sim::timing::run(&out)?;
         }
         Command::Render { scenario, frame: n, out } => {
             let s = load(&scenario)?;
+            io::create_out_dir(&out)?;
             let files = frame::render_frame(&s, n, &out).context("rendering")?;
             for f in files {
                 println!("wrote {}", f.display());

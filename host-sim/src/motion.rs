@@ -5,7 +5,7 @@
 //!
 //! ## Fixed geometry
 //! - The right camera `Σ_CR` sits on the flange at `[+baseline/2, 0, 0.05]` m (flange
-//!   coordinates) with the flange's orientation, see [`crate::arm::flange_to_camera`].
+//!   coordinates) with the flange's orientation, see [`flange_to_camera`].
 //! - At `t = 0` the flange is at [`FLANGE_START_M`] with orientation
 //!   [`initial_camera_rotation`]: the optical axis looks along world `+x`, tilted down by
 //!   [`CAMERA_TILT_DEG`].
@@ -31,12 +31,24 @@
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::arm::flange_to_camera_f64;
-use crate::occlusion::Placement;
-use crate::scenario::Scenario;
-
 /// Downward tilt `φ` of the optical axis at `t = 0` (degrees).
 pub const CAMERA_TILT_DEG: f64 = 20.0;
+
+/// Height of the right camera's origin above the flange, along the flange `z` axis (m).
+pub const CAMERA_MOUNT_OFFSET_M: f64 = 0.05;
+
+/// `^H T_CR` in f64: the right camera frame is the flange frame translated by
+/// `[+baseline/2, 0, 0.05]` m (flange coordinates), with the same orientation (optical axis =
+/// flange `z`).
+pub fn flange_to_camera_f64(baseline_m: f64) -> Isometry3<f64> {
+    Isometry3::from_parts(Translation3::new(0.5 * baseline_m, 0.0, CAMERA_MOUNT_OFFSET_M), UnitQuaternion::identity())
+}
+
+/// `^H T_CR` as the core's f32 isometry (see [`flange_to_camera_f64`]); pass it to
+/// `evorec_core::feedforward` and to the tracker configuration.
+pub fn flange_to_camera(baseline_m: f64) -> Isometry3<f32> {
+    flange_to_camera_f64(baseline_m).cast::<f32>()
+}
 
 /// Flange position `p_e0` at `t = 0` (world, metres).
 pub const FLANGE_START_M: [f64; 3] = [0.45, 0.0, 0.75];
@@ -139,16 +151,16 @@ pub struct FlangeTrajectory {
 }
 
 impl FlangeTrajectory {
-    /// The flange motion described by a scenario, starting at [`initial_flange_pose`].
-    pub fn from_scenario(s: &Scenario) -> Self {
-        Self {
-            kind: s.robot.motion,
-            start: initial_flange_pose(),
-            orbit_centre: target_centre(s.camera.baseline_m, s.target.distance_m),
-            omega_rad_s: s.robot.omega_rad_s,
-            amplitude_m: s.robot.amplitude_m,
-            amplitude_rad: s.robot.amplitude_deg.to_radians(),
-        }
+    /// A flange motion of `kind` starting at [`initial_flange_pose`], orbiting (motion B) the
+    /// vertical axis through `orbit_centre`.
+    pub fn new(
+        kind: MotionKind,
+        omega_rad_s: f64,
+        amplitude_m: f64,
+        amplitude_rad: f64,
+        orbit_centre: Point3<f64>,
+    ) -> Self {
+        Self { kind, start: initial_flange_pose(), orbit_centre, omega_rad_s, amplitude_m, amplitude_rad }
     }
 
     /// Desired flange pose and twist at time `t` (s).
@@ -210,27 +222,6 @@ pub struct TargetMotion {
 }
 
 impl TargetMotion {
-    /// The target motion described by a scenario (with `placement = "random"`, the pose of
-    /// [`random_target_pose`] and no `yaw0`).
-    pub fn from_scenario(s: &Scenario) -> Self {
-        let fixed = Self {
-            centre: target_centre(s.camera.baseline_m, s.target.distance_m),
-            yaw0_rad: s.target.yaw0_deg.to_radians(),
-            amplitude_rad: s.target.amplitude_deg.to_radians(),
-            omega_rad_s: s.target.omega_rad_s,
-            rest: target_rest_rotation(),
-        };
-        match s.target.placement {
-            Placement::Fixed => fixed,
-            Placement::Random => match random_target_pose(s) {
-                Some(pose) => {
-                    Self { centre: Point3::from(pose.translation.vector), yaw0_rad: 0.0, rest: pose.rotation, ..fixed }
-                }
-                None => fixed,
-            },
-        }
-    }
-
     /// The yaw `θ_o(t)` added to `yaw0` (rad).
     pub fn theta(&self, t: f64) -> f64 {
         self.amplitude_rad * (self.omega_rad_s * t).sin()
@@ -252,83 +243,10 @@ impl TargetMotion {
     }
 }
 
-/// Tries of [`random_target_pose`] before it gives up.
-pub const RANDOM_POSE_TRIES: usize = 100_000;
-
-/// Times over the run at which a random pose is checked to be inside both images.
-pub const RANDOM_POSE_CHECKS: usize = 40;
-
-/// Margin (pixels) the block's image keeps from every image border in a random pose.
-pub const RANDOM_POSE_MARGIN_PX: f32 = 2.0;
-
-/// A random world pose `^W T_M` of the block for the scenario's seed: its centre uniform in
-/// the tracker's search space ([`crate::experiment::search_space`], in `Σ_CR` at `t = 0`), its
-/// orientation uniform (Shoemake's method), redrawn until every corner is at least
-/// [`RANDOM_POSE_MARGIN_PX`] inside both images at `t = 0` and, when the flange moves, at
-/// [`RANDOM_POSE_CHECKS`] times over the run (along the scripted flange trajectory, with the
-/// block at rest: its own yaw oscillation is not checked). `None` after
-/// [`RANDOM_POSE_TRIES`] tries.
-pub fn random_target_pose(s: &Scenario) -> Option<Isometry3<f64>> {
-    use rand_core::{Rng, SeedableRng};
-    let rig = crate::sim::rig(s).ok()?;
-    let space = crate::experiment::search_space();
-    let block = crate::sim::block(s);
-    let trajectory = FlangeTrajectory::from_scenario(s);
-    let mount = flange_to_camera_f64(s.camera.baseline_m);
-    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(s.seed ^ 0x9A3D_0B1E_C7F0_5EED);
-    let mut unit = move || (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
-    let inside = |p: &Result<nalgebra::Point2<f32>, _>, cam: &evorec_core::camera::Pinhole| match p {
-        Ok(p) => {
-            let m = RANDOM_POSE_MARGIN_PX;
-            p.x >= m && p.y >= m && p.x <= f32::from(cam.width()) - m && p.y <= f32::from(cam.height()) - m
-        }
-        Err(_) => false,
-    };
-    for _ in 0..RANDOM_POSE_TRIES {
-        let t: [f64; 3] = core::array::from_fn(|i| {
-            let (lo, hi) = (f64::from(space.t_min()[i]), f64::from(space.t_max()[i]));
-            lo + (hi - lo) * unit()
-        });
-        let (u1, u2, u3) = (unit(), unit(), unit());
-        let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
-        let tau = std::f64::consts::TAU;
-        let q = nalgebra::Quaternion::new(
-            b * (tau * u3).cos(),
-            a * (tau * u2).sin(),
-            a * (tau * u2).cos(),
-            b * (tau * u3).sin(),
-        );
-        let q = UnitQuaternion::from_quaternion(q);
-        let pose = Isometry3::from_parts(Translation3::new(t[0], t[1], t[2]), q);
-        let world = initial_camera_pose(s.camera.baseline_m) * pose;
-        let visible_at = |t: f64| {
-            let cam = trajectory.setpoint(t).pose * mount;
-            let pose32: Isometry3<f32> = (cam.inverse() * world).cast();
-            block.corners().iter().all(|c| {
-                let (r, l) = rig.project_model_point(&pose32, c);
-                inside(&r, &rig.right) && inside(&l, &rig.left)
-            })
-        };
-        let checks =
-            if trajectory.omega_rad_s > 0.0 && trajectory.kind != MotionKind::Static { RANDOM_POSE_CHECKS } else { 0 };
-        if visible_at(0.0) && (1..=checks).all(|k| visible_at(s.duration_s * k as f64 / checks as f64)) {
-            return Some(world);
-        }
-    }
-    None
-}
-
 /// The default geometry's trajectory (baseline 0.1 m, 0.7 m, ±0.1 m, ±15°) for tests.
 #[cfg(test)]
 pub(crate) fn test_trajectory(kind: MotionKind, omega: f64) -> FlangeTrajectory {
-    FlangeTrajectory {
-        kind,
-        start: initial_flange_pose(),
-        orbit_centre: target_centre(0.1, 0.7),
-        omega_rad_s: omega,
-        amplitude_m: 0.1,
-        amplitude_rad: 15f64.to_radians(),
-    }
+    FlangeTrajectory::new(kind, omega, 0.1, 15f64.to_radians(), target_centre(0.1, 0.7))
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Mutex;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
@@ -174,17 +174,19 @@ pub const COLUMNS: [&str; 10] =
 /// I/O errors.
 pub fn write_tables(results: &[(Cell, Accuracy)], out: &Path) -> Result<()> {
     std::fs::create_dir_all(out)?;
-    let mut w = csv::Writer::from_path(out.join("paper_table.csv")).context("paper_table.csv")?;
-    w.write_record(COLUMNS)?;
-    for (cell, acc) in results {
-        let mut rec = vec![cell.motion_name().to_owned(), cell.method_name().to_owned(), format!("{}", cell.omega)];
-        rec.extend(
-            values(acc).iter().enumerate().map(|(i, v)| if i == 0 { format!("{v:.4}") } else { format!("{v:.6}") }),
-        );
-        w.write_record(&rec)?;
-    }
-    w.flush()?;
-    std::fs::write(out.join("paper_table.md"), markdown(results))?;
+    crate::io::write_atomic(&out.join("paper_table.csv"), |file| {
+        let mut w = csv::Writer::from_writer(file);
+        w.write_record(COLUMNS)?;
+        for (cell, acc) in results {
+            let mut rec = vec![cell.motion_name().to_owned(), cell.method_name().to_owned(), format!("{}", cell.omega)];
+            rec.extend(
+                values(acc).iter().enumerate().map(|(i, v)| if i == 0 { format!("{v:.4}") } else { format!("{v:.6}") }),
+            );
+            w.write_record(&rec)?;
+        }
+        Ok(w.flush()?)
+    })?;
+    crate::io::write_bytes(&out.join("paper_table.md"), markdown(results).as_bytes())?;
     Ok(())
 }
 

@@ -127,7 +127,7 @@ fn tick_formatter(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
     }
 }
 
-fn draw_err<E: std::fmt::Display>(e: E) -> anyhow::Error {
+pub(crate) fn draw_err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("drawing failed: {e}")
 }
 
@@ -185,7 +185,7 @@ fn draw_panel(
 }
 
 /// Renders into an RGB buffer with `draw` and saves it as a PNG.
-fn render_png(
+pub(crate) fn render_png(
     path: &Path,
     size: (u32, u32),
     draw: impl FnOnce(&DrawingArea<BitMapBackend<'_>, Shift>) -> anyhow::Result<()>,
@@ -198,7 +198,7 @@ fn render_png(
         root.present().map_err(draw_err)?;
     }
     let img = image::RgbImage::from_raw(size.0, size.1, buf).ok_or_else(|| anyhow!("bad plot buffer size"))?;
-    img.save_with_format(path, image::ImageFormat::Png).with_context(|| format!("cannot write {}", path.display()))
+    crate::io::write_png(path, &img)
 }
 
 /// Three stacked panels of `(truth, estimate, y description)` with a title.

@@ -38,11 +38,22 @@
 //!
 //! [ga]
 //! population = 40          # one of SUPPORTED_POPULATIONS
+//!
+//! [servo]                  # optional: closes the loop (position-based visual servoing)
+//! desired_t_m = [-0.05, 0.0, 0.6]  # required in [servo]: block centre in Σ_CR (m)
+//! desired_q_xyzw = [0, 0, 0, 1]    # optional ^CR Q_M* (unit); default: the one at t = 0
+//! gain = 2.0               # (0, 50] 1/s
+//! max_speed_m_s = 0.3      # (0, 2]
+//! max_rot_speed_rad_s = 1.0    # (0, 5]
+//! max_accel_m_s2 = 1.0     # (0, 20]
+//! max_rot_accel_rad_s2 = 3.0   # (0, 50]
+//! delay_frames = 1         # 0 ..= 10: processing delay between capture and estimate
 //! ```
 //! Acquisition keys (`[tracker] initial`, `[target] placement`, `[[occlusion]]`) are
 //! described in [`crate::occlusion`].
 //! All tables and all keys except `seed`, `duration_s` and `method` are optional; the values
-//! shown are the defaults (`robot.motion` defaults to `"static"`).
+//! shown are the defaults (`robot.motion` defaults to `"static"`, no `[servo]` runs the
+//! scripted motion open loop).
 
 use std::path::{Path, PathBuf};
 
@@ -233,6 +244,45 @@ impl Default for GaConfig {
     }
 }
 
+/// `[servo]`: the closed loop (see `evorec_core::servo`). With it the flange follows the servo's
+/// camera twist instead of `[robot]`'s scripted motion.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ServoSection {
+    /// Desired block centre in `Σ_CR` (m).
+    pub desired_t_m: [f64; 3],
+    /// Desired `^CR Q_M` as `[x, y, z, w]` (unit); `None`: the relative orientation at `t = 0`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub desired_q_xyzw: Option<[f64; 4]>,
+    /// Feedback gain `λ` (1/s).
+    pub gain: f64,
+    /// Linear speed limit of the camera (m/s).
+    pub max_speed_m_s: f64,
+    /// Angular speed limit (rad/s).
+    pub max_rot_speed_rad_s: f64,
+    /// Linear acceleration limit (m/s²).
+    pub max_accel_m_s2: f64,
+    /// Angular acceleration limit (rad/s²).
+    pub max_rot_accel_rad_s2: f64,
+    /// Frame periods between a frame's capture and its estimate reaching the servo.
+    pub delay_frames: u32,
+}
+
+impl ServoSection {
+    /// Defaults for every key but `desired_t_m`.
+    pub fn new(desired_t_m: [f64; 3]) -> Self {
+        Self {
+            desired_t_m,
+            desired_q_xyzw: None,
+            gain: 2.0,
+            max_speed_m_s: 0.3,
+            max_rot_speed_rad_s: 1.0,
+            max_accel_m_s2: 1.0,
+            max_rot_accel_rad_s2: 3.0,
+            delay_frames: 1,
+        }
+    }
+}
+
 /// `[tracker]`: how the tracker starts.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
 pub struct TrackerStart {
@@ -259,6 +309,9 @@ pub struct Scenario {
     pub robot: RobotConfig,
     /// GA settings.
     pub ga: GaConfig,
+    /// The closed loop, if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub servo: Option<ServoSection>,
     /// How the tracker starts.
     pub tracker: TrackerStart,
     /// Times when the block is hidden.
@@ -278,6 +331,7 @@ impl Scenario {
             target: TargetConfig::default(),
             robot: RobotConfig::default(),
             ga: GaConfig::default(),
+            servo: None,
             tracker: TrackerStart::default(),
             occlusion: Occlusions::default(),
         }
@@ -305,12 +359,14 @@ impl Scenario {
                 "ga",
                 "tracker",
                 "occlusion",
+                "servo",
             ],
         )?;
         let camera = parse_camera(&top.subtable("camera")?)?;
         let target = parse_target(&top.subtable("target")?)?;
         let robot = parse_robot(&top.subtable("robot")?)?;
         let ga = parse_ga(&top.subtable("ga")?)?;
+        let servo = parse_servo(&top.subtable("servo")?)?;
         let tracker_section = top.subtable("tracker")?;
         tracker_section.check_keys(&["initial"])?;
         let tracker = TrackerStart { initial: occlusion::parse_initial(tracker_section.get("initial"))? };
@@ -333,7 +389,7 @@ impl Scenario {
             other => return Err(invalid("method", format!("expected \"ga\" or \"ff\", got \"{other}\""))),
         };
         let occlusion = occlusion::parse_occlusions(top.get("occlusion"), duration_s)?;
-        Ok(Self { seed, duration_s, frame_period_s, method, camera, target, robot, ga, tracker, occlusion })
+        Ok(Self { seed, duration_s, frame_period_s, method, camera, target, robot, ga, servo, tracker, occlusion })
     }
 
     /// Reads, parses and validates a scenario file.
@@ -456,6 +512,58 @@ fn parse_ga(s: &Section<'_>) -> Result<GaConfig> {
             format!("the core is compiled for population sizes {SUPPORTED_POPULATIONS:?} only, got {population}"),
         )),
     }
+}
+
+fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
+    if s.table.is_none() {
+        return Ok(None);
+    }
+    s.check_keys(&[
+        "desired_t_m",
+        "desired_q_xyzw",
+        "gain",
+        "max_speed_m_s",
+        "max_rot_speed_rad_s",
+        "max_accel_m_s2",
+        "max_rot_accel_rad_s2",
+        "delay_frames",
+    ])?;
+    if s.get("desired_t_m").is_none() {
+        return Err(s.missing("desired_t_m"));
+    }
+    let desired_t_m: [f64; 3] = s.floats("desired_t_m", [0.0; 3])?;
+    let t_field = s.path("desired_t_m");
+    check_range_why(&format!("{t_field}[0]"), desired_t_m[0].abs(), Bound::Closed(0.0), 1.0, " (|x|)")?;
+    check_range_why(&format!("{t_field}[1]"), desired_t_m[1].abs(), Bound::Closed(0.0), 1.0, " (|y|)")?;
+    check_range_why(&format!("{t_field}[2]"), desired_t_m[2], Bound::Open(0.2), 3.0, " (in front of the camera)")?;
+    let desired_q_xyzw = match s.get("desired_q_xyzw") {
+        None => None,
+        Some(_) => {
+            let q: [f64; 4] = s.floats("desired_q_xyzw", [0.0; 4])?;
+            let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if !n.is_finite() || (n - 1.0).abs() > 1e-3 {
+                return Err(invalid(s.path("desired_q_xyzw"), format!("must be a unit quaternion, got norm {n}")));
+            }
+            Some(q.map(|x| x / n))
+        }
+    };
+    let d = ServoSection::new(desired_t_m);
+    let gain = s.float_in("gain", d.gain, Bound::Open(0.0), 50.0)?;
+    let max_speed_m_s = s.float_in("max_speed_m_s", d.max_speed_m_s, Bound::Open(0.0), 2.0)?;
+    let max_rot_speed_rad_s = s.float_in("max_rot_speed_rad_s", d.max_rot_speed_rad_s, Bound::Open(0.0), 5.0)?;
+    let max_accel_m_s2 = s.float_in("max_accel_m_s2", d.max_accel_m_s2, Bound::Open(0.0), 20.0)?;
+    let max_rot_accel_rad_s2 = s.float_in("max_rot_accel_rad_s2", d.max_rot_accel_rad_s2, Bound::Open(0.0), 50.0)?;
+    let delay_frames = s.int_in("delay_frames", i64::from(d.delay_frames), 0, 10)? as u32;
+    Ok(Some(ServoSection {
+        desired_t_m,
+        desired_q_xyzw,
+        gain,
+        max_speed_m_s,
+        max_rot_speed_rad_s,
+        max_accel_m_s2,
+        max_rot_accel_rad_s2,
+        delay_frames,
+    }))
 }
 
 /// Lower end of a range check.
@@ -675,6 +783,44 @@ mod tests {
             "ga.population: the core is compiled for population sizes [40] only, got 30"
         );
         assert!(err("seed = 1\nduration_s = \n").starts_with("TOML syntax error"));
+    }
+
+    #[test]
+    fn servo_section_is_validated_field_by_field() {
+        let ok = Scenario::from_toml_str(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\n"))
+            .unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(ok.servo, Some(ServoSection::new([0.0, 0.0, 0.6])));
+        assert_eq!(Scenario::from_toml_str(BASE).map(|s| s.servo).ok(), Some(None));
+        assert_eq!(err(&with("[servo]\ngain = 2\n")), "servo.desired_t_m: missing (this key is required)");
+        assert_eq!(
+            err(&with("[servo]\ndesired_t_m = [0, 0, 0.1]\n")),
+            "servo.desired_t_m[2]: must be in (0.2, 3] (in front of the camera), got 0.1"
+        );
+        assert_eq!(
+            err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ngain = 0\n")),
+            "servo.gain: must be in (0, 50], got 0"
+        );
+        assert_eq!(
+            err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\nmax_speed_m_s = -1\n")),
+            "servo.max_speed_m_s: must be in (0, 2], got -1"
+        );
+        assert_eq!(
+            err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ndesired_q_xyzw = [0, 0, 0, 2]\n")),
+            "servo.desired_q_xyzw: must be a unit quaternion, got norm 2"
+        );
+        assert_eq!(
+            err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ndelay_frames = 11\n")),
+            "servo.delay_frames: must be in 0..=10, got 11"
+        );
+        assert!(err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ngian = 1\n")).starts_with("servo.gian: unknown key"));
+        let mut s = Scenario::new(3, 5.0, Method::Ff);
+        s.servo = Some(ServoSection {
+            desired_q_xyzw: Some([0.0, 0.0, 0.0, 1.0]),
+            gain: 3.5,
+            ..ServoSection::new([0.01, -0.02, 0.55])
+        });
+        let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{e}\n{text}")), s);
     }
 
     #[test]

@@ -17,9 +17,9 @@ use nalgebra::Isometry3;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use crate::arm::{self, ArmSim, CONTROL_PERIOD_S, DOF};
-use crate::motion::{FlangeTrajectory, TargetMotion};
-use crate::occlusion::{self, OcclusionKind};
+use crate::arm::{ArmSim, CONTROL_PERIOD_S, DOF};
+use crate::motion::{self, FlangeTrajectory, TargetMotion, Twist};
+use crate::occlusion::{self, OcclusionKind, Placement};
 use crate::render::{self, AntiAlias, RenderOptions, StereoImages};
 use crate::scenario::Scenario;
 
@@ -49,6 +49,8 @@ pub struct World {
     block: Block,
     render: RenderOptions,
     rng: Xoshiro256PlusPlus,
+    hidden: bool,
+    target_offset: nalgebra::Vector3<f64>,
 }
 
 impl World {
@@ -65,12 +67,14 @@ impl World {
         Ok(Self {
             scenario: *scenario,
             arm,
-            trajectory: FlangeTrajectory::from_scenario(scenario),
-            target: TargetMotion::from_scenario(scenario),
+            trajectory: flange_trajectory(scenario),
+            target: target_motion(scenario),
             rig: rig(scenario)?,
             block: block(scenario),
             render: RenderOptions::default().with_antialias(antialias).with_noise(scenario.camera.noise_std as f32),
             rng: Xoshiro256PlusPlus::seed_from_u64(scenario.seed ^ 0x5EED_0FF4_A3E5),
+            hidden: false,
+            target_offset: nalgebra::Vector3::zeros(),
         })
     }
 
@@ -106,6 +110,27 @@ impl World {
         }
     }
 
+    /// Runs the 1 ms joint control loop up to time `t` (s) in closed loop: before every
+    /// control period `control` gives the flange setpoint (pose and world twist at the flange
+    /// origin) instead of the scripted trajectory.
+    pub fn advance_with(&mut self, t: f64, mut control: impl FnMut(&ArmSim) -> (Isometry3<f64>, Twist)) {
+        while self.arm.time() + 0.5 * CONTROL_PERIOD_S < t {
+            let (pose, twist) = control(&self.arm);
+            self.arm.step(CONTROL_PERIOD_S, &pose, &twist);
+        }
+    }
+
+    /// Hides the block from both cameras (an occluder in front of them) or shows it again.
+    pub fn set_target_hidden(&mut self, hidden: bool) {
+        self.hidden = hidden;
+    }
+
+    /// Shifts the block by `offset` (world, m) from its scripted pose (a conveyor driven by
+    /// the caller).
+    pub fn set_target_offset(&mut self, offset: nalgebra::Vector3<f64>) {
+        self.target_offset = offset;
+    }
+
     /// `^W T_CR`: the right camera's pose from the arm's forward kinematics.
     pub fn camera_pose(&self) -> Isometry3<f64> {
         self.arm.camera_pose(self.scenario.camera.baseline_m)
@@ -113,7 +138,9 @@ impl World {
 
     /// `^W T_M` at the current time.
     pub fn target_pose(&self) -> Isometry3<f64> {
-        self.target.target_world_pose(self.arm.time())
+        let mut pose = self.target.target_world_pose(self.arm.time());
+        pose.translation.vector += self.target_offset;
+        pose
     }
 
     /// `^CR T_M`: the target in the right camera frame (computed in f64).
@@ -136,7 +163,8 @@ impl World {
     /// a removed block is not drawn, an occluder is painted over the block's image.
     pub fn render(&mut self) -> StereoImages {
         let pose: Isometry3<f32> = self.target_in_camera().cast();
-        match self.occlusion() {
+        let occlusion = if self.hidden { Some(OcclusionKind::Removed) } else { self.occlusion() };
+        match occlusion {
             None => render::render_stereo(&self.rig, &pose, &self.block, &self.render, &mut self.rng),
             Some(OcclusionKind::Removed) => {
                 // A block behind the cameras renders as the background alone.
@@ -236,6 +264,7 @@ impl ErrorType for SimBoard {
 }
 
 impl CameraController<DOF> for SimBoard {
+    type Format = evorec_core::image::Hue;
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SimError> {
         if self.next >= self.frames {
             return Err(SimError::EndOfStream);
@@ -302,7 +331,107 @@ pub fn frame_time(s: &Scenario, frame: u32) -> Result<f64> {
 
 /// The flange-to-camera transform of a scenario (f32, for the tracker).
 pub fn flange_to_camera(s: &Scenario) -> Isometry3<f32> {
-    arm::flange_to_camera(s.camera.baseline_m)
+    motion::flange_to_camera(s.camera.baseline_m)
+}
+
+/// The flange motion a scenario describes.
+pub fn flange_trajectory(s: &Scenario) -> FlangeTrajectory {
+    let r = &s.robot;
+    let centre = motion::target_centre(s.camera.baseline_m, s.target.distance_m);
+    FlangeTrajectory::new(r.motion, r.omega_rad_s, r.amplitude_m, r.amplitude_deg.to_radians(), centre)
+}
+
+/// The target motion a scenario describes (with `placement = "random"`, the pose of
+/// [`random_target_pose`] and no `yaw0`).
+pub fn target_motion(s: &Scenario) -> TargetMotion {
+    let fixed = TargetMotion {
+        centre: motion::target_centre(s.camera.baseline_m, s.target.distance_m),
+        yaw0_rad: s.target.yaw0_deg.to_radians(),
+        amplitude_rad: s.target.amplitude_deg.to_radians(),
+        omega_rad_s: s.target.omega_rad_s,
+        rest: motion::target_rest_rotation(),
+    };
+    match s.target.placement {
+        Placement::Fixed => fixed,
+        Placement::Random => match random_target_pose(s) {
+            Some(pose) => TargetMotion {
+                centre: nalgebra::Point3::from(pose.translation.vector),
+                yaw0_rad: 0.0,
+                rest: pose.rotation,
+                ..fixed
+            },
+            None => fixed,
+        },
+    }
+}
+
+/// Tries of [`random_target_pose`] before it gives up.
+pub const RANDOM_POSE_TRIES: usize = 100_000;
+
+/// Times over the run at which a random pose is checked to be inside both images.
+pub const RANDOM_POSE_CHECKS: usize = 40;
+
+/// Margin (pixels) the block's image keeps from every image border in a random pose.
+pub const RANDOM_POSE_MARGIN_PX: f32 = 2.0;
+
+/// A random world pose `^W T_M` of the block for the scenario's seed: its centre uniform in
+/// the tracker's search space ([`crate::experiment::search_space`], in `Σ_CR` at `t = 0`), its
+/// orientation uniform (Shoemake's method), redrawn until every corner is at least
+/// [`RANDOM_POSE_MARGIN_PX`] inside both images at `t = 0` and, when the flange moves, at
+/// [`RANDOM_POSE_CHECKS`] times over the run (along the scripted flange trajectory, with the
+/// block at rest: its own yaw oscillation is not checked). `None` after
+/// [`RANDOM_POSE_TRIES`] tries.
+pub fn random_target_pose(s: &Scenario) -> Option<Isometry3<f64>> {
+    use rand_core::{Rng, SeedableRng};
+    let rig = rig(s).ok()?;
+    let space = crate::experiment::search_space();
+    let block = block(s);
+    let trajectory = flange_trajectory(s);
+    let mount = motion::flange_to_camera_f64(s.camera.baseline_m);
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(s.seed ^ 0x9A3D_0B1E_C7F0_5EED);
+    let mut unit = move || (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    let inside = |p: &Result<nalgebra::Point2<f32>, _>, cam: &evorec_core::camera::Pinhole| match p {
+        Ok(p) => {
+            let m = RANDOM_POSE_MARGIN_PX;
+            p.x >= m && p.y >= m && p.x <= f32::from(cam.width()) - m && p.y <= f32::from(cam.height()) - m
+        }
+        Err(_) => false,
+    };
+    for _ in 0..RANDOM_POSE_TRIES {
+        let t: [f64; 3] = core::array::from_fn(|i| {
+            let (lo, hi) = (f64::from(space.t_min()[i]), f64::from(space.t_max()[i]));
+            lo + (hi - lo) * unit()
+        });
+        let (u1, u2, u3) = (unit(), unit(), unit());
+        let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+        let tau = std::f64::consts::TAU;
+        let q = nalgebra::Quaternion::new(
+            b * (tau * u3).cos(),
+            a * (tau * u2).sin(),
+            a * (tau * u2).cos(),
+            b * (tau * u3).sin(),
+        );
+        let q = nalgebra::UnitQuaternion::from_quaternion(q);
+        let pose = Isometry3::from_parts(nalgebra::Translation3::new(t[0], t[1], t[2]), q);
+        let world = motion::initial_camera_pose(s.camera.baseline_m) * pose;
+        let visible_at = |t: f64| {
+            let cam = trajectory.setpoint(t).pose * mount;
+            let pose32: Isometry3<f32> = (cam.inverse() * world).cast();
+            block.corners().iter().all(|c| {
+                let (r, l) = rig.project_model_point(&pose32, c);
+                inside(&r, &rig.right) && inside(&l, &rig.left)
+            })
+        };
+        let checks = if trajectory.omega_rad_s > 0.0 && trajectory.kind != motion::MotionKind::Static {
+            RANDOM_POSE_CHECKS
+        } else {
+            0
+        };
+        if visible_at(0.0) && (1..=checks).all(|k| visible_at(s.duration_s * k as f64 / checks as f64)) {
+            return Some(world);
+        }
+    }
+    None
 }
 
 /// Renders the frame at `frame` of a scenario (advancing a fresh world to its time).

@@ -126,6 +126,7 @@ impl ErrorType for ReplayBoard<'_> {
 }
 
 impl CameraController<7> for ReplayBoard<'_> {
+    type Format = evorec_core::image::Hue;
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, ErrorKind> {
         let f = self.frames.next().ok_or(ErrorKind::EndOfStream)?;
         left.get_mut(..f.left.len()).ok_or(ErrorKind::Other)?.copy_from_slice(&f.left);

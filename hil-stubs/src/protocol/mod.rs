@@ -171,7 +171,7 @@ pub enum DecodeError {
         /// CRC computed over header and payload.
         computed: u32,
     },
-    /// A field holds a value outside its range (e.g. a feedforward flag other than 0/1).
+    /// A field holds a value outside its range (e.g. a feedforward flag other than 0/1/2).
     BadValue,
 }
 

@@ -67,6 +67,7 @@ fn encode_setup(e: &mut Enc<'_>, s: &Setup) {
     e.u8(match s.feedforward {
         Feedforward::Off => 0,
         Feedforward::On => 1,
+        Feedforward::OnWithTarget => 2,
     });
     e.u16(0);
     e.f32(s.max_dt_s);
@@ -109,6 +110,7 @@ fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {
     let feedforward = match d.u8() {
         0 => Feedforward::Off,
         1 => Feedforward::On,
+        2 => Feedforward::OnWithTarget,
         _ => return Err(DecodeError::BadValue),
     };
     let _reserved = d.u16();
@@ -167,7 +169,8 @@ pub(super) fn decode_small(kind: MsgType, payload: &[u8]) -> Result<Message<'sta
             let fitness = d.f32();
             let generation = d.u32();
             let status = Status::from_code(d.u8()).ok_or(DecodeError::BadValue)?;
-            Message::Estimate(Estimate { psi, fitness, generation, status })
+            // The capture time is not in the payload; the host fills it in from its frame.
+            Message::Estimate(Estimate { psi, fitness, generation, capture_time_us: 0, status })
         }
         MsgType::End => Message::End,
         MsgType::Ack => Message::Ack(d.u32()),

@@ -49,6 +49,7 @@ fn small_messages() -> Vec<Envelope<'static>> {
                 psi: Psi::new([0.01, -0.02, 0.7], [f32::MIN_POSITIVE, -0.0, 1.0e-30]),
                 fitness: 0.875,
                 generation: 42,
+                capture_time_us: 0,
                 status: evorec_core::status::Status::Lost,
             }),
         },
@@ -80,7 +81,7 @@ fn small_messages_round_trip() {
 fn payload_sizes_match_the_constants() {
     assert_eq!(encode(&Envelope::bare(Message::Config(sample_setup()))).len(), HEADER_LEN + CONFIG_LEN + CRC_LEN);
     assert_eq!(FRAME_FIXED_LEN, 68);
-    assert_eq!(ESTIMATE_LEN, 32);
+    assert_eq!(ESTIMATE_LEN, 33);
 }
 
 #[test]
@@ -90,6 +91,7 @@ fn nan_bits_cross_unchanged() {
         psi: Psi::new([odd_nan, 0.0, 0.0], [0.0; 3]),
         fitness: f32::from_bits(0xFFA0_0001),
         generation: 1,
+        capture_time_us: 0,
         status: evorec_core::status::Status::Searching,
     }));
     let bytes = encode(&env);
@@ -198,7 +200,7 @@ fn bad_feedforward_flag_is_rejected() {
     // The feedforward flag sits after 30 f32 fields, the seed and the hue tolerance.
     let ff = 4 * 4 + 2 * 2 + 4 + 12 + 24 + 12 + 16 + 12 + 12 + 8 + 1;
     assert_eq!(payload[ff], 1);
-    payload[ff] = 2;
+    payload[ff] = 3;
     assert_eq!(decode_small(MsgType::Config, &payload[..len]), Err(DecodeError::BadValue));
 }
 
@@ -235,7 +237,7 @@ mod prop {
             let env = Envelope {
                 sequence,
                 capture_time_us: time,
-                message: Message::Estimate(Estimate { psi: Psi(psi), fitness, generation, status: evorec_core::status::Status::Tracking }),
+                message: Message::Estimate(Estimate { psi: Psi(psi), fitness, generation, capture_time_us: 0, status: evorec_core::status::Status::Tracking }),
             };
             let bytes = encode(&env);
             let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();

@@ -1,0 +1,108 @@
+//! Feedforward of the target's own motion (`Feedforward::OnWithTarget`, eq. 23 in full) on a
+//! synthetic sequence: a block sliding sideways in front of a still camera.
+
+use evorec_core::camera::{Pinhole, StereoRig};
+use evorec_core::config::NO_HUE;
+use evorec_core::ga::SearchSpace;
+use evorec_core::hue::HueImage;
+use evorec_core::model::Block;
+use evorec_core::pose::Psi;
+use evorec_core::target_motion::PredictError;
+use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
+use evorec_core::{quat, synth};
+use nalgebra::{Isometry3, Vector3};
+
+const DT_US: u64 = 33_000;
+const FRAMES: u64 = 100;
+/// Lateral speed of the block in the camera frame (m/s), reached after [`RAMP_S`].
+const SPEED: f32 = 0.1;
+/// The block accelerates uniformly from rest over this time (s).
+const RAMP_S: f32 = 1.0;
+
+/// Distance travelled after `t` seconds.
+fn travel(t: f32) -> f32 {
+    if t < RAMP_S { 0.5 * SPEED * t * t / RAMP_S } else { SPEED * (t - 0.5 * RAMP_S) }
+}
+
+fn rig() -> StereoRig {
+    let cam = Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, 640, 480).unwrap();
+    StereoRig::parallel(cam, 0.1).unwrap()
+}
+
+fn truth(k: u64) -> Psi {
+    let t = (k * DT_US) as f32 * 1e-6;
+    let q = quat::from_angle_axis(0.3, &Vector3::new(0.2, 1.0, 0.1)).unwrap();
+    Psi::from_parts(&Vector3::new(-0.15 + travel(t), 0.01, 0.75), &q)
+}
+
+fn render(rig: &StereoRig, psi: &Psi) -> (Vec<u8>, Vec<u8>) {
+    let (w, h) = (usize::from(rig.right.width()), usize::from(rig.right.height()));
+    let iso = psi.try_to_isometry().unwrap();
+    let (mut l, mut r) = (vec![NO_HUE; w * h], vec![NO_HUE; w * h]);
+    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
+    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
+    (l, r)
+}
+
+/// Runs the sequence; returns the RMS position error (m) over frames 30.. and the tracker.
+fn run(mode: Feedforward) -> (f32, Tracker) {
+    let rig = rig();
+    let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(3);
+    let mut tracker: Tracker = Tracker::new(config).unwrap();
+    tracker.reset_around(&truth(0), &[0.002, 0.002, 0.002, 0.004, 0.004, 0.004]).unwrap();
+    let mut sq = 0.0;
+    let mut n = 0;
+    for k in 0..FRAMES {
+        let (l, r) = render(&rig, &truth(k));
+        let frame = StereoFrame {
+            left: HueImage::new_checked(&l[..], 640, 480).unwrap(),
+            right: HueImage::new_checked(&r[..], 640, 480).unwrap(),
+        };
+        let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: k * DT_US };
+        let dt = if k == 0 { 0.0 } else { DT_US as f32 * 1e-6 };
+        let e = tracker.step(&frame, &joints, dt, mode).unwrap();
+        assert_eq!(e.capture_time_us, k * DT_US);
+        if k >= 30 {
+            sq += (e.psi.translation() - truth(k).translation()).norm_squared();
+            n += 1;
+        }
+    }
+    ((sq / n as f32).sqrt(), tracker)
+}
+
+#[test]
+fn target_feedforward_follows_a_sliding_block() {
+    let (rms_ff, _) = run(Feedforward::On);
+    let (rms_target, tracker) = run(Feedforward::OnWithTarget);
+    assert!(rms_target < 0.5 * rms_ff, "FF + target {rms_target} m vs FF {rms_ff} m");
+    assert!(rms_target < 0.008, "FF + target {rms_target} m");
+
+    // The filter has the block's velocity (the camera is the world's flange frame at q = 0, so
+    // the world velocity is the camera-frame one rotated by the flange's rotation).
+    let filter = tracker.target_filter();
+    assert!(filter.is_trusted());
+    let v = filter.velocity().unwrap().v;
+    let cam = evorec_core::kinematics::PA10.forward(&[0.0; 7]);
+    let expected = cam.rotation * Vector3::new(SPEED, 0.0, 0.0);
+    assert!((v - expected).norm() < 0.02, "v {v} vs {expected}");
+
+    // Hand-over: the pose 50 ms after the last capture is ahead by about 5 mm.
+    let last = (FRAMES - 1) * DT_US;
+    let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: last };
+    let p = tracker.predict(&joints, last + 50_000).unwrap();
+    assert!(p.trusted && p.base_time_us == last);
+    let t_out = (last + 50_000) as f32 * 1e-6;
+    let expected_x = -0.15 + travel(t_out);
+    assert!((p.psi.0[0] - expected_x).abs() < 0.004, "predicted x {} vs {expected_x}", p.psi.0[0]);
+}
+
+#[test]
+fn a_reset_forgets_the_target_motion() {
+    let (_, mut tracker) = run(Feedforward::OnWithTarget);
+    assert!(tracker.target_filter().is_trusted());
+    tracker.reset_uniform();
+    assert!(!tracker.target_filter().has_track());
+    let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
+    assert_eq!(tracker.predict(&joints, 0), Err(PredictError::NoTrack));
+}

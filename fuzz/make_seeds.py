@@ -1,0 +1,83 @@
+#!/usr/bin/env python3
+"""Writes the hand-made seed inputs of the fuzz corpora (fuzz/corpus/<target>/seed-*).
+
+Link messages follow hil-stubs/src/protocol/mod.rs (24-byte header, payload, CRC-32/ISO-HDLC
+trailer = zlib.crc32). Run from anywhere: python3 fuzz/make_seeds.py
+"""
+import os
+import struct
+import zlib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def msg(kind, payload=b"", seq=0, time_us=0):
+    header = b"EVRC" + bytes([1, kind]) + b"\0\0" + struct.pack("<IIQ", seq, len(payload), time_us)
+    body = header + payload
+    return body + struct.pack("<I", zlib.crc32(body))
+
+
+def f32s(*v):
+    return struct.pack("<%df" % len(v), *v)
+
+
+def setup(width, height):
+    """A CONFIG payload: the protocol tests' sample setup at the given image size."""
+    p = f32s(width * 1.25, width * 1.25, width / 2, height / 2)
+    p += struct.pack("<HH", width, height)
+    p += f32s(0.1)  # baseline
+    p += f32s(0.1, 0.15, 0.2)  # block
+    p += f32s(0, 120, 240, 0, 120, 240)  # face hues
+    p += f32s(0, 0.06, 0.1) + f32s(1, 0, 0, 0)  # flange to camera
+    p += f32s(-0.2, -0.2, 0.4) + f32s(0.2, 0.2, 1.0)  # search box
+    p += struct.pack("<QBBH", 1, 5, 1, 0)  # seed, hue tolerance, feedforward on, reserved
+    p += f32s(0.5)  # max dt
+    p += f32s(0.2, 0.9, 0.35) + struct.pack("<II", 1, 3) + f32s(0.25, 0.6)
+    p += f32s(0.02, 0.02, 0.02, 0.04, 0.04, 0.04, 0.004, 0.004, 0.004, 0.008, 0.008, 0.008)
+    p += f32s(0.001, 0.001, 0.001, 0.002, 0.002, 0.002)
+    p += f32s(0, 0, 0.7, 0, 0, 0) + f32s(*[0.02] * 6)  # initial pose and spread
+    return p
+
+
+def frame(width, height, t_us, hue):
+    p = struct.pack("<HHQ", width, height, t_us) + f32s(*[0.1] * 7) + f32s(*[0.01] * 7)
+    n = width * height
+    left = bytes((hue + i) % 256 for i in range(n))
+    return p + left + left[::-1]
+
+
+def write(target, name, data):
+    d = os.path.join(HERE, "corpus", target)
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(d, "seed-" + name), "wb") as f:
+        f.write(data)
+
+
+def main():
+    w, h = 16, 12
+    config = msg(1, setup(w, h))
+    frames = b"".join(msg(2, frame(w, h, 33_333 * k, 10 * k), seq=k, time_us=33_333 * k) for k in range(1, 3))
+    end = msg(4)
+    write("link_decode", "config", config)
+    write("link_decode", "frame", msg(2, frame(4, 3, 7, 0), seq=5, time_us=9))
+    write("link_decode", "stream", config + frames + end)
+    write("firmware_serve", "conversation", config + frames + end)
+    write("firmware_serve", "wrong-size-frame", config + msg(2, frame(4, 3, 1, 0), seq=1) + end)
+    replies = msg(5, struct.pack("<I", 0))
+    replies += msg(3, f32s(0.01, -0.02, 0.7, 0.05, 0.1, -0.03, 0.9) + struct.pack("<I", 1), seq=1, time_us=33_333)
+    replies += msg(6, seq=2, time_us=66_666)
+    replies += msg(7, struct.pack("<5I", 2, 1, 1, 13_892, 90_000))
+    write("host_replies", "conversation", replies)
+    write("host_replies", "error", msg(8, struct.pack("<I", 2)))
+    # tracker_step: camera 16x12, no reset, one step on 16x12 images with zero joints, dt 0.033
+    step = bytes([16, 12, 0]) + struct.pack("<HHHH", 16, 12, 16, 12) + bytes([7, 1])
+    step += bytes((i * 13) % 256 for i in range(16 * 12)) + f32s(*[0.0] * 14) + f32s(0.033) + bytes([1])
+    write("tracker_step", "one-step", step)
+    write("tracker_step", "nan-joints", step[: -(14 * 4 + 5)] + f32s(float("nan"), *[0.0] * 13) + f32s(0.033) + b"\1")
+    with open(os.path.join(HERE, "..", "scenarios", "smoke.toml"), "rb") as f:
+        write("scenario_toml", "smoke", f.read())
+    write("scenario_toml", "minimal", b'seed = 1\nduration_s = 1.0\nmethod = "ga"\n')
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,667 @@
+//! The closed loop: position-based visual servoing of the simulated PA-10 from the tracker's
+//! own estimates (a scenario with `[servo]`).
+//!
+//! Per frame `n` (captured at `t_n = n·T`):
+//! 1. the 1 kHz joint loop runs up to `t_n`; at every period the newest estimate that has
+//!    *reached* the servo (captured `delay_frames·T` earlier or more) is handed over to the
+//!    command time — taken into the world with the joint state of its capture and seen from
+//!    the camera at the current joint state (and, with the target velocity, moved by the
+//!    target filter's velocity) —, the core's [`Servo`] turns it into a camera twist, and the
+//!    twist is integrated into the flange setpoint that the arm's resolved-rate controller
+//!    follows (joint velocity limits, joint-limit avoidance);
+//! 2. the frame pair is rendered (or the block hidden during an occlusion) and the tracker
+//!    runs one generation on it; the estimate updates the target filter and the tracking gate
+//!    and is queued until it reaches the servo.
+//!
+//! The servo moves only while the gate says the tracker is tracking; otherwise it decelerates
+//! to a stop within its limits and resumes when the gate says tracking again.
+
+use std::collections::VecDeque;
+
+use anyhow::{Result, anyhow};
+use evorec_core::feedforward::{self, CameraTwist};
+use evorec_core::hue::HueImage;
+use evorec_core::kinematics::PA10;
+use evorec_core::pose::Psi;
+use evorec_core::servo::{PoseError, Servo, ServoConfig, ServoInput, ServoLimits};
+use evorec_core::target_motion::{self, TargetFilter};
+use evorec_core::tracker::{Estimate, Feedforward, JointSample, StereoFrame};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use serde::Serialize;
+
+use crate::arm::{ArmSim, CONTROL_PERIOD_S, DOF};
+use crate::experiment::{self, INITIAL_SPREAD, RunOutput, SimTracker, Summary};
+use crate::motion::Twist;
+use crate::motion::flange_to_camera_f64;
+use crate::render;
+use crate::scenario::{Scenario, ServoSection};
+use crate::sim::{TraceRow, World, frame_total};
+
+/// Fitness at or above which an estimate counts towards acquiring the block.
+pub const GATE_ACQUIRE_FITNESS: f32 = 0.6;
+/// Consecutive estimates at or above [`GATE_ACQUIRE_FITNESS`] before the gate says tracking.
+pub const GATE_ACQUIRE_FRAMES: u32 = 3;
+/// Fitness below which one estimate makes the gate say lost.
+pub const GATE_LOSE_FITNESS: f32 = 0.5;
+
+/// Whether the tracker is tracking, decided from the fitness of its estimates (hysteresis:
+/// [`GATE_ACQUIRE_FRAMES`] good estimates to start, one bad one to stop).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct TrackGate {
+    good: u32,
+    tracking: bool,
+}
+
+impl TrackGate {
+    /// Takes the next estimate and says whether the servo may act on it.
+    // TODO(lead): status — replace this rule by the tracker's own status (Searching / Tracking
+    // / Lost on `Estimate`) when the acquisition branch lands: `est.status == Tracking`.
+    pub fn update(&mut self, est: &Estimate) -> bool {
+        if est.fitness >= GATE_ACQUIRE_FITNESS {
+            self.good = self.good.saturating_add(1);
+        } else {
+            self.good = 0;
+        }
+        if est.fitness < GATE_LOSE_FITNESS || !est.fitness.is_finite() {
+            self.tracking = false;
+        } else if self.good >= GATE_ACQUIRE_FRAMES {
+            self.tracking = true;
+        }
+        self.tracking
+    }
+}
+
+/// A conveyor carrying the block along world `y`: it starts at the block's scripted centre
+/// moving at `speed` towards `+y` and reverses at `±travel/2` with deceleration `accel`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Conveyor {
+    /// Belt speed (m/s).
+    pub speed_m_s: f64,
+    /// Length of the shuttle (m).
+    pub travel_m: f64,
+    /// Acceleration of the reversals (m/s²).
+    pub accel_m_s2: f64,
+}
+
+/// The state of a [`Conveyor`] (integrated at the joint-control period).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Belt {
+    conveyor: Conveyor,
+    y: f64,
+    v: f64,
+    dir: f64,
+    t: f64,
+    /// Since when the belt runs at constant speed (∞ while it accelerates).
+    constant_since: f64,
+}
+
+impl Belt {
+    fn new(conveyor: Conveyor) -> Self {
+        Self { conveyor, y: 0.0, v: conveyor.speed_m_s, dir: 1.0, t: 0.0, constant_since: 0.0 }
+    }
+
+    fn advance_to(&mut self, t: f64) {
+        let (c, h) = (self.conveyor, CONTROL_PERIOD_S);
+        while self.t + 0.5 * h < t {
+            let stop = c.speed_m_s * c.speed_m_s / (2.0 * c.accel_m_s2);
+            if self.dir * self.y >= 0.5 * c.travel_m - stop && self.dir * self.v > 0.0 {
+                self.dir = -self.dir;
+            }
+            let want = self.dir * c.speed_m_s;
+            let dv = (want - self.v).clamp(-c.accel_m_s2 * h, c.accel_m_s2 * h);
+            if dv != 0.0 {
+                self.constant_since = f64::INFINITY;
+            } else if self.constant_since == f64::INFINITY {
+                self.constant_since = self.t;
+            }
+            self.v += dv;
+            self.y += self.v * h;
+            self.t += h;
+        }
+    }
+
+    /// Seconds the belt has run at constant speed (0 while it accelerates).
+    fn steady_for(&self) -> f64 {
+        if self.constant_since.is_finite() { self.t - self.constant_since } else { 0.0 }
+    }
+}
+
+/// A frame counts towards the steady state only after the conveyor ran at constant speed for
+/// this long (s).
+pub const STEADY_AFTER_REVERSAL_S: f64 = 1.0;
+
+/// Options of a closed-loop run that scenario files do not carry.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LoopOptions {
+    /// Hide the block from `start` for `duration` seconds.
+    pub occlusion: Option<(f64, f64)>,
+    /// A conveyor under the block.
+    pub conveyor: Option<Conveyor>,
+    /// The tracker's feedforward, overriding the scenario's method (`None`: the method's).
+    pub feedforward: Option<Feedforward>,
+    /// Hand over with the target filter's velocity and feed it forward in the servo law
+    /// (the "ff+target" method).
+    pub target_velocity: bool,
+}
+
+impl LoopOptions {
+    /// The options a scenario's method implies (no occlusion).
+    pub fn for_scenario(_s: &Scenario) -> Self {
+        // TODO(servo): `target_velocity: s.method == Method::FfTarget` once that method lands.
+        Self { occlusion: None, conveyor: None, feedforward: None, target_velocity: false }
+    }
+}
+
+/// The servo's side of one frame (the extra columns of `trace.csv`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServoRow {
+    /// Capture time (s).
+    pub t: f64,
+    /// The servo's command at `t` (camera twist in `Σ_CR`).
+    pub command: CameraTwist,
+    /// True servo error: the true relative pose against the desired one.
+    pub error: PoseError,
+    /// Whether the servo was acting on a tracked estimate at `t`.
+    pub tracking: bool,
+    /// Whether the block was hidden in this frame.
+    pub occluded: bool,
+    /// Largest true camera speed since the previous frame (m/s, from `q̇`).
+    pub camera_speed_m_s: f64,
+    /// Largest true camera angular speed since the previous frame (rad/s).
+    pub camera_rot_speed_rad_s: f64,
+    /// Tracker error `‖t̂ − t‖` of this frame's estimate (m).
+    pub tracker_error_m: f64,
+    /// Whether the block's own motion was steady (no conveyor reversal within
+    /// [`STEADY_AFTER_REVERSAL_S`]).
+    pub steady: bool,
+}
+
+/// Header of the servo columns of `trace.csv`.
+pub const SERVO_COLUMNS: [&str; 15] = [
+    "cmd_vx_m_s",
+    "cmd_vy_m_s",
+    "cmd_vz_m_s",
+    "cmd_wx_rad_s",
+    "cmd_wy_rad_s",
+    "cmd_wz_rad_s",
+    "servo_ex_mm",
+    "servo_ey_mm",
+    "servo_ez_mm",
+    "servo_err_mm",
+    "servo_err_deg",
+    "tracking",
+    "occluded",
+    "camera_speed_m_s",
+    "camera_rot_speed_rad_s",
+];
+
+impl ServoRow {
+    /// The fields under [`SERVO_COLUMNS`].
+    pub fn record(&self) -> Vec<String> {
+        let c = &self.command;
+        let mut rec: Vec<String> = c.v.iter().chain(c.w.iter()).map(|v| format!("{v:.6}")).collect();
+        rec.extend(self.error.translation.iter().map(|v| format!("{:.4}", v * 1e3)));
+        rec.push(format!("{:.4}", self.error.translation_norm() * 1e3));
+        rec.push(format!("{:.4}", self.error.rotation_norm().to_degrees()));
+        rec.push(u8::from(self.tracking).to_string());
+        rec.push(u8::from(self.occluded).to_string());
+        rec.push(format!("{:.6}", self.camera_speed_m_s));
+        rec.push(format!("{:.6}", self.camera_rot_speed_rad_s));
+        rec
+    }
+}
+
+/// How a closed-loop run ended (the stability map's classes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// The servo error settled.
+    Converged,
+    /// The servo error keeps swinging (its spread over the second half exceeds
+    /// [`OSCILLATION_MM`] or [`OSCILLATION_DEG`]).
+    Oscillating,
+    /// The servo error grows or exceeds [`DIVERGED_MM`] / [`DIVERGED_DEG`].
+    Diverged,
+    /// The tracker lost the block (not tracking outside an occlusion in the second half, or
+    /// its error above [`LOST_TRACKER_M`] at the end).
+    Lost,
+}
+
+impl Outcome {
+    /// Lower-case name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Converged => "converged",
+            Self::Oscillating => "oscillating",
+            Self::Diverged => "diverged",
+            Self::Lost => "lost",
+        }
+    }
+}
+
+/// Spread (standard deviation) of the servo error's translation that counts as oscillating (mm).
+pub const OSCILLATION_MM: f64 = 5.0;
+/// Spread of the servo error's rotation that counts as oscillating (degrees).
+pub const OSCILLATION_DEG: f64 = 1.0;
+/// Servo error that counts as diverged (mm).
+pub const DIVERGED_MM: f64 = 100.0;
+/// Servo rotation error that counts as diverged (degrees).
+pub const DIVERGED_DEG: f64 = 30.0;
+/// Tracker error at the end that counts as a lost block (m).
+pub const LOST_TRACKER_M: f64 = 0.03;
+
+/// Summary of the servo side of a run (steady state = the frames of the second half of the run
+/// whose [`ServoRow::steady`] is set).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ServoSummary {
+    /// Start of the steady-state window (s).
+    pub steady_from_s: f64,
+    /// RMS of `‖t_e‖` over the steady-state window (mm).
+    pub rms_err_mm: f64,
+    /// RMS of the rotation error over the steady-state window (degrees).
+    pub rms_err_deg: f64,
+    /// Largest `‖t_e‖` over the steady-state window (mm).
+    pub max_err_mm: f64,
+    /// Standard deviation of `t_e` about its mean over the steady-state window (mm).
+    pub spread_mm: f64,
+    /// Standard deviation of the rotation error about its mean (degrees).
+    pub spread_deg: f64,
+    /// Frames in which the servo was not acting on a tracked estimate.
+    pub frames_not_tracking: usize,
+    /// Largest true camera speed over the run (m/s).
+    pub max_camera_speed_m_s: f64,
+    /// Largest commanded speed over the run (m/s).
+    pub max_command_speed_m_s: f64,
+    /// The class of the run.
+    pub outcome: Outcome,
+}
+
+fn norm(v: &Vector3<f32>) -> f64 {
+    f64::from(v.norm())
+}
+
+impl ServoSummary {
+    /// Summarises the servo rows of a run of `duration_s`.
+    pub fn of(rows: &[ServoRow], duration_s: f64) -> Self {
+        let from = 0.5 * duration_s;
+        let steady: Vec<&ServoRow> = rows.iter().filter(|r| r.t >= from && r.steady).collect();
+        let n = steady.len().max(1) as f64;
+        let mean_t = steady.iter().fold(Vector3::<f64>::zeros(), |a, r| a + r.error.translation.cast::<f64>()) / n;
+        let mean_r = steady.iter().fold(Vector3::<f64>::zeros(), |a, r| a + r.error.rotation.cast::<f64>()) / n;
+        let (mut sq_t, mut sq_r, mut var_t, mut var_r, mut max_t) = (0.0, 0.0, 0.0, 0.0, 0.0f64);
+        for r in &steady {
+            let (et, er) = (r.error.translation.cast::<f64>(), r.error.rotation.cast::<f64>());
+            sq_t += et.norm_squared();
+            sq_r += er.norm_squared();
+            var_t += (et - mean_t).norm_squared();
+            var_r += (er - mean_r).norm_squared();
+            max_t = max_t.max(et.norm());
+        }
+        let summary = Self {
+            steady_from_s: from,
+            rms_err_mm: (sq_t / n).sqrt() * 1e3,
+            rms_err_deg: (sq_r / n).sqrt().to_degrees(),
+            max_err_mm: max_t * 1e3,
+            spread_mm: (var_t / n).sqrt() * 1e3,
+            spread_deg: (var_r / n).sqrt().to_degrees(),
+            frames_not_tracking: rows.iter().filter(|r| !r.tracking).count(),
+            max_camera_speed_m_s: rows.iter().map(|r| r.camera_speed_m_s).fold(0.0, f64::max),
+            max_command_speed_m_s: rows.iter().map(|r| norm(&r.command.v)).fold(0.0, f64::max),
+            outcome: Outcome::Converged,
+        };
+        Self { outcome: classify(&summary, &steady), ..summary }
+    }
+}
+
+fn classify(s: &ServoSummary, steady: &[&ServoRow]) -> Outcome {
+    let lost_frames = steady.iter().any(|r| !r.tracking && !r.occluded);
+    let lost_end = steady.last().is_none_or(|r| r.tracker_error_m > LOST_TRACKER_M);
+    if lost_frames || lost_end {
+        return Outcome::Lost;
+    }
+    let max_deg = steady.iter().map(|r| f64::from(r.error.rotation_norm()).to_degrees()).fold(0.0, f64::max);
+    let half = steady.len() / 2;
+    let rms = |rows: &[&ServoRow]| {
+        (rows.iter().map(|r| f64::from(r.error.translation.norm_squared())).sum::<f64>() / rows.len().max(1) as f64)
+            .sqrt()
+    };
+    let growing = rms(&steady[half..]) > 2.0 * rms(&steady[..half]) && rms(&steady[half..]) > 0.02;
+    if s.max_err_mm > DIVERGED_MM || max_deg > DIVERGED_DEG || growing {
+        Outcome::Diverged
+    } else if s.spread_mm > OSCILLATION_MM || s.spread_deg > OSCILLATION_DEG {
+        Outcome::Oscillating
+    } else {
+        Outcome::Converged
+    }
+}
+
+/// An estimate on its way to the servo.
+#[derive(Debug, Clone, Copy)]
+struct Released {
+    psi: Psi,
+    q: [f32; DOF],
+    filter: TargetFilter,
+    tracking: bool,
+}
+
+/// The servo side of the 1 kHz loop: hand-over, law, setpoint integration.
+struct Controller {
+    servo: Servo,
+    mount: Isometry3<f32>,
+    mount64: Isometry3<f64>,
+    setpoint: Option<Isometry3<f64>>,
+    pending: VecDeque<(f64, Released)>,
+    latest: Option<Released>,
+    tracking: bool,
+    target_velocity: bool,
+    speed: f64,
+    rot_speed: f64,
+}
+
+/// A setpoint further than this from the flange (m or rad) is re-anchored at the flange (the
+/// arm could not follow: joint velocity or position limits).
+const SETPOINT_ANCHOR: f64 = 0.01;
+
+impl Controller {
+    fn hand_over(&self, r: &Released, joints: &JointSample<DOF>) -> Option<ServoInput> {
+        let camera = PA10.forward(&joints.q) * self.mount;
+        if self.target_velocity {
+            let p = r.filter.predict(&PA10, &self.mount, joints, joints.time_us).ok()?;
+            let r_cw = camera.rotation.inverse();
+            let target_velocity = CameraTwist { v: r_cw * p.velocity.v, w: r_cw * p.velocity.w };
+            return Some(ServoInput { pose: p.psi.try_to_isometry().ok()?, target_velocity });
+        }
+        r.psi.validate().ok()?;
+        let world = target_motion::world_pose(&PA10, &r.q, &self.mount, &r.psi);
+        Some(ServoInput { pose: camera.inverse() * world, target_velocity: CameraTwist::ZERO })
+    }
+
+    fn control(&mut self, arm: &ArmSim) -> (Isometry3<f64>, Twist) {
+        let now = arm.time();
+        while self.pending.front().is_some_and(|(t, _)| *t <= now + 1e-6) {
+            if let Some((_, r)) = self.pending.pop_front() {
+                self.tracking = r.tracking;
+                self.latest = Some(r);
+            }
+        }
+        let joints = arm.joint_sample();
+        let input = if self.tracking { self.latest.as_ref().and_then(|r| self.hand_over(r, &joints)) } else { None };
+        let dt = CONTROL_PERIOD_S as f32;
+        let out = match self.servo.update(input.as_ref(), dt) {
+            Ok(o) => o.command,
+            Err(e) => {
+                log::warn!("servo input refused at t = {now:.3}: {e}");
+                self.servo.update(None, dt).map_or(CameraTwist::ZERO, |o| o.command)
+            }
+        };
+        let actual = feedforward::camera_twist(&PA10, &joints.q, &joints.qd, &self.mount);
+        self.speed = self.speed.max(norm(&actual.v));
+        self.rot_speed = self.rot_speed.max(norm(&actual.w));
+
+        let flange = arm.flange_pose();
+        let mut sp = self.setpoint.unwrap_or(flange);
+        let e = arm.flange_error(&sp);
+        if e.position_norm() > SETPOINT_ANCHOR || e.rotation_norm() > SETPOINT_ANCHOR {
+            sp = flange;
+        }
+        let r_wc = (sp * self.mount64).rotation;
+        let w = r_wc * out.w.cast::<f64>();
+        let v_cam = r_wc * out.v.cast::<f64>();
+        let v = v_cam - w.cross(&(sp.rotation * self.mount64.translation.vector));
+        let h = CONTROL_PERIOD_S;
+        sp.translation.vector += v * h;
+        sp.rotation = UnitQuaternion::from_scaled_axis(w * h) * sp.rotation;
+        self.setpoint = Some(sp);
+        (sp, Twist { v, w })
+    }
+}
+
+/// The servo configuration of a scenario's `[servo]`; `relative0` is `^CR T_M` at `t = 0`
+/// (the default desired orientation).
+pub fn servo_config(sec: &ServoSection, relative0: &Isometry3<f64>) -> ServoConfig {
+    let rotation = match sec.desired_q_xyzw {
+        Some([x, y, z, w]) => UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+        None => relative0.rotation,
+    };
+    let [x, y, z] = sec.desired_t_m;
+    ServoConfig {
+        desired: Isometry3::from_parts(Translation3::new(x, y, z), rotation).cast::<f32>(),
+        gain: sec.gain as f32,
+        limits: ServoLimits {
+            max_speed_m_s: sec.max_speed_m_s as f32,
+            max_rot_speed_rad_s: sec.max_rot_speed_rad_s as f32,
+            max_accel_m_s2: sec.max_accel_m_s2 as f32,
+            max_rot_accel_rad_s2: sec.max_rot_accel_rad_s2 as f32,
+        },
+    }
+}
+
+/// The outcome of a closed-loop run.
+#[derive(Debug, Clone)]
+pub struct ClosedLoopOutput {
+    /// The trace and summary, as an open-loop run has them.
+    pub run: RunOutput,
+    /// The servo's side of every frame.
+    pub servo: Vec<ServoRow>,
+    /// Its summary.
+    pub servo_summary: ServoSummary,
+}
+
+/// `summary.json` of a closed-loop run.
+#[derive(Debug, Clone, Serialize)]
+pub struct ClosedLoopSummary<'a> {
+    /// The tracker's summary.
+    #[serde(flatten)]
+    pub run: &'a Summary,
+    /// The servo's.
+    pub servo: &'a ServoSummary,
+}
+
+/// Runs a scenario with `[servo]` in closed loop (see the module documentation). `on_frame`
+/// is called after every frame.
+///
+/// # Errors
+/// No `[servo]` section, or the world, tracker or servo cannot be built.
+pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Result<ClosedLoopOutput> {
+    let sec = s.servo.ok_or_else(|| anyhow!("the scenario has no [servo] section"))?;
+    let mut world = World::new(s)?;
+    let truth0 = world.truth();
+    let config = servo_config(&sec, &world.target_in_camera());
+    let desired = config.desired;
+    let servo = Servo::new(config).map_err(|e| anyhow!("servo: {e}"))?;
+    let mut tracker = SimTracker::new(experiment::tracker_config(s)?).map_err(|e| anyhow!("tracker: {e}"))?;
+    tracker.reset_around(&truth0, &INITIAL_SPREAD).map_err(|e| anyhow!("initial pose: {e}"))?;
+    let mount = crate::sim::flange_to_camera(s);
+    let mut ctl = Controller {
+        servo,
+        mount,
+        mount64: flange_to_camera_f64(s.camera.baseline_m),
+        setpoint: None,
+        pending: VecDeque::new(),
+        latest: None,
+        tracking: false,
+        target_velocity: opts.target_velocity,
+        speed: 0.0,
+        rot_speed: 0.0,
+    };
+    let mut gate = TrackGate::default();
+    let ff = opts.feedforward.unwrap_or_else(|| experiment::feedforward(s.method));
+    let (w, h) = (s.camera.width, s.camera.height);
+    let n = usize::from(w) * usize::from(h);
+    let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
+    let frames = frame_total(s);
+    let (mut rows, mut servo_rows) = (Vec::with_capacity(frames as usize), Vec::with_capacity(frames as usize));
+    let (mut rejected, mut last_us) = (0u32, None::<u64>);
+    let delay = f64::from(sec.delay_frames) * s.frame_period_s;
+    let mut belt = opts.conveyor.map(Belt::new);
+    for k in 0..frames {
+        let t = f64::from(k) * s.frame_period_s;
+        world.advance_with(t, |arm| ctl.control(arm));
+        let mut steady = true;
+        if let Some(b) = belt.as_mut() {
+            b.advance_to(t);
+            world.set_target_offset(Vector3::new(0.0, b.y, 0.0));
+            steady = b.steady_for() >= STEADY_AFTER_REVERSAL_S;
+        }
+        let occluded = opts.occlusion.is_some_and(|(a, d)| t >= a && t < a + d);
+        world.set_target_hidden(occluded);
+        let images = world.render();
+        render::hue_into(&images.left, &mut left);
+        render::hue_into(&images.right, &mut right);
+        let joints = world.arm().joint_sample();
+        let frame = StereoFrame {
+            left: HueImage::new_checked(&left[..], w, h).map_err(|e| anyhow!("left image: {e:?}"))?,
+            right: HueImage::new_checked(&right[..], w, h).map_err(|e| anyhow!("right image: {e:?}"))?,
+        };
+        let dt = last_us.map_or(0.0, |t0| joints.time_us.saturating_sub(t0) as f32 * 1e-6);
+        let est = match tracker.step(&frame, &joints, dt, ff) {
+            Ok(e) => e,
+            Err(e) => {
+                log::warn!("frame {k} refused: {e}");
+                rejected += 1;
+                continue;
+            }
+        };
+        last_us = Some(joints.time_us);
+        let tracking = gate.update(&est);
+        let filter = *tracker.target_filter();
+        ctl.pending.push_back((t + delay, Released { psi: est.psi, q: joints.q, filter, tracking }));
+        let truth = world.truth();
+        let true_rel: Isometry3<f32> = world.target_in_camera().cast();
+        servo_rows.push(ServoRow {
+            t,
+            command: *ctl.servo.command(),
+            error: PoseError::between(&true_rel, &desired),
+            tracking: ctl.tracking,
+            occluded,
+            camera_speed_m_s: std::mem::take(&mut ctl.speed),
+            camera_rot_speed_rad_s: std::mem::take(&mut ctl.rot_speed),
+            tracker_error_m: norm(&(est.psi.translation() - truth.translation())),
+            steady,
+        });
+        rows.push(TraceRow {
+            t,
+            q: joints.q,
+            qd: joints.qd,
+            truth,
+            estimate: est.psi,
+            fitness: est.fitness,
+            status: est.status,
+            hidden: occluded,
+        });
+        on_frame();
+    }
+    let summary = Summary::of(&rows, rejected, s);
+    let servo_summary = ServoSummary::of(&servo_rows, s.duration_s);
+    Ok(ClosedLoopOutput { run: RunOutput { rows, summary }, servo: servo_rows, servo_summary })
+}
+
+/// Writes `trace.csv` (with the servo columns), `summary.json` (with the servo summary) and
+/// the plots of a closed-loop run into `dir`.
+///
+/// # Errors
+/// I/O errors.
+pub fn write_outputs(out: &ClosedLoopOutput, dir: &std::path::Path, title: &str) -> Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let trace = dir.join("trace.csv");
+    let extra: Vec<Vec<String>> = out.servo.iter().map(ServoRow::record).collect();
+    crate::io::write_trace_with(&trace, &out.run.rows, &SERVO_COLUMNS, &extra)?;
+    let summary = ClosedLoopSummary { run: &out.run.summary, servo: &out.servo_summary };
+    crate::io::write_json(&dir.join("summary.json"), &summary)?;
+    crate::plot::plot_trace(&trace, dir, title)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::Method;
+
+    /// A still block, the camera brought 0.1 m closer, 320×240.
+    fn scenario(duration_s: f64) -> Scenario {
+        let mut s = Scenario::new(1, duration_s, Method::Ff);
+        s.camera.width = 320;
+        s.camera.height = 240;
+        s.camera.fx = 400.0;
+        s.camera.fy = 400.0;
+        s.camera.cx = 160.0;
+        s.camera.cy = 120.0;
+        s.camera.supersample = 1;
+        s.target.omega_rad_s = 0.0;
+        s.servo = Some(ServoSection::new([-0.05, 0.0, 0.6]));
+        s
+    }
+
+    #[test]
+    fn converges_on_a_still_block_within_the_speed_limit() {
+        let s = scenario(6.0);
+        let out = run(&s, &LoopOptions::for_scenario(&s), || {}).unwrap_or_else(|e| unreachable!("{e}"));
+        let sum = out.servo_summary;
+        assert_eq!(sum.outcome, Outcome::Converged, "{sum:?}");
+        assert!(sum.rms_err_mm < 5.0 && sum.rms_err_deg < 1.0, "{sum:?}");
+        let first = out.servo[0].error.translation_norm();
+        assert!((first - 0.1).abs() < 1e-3, "starts 0.1 m from the desired pose: {first}");
+        let limit = ServoSection::new([0.0; 3]).max_speed_m_s;
+        assert!(sum.max_camera_speed_m_s <= limit * 1.02, "{sum:?}");
+    }
+
+    #[test]
+    fn occlusion_stops_the_arm_within_its_limits_and_the_loop_recovers() {
+        let s = scenario(6.0);
+        let sec = s.servo.unwrap_or_else(|| unreachable!());
+        let (start, duration) = (0.6, 1.0);
+        let opts = LoopOptions { occlusion: Some((start, duration)), ..LoopOptions::for_scenario(&s) };
+        let out = run(&s, &opts, || {}).unwrap_or_else(|e| unreachable!("{e}"));
+        let rows = &out.servo;
+        // Moving towards the block when the occluder comes.
+        let before = rows.iter().filter(|r| r.t < start).map(|r| r.camera_speed_m_s).fold(0.0, f64::max);
+        assert!(before > 0.05, "{before}");
+        // Stopped within: one frame for the gate + the delay + max_speed / max_accel (+ a frame).
+        let stop_by =
+            start + (2.0 + f64::from(sec.delay_frames)) * s.frame_period_s + sec.max_speed_m_s / sec.max_accel_m_s2;
+        for r in rows.iter().filter(|r| r.t > stop_by && r.t < start + duration) {
+            assert!(r.camera_speed_m_s < 1e-3, "still moving at t = {}: {} m/s", r.t, r.camera_speed_m_s);
+            assert!(!r.tracking);
+        }
+        // Never above the speed limit, also when it resumes.
+        for r in rows {
+            assert!(r.camera_speed_m_s <= sec.max_speed_m_s * 1.02, "t = {}: {} m/s", r.t, r.camera_speed_m_s);
+        }
+        // Tracking again within 0.5 s of reappearance, and converged at the end.
+        let back = rows.iter().find(|r| r.t >= start + duration && r.tracking).map(|r| r.t);
+        assert!(back.is_some_and(|t| t < start + duration + 0.5), "{back:?}");
+        let last = rows.last().map(|r| r.error.translation_norm()).unwrap_or(1.0);
+        assert!(last < 0.005, "{last}");
+        let stopped = rows.iter().find(|r| r.t > start && r.camera_speed_m_s < 1e-3).map(|r| r.t - start);
+        let after = rows.iter().filter(|r| r.t >= start + duration).map(|r| r.camera_speed_m_s).fold(0.0, f64::max);
+        println!(
+            "occlusion: speed before {before:.3} m/s, stopped {stopped:?} s after it began, tracking again at {back:?} s, \
+             max speed after {after:.3} m/s (limit {}), final error {:.2} mm",
+            sec.max_speed_m_s,
+            last * 1e3
+        );
+    }
+
+    #[test]
+    fn conveyor_reverses_within_its_travel() {
+        let mut b = Belt::new(Conveyor { speed_m_s: 0.2, travel_m: 0.4, accel_m_s2: 0.5 });
+        let mut max_y: f64 = 0.0;
+        for k in 1..=400 {
+            b.advance_to(f64::from(k) * 0.01);
+            max_y = max_y.max(b.y.abs());
+            assert!(b.v.abs() <= 0.2 + 1e-12);
+        }
+        assert!(max_y <= 0.2 + 1e-3 && max_y > 0.19, "{max_y}");
+    }
+
+    #[test]
+    fn gate_needs_good_frames_to_start_and_one_bad_to_stop() {
+        let est = |fitness| Estimate { psi: Psi::IDENTITY, fitness, generation: 1, capture_time_us: 0, status: evorec_core::status::Status::Tracking };
+        let mut g = TrackGate::default();
+        assert!(!g.update(&est(0.9)) && !g.update(&est(0.9)));
+        assert!(g.update(&est(0.9)));
+        assert!(g.update(&est(0.55)));
+        assert!(!g.update(&est(0.4)));
+        assert!(!g.update(&est(0.9)));
+    }
+}

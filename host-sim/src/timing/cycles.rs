@@ -1,0 +1,274 @@
+//! Instruction mix and the cycle ESTIMATE (never a measurement) for a 168 MHz Cortex-M4F.
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::Path;
+
+use anyhow::{Context, Result, anyhow};
+
+use super::ESTIMATE_CLOCK_HZ;
+use super::disasm::{Graph, Insn, call_graph, disassemble, is_branch, is_default_generation, reg_count};
+use super::elf::FlashImage;
+use super::flash::{self, HotLoop, Waits};
+
+/// Instruction classes with their worst-case Cortex-M4 cycle costs (Cortex-M4 TRM r0p1,
+/// §3.3 "Processor instruction timings" and the FPU chapter's instruction timings), for
+/// zero-wait-state memory; a taken branch refills the pipeline (1 + P, P ≤ 3).
+pub(super) fn classify(i: &Insn) -> (&'static str, u32) {
+    let m = i.mnemonic.trim_end_matches(".w").trim_end_matches(".n");
+    let ops = i.operands.as_str();
+    let base = m.trim_end_matches(".f32").trim_end_matches(".f64");
+    if m.starts_with("vdiv") || m.starts_with("vsqrt") {
+        return ("fp divide/sqrt (14)", 14);
+    }
+    if ["vmla", "vmls", "vnmla", "vnmls", "vfma", "vfms", "vfnma", "vfnms"].contains(&base) {
+        return ("fp multiply-accumulate (3)", 3);
+    }
+    if base == "vldr" || base == "vstr" {
+        return ("fp load/store (2)", 2);
+    }
+    if ["vpush", "vpop", "vldmia", "vstmia", "vldmdb", "vstmdb", "vldm", "vstm"].contains(&base) {
+        let per = if ops.contains("{d") { 2 } else { 1 };
+        return ("fp load/store multiple (1+N)", 1 + per * reg_count(ops));
+    }
+    if m.starts_with('v') {
+        let words = ops.split(',').count();
+        return ("fp arithmetic/convert/move (1)", if base == "vmov" && words == 4 { 2 } else { 1 });
+    }
+    if is_branch(m) {
+        return ("branch (1+P, P=3)", if m == "tbb" || m == "tbh" { 2 + 3 } else { 1 + 3 });
+    }
+    if m == "pop" || m == "ldm" || m == "ldmia" || m == "ldmdb" {
+        let pc = if ops.contains("pc") { 3 } else { 0 };
+        return ("load/store multiple (1+N)", 1 + reg_count(ops) + pc);
+    }
+    if m == "push" || m.starts_with("stm") {
+        return ("load/store multiple (1+N)", 1 + reg_count(ops));
+    }
+    if m == "ldrd" || m == "strd" {
+        return ("load/store (2; LDRD/STRD 3)", 3);
+    }
+    if m.starts_with("ldr") || m.starts_with("str") {
+        let pc = if m.starts_with("ldr") && ops.starts_with("pc") { 3 } else { 0 };
+        return ("load/store (2; LDRD/STRD 3)", 2 + pc);
+    }
+    if m == "sdiv" || m == "udiv" {
+        return ("integer divide (2-12)", 12);
+    }
+    if ["mla", "mls"].contains(&m) {
+        return ("multiply (1; MLA/MLS 2)", 2);
+    }
+    if ["mul", "muls", "umull", "smull", "umlal", "smlal"].contains(&m) {
+        return ("multiply (1; MLA/MLS 2)", 1);
+    }
+    ("integer ALU, IT (1)", 1)
+}
+
+/// Cycles of a class mix if every branch cost `branch` cycles instead of 4.
+fn cycles_with_branch_cost(mix: &Mix, branch: f64) -> f64 {
+    let n = mix.classes.get("branch (1+P, P=3)").copied().unwrap_or(0.0);
+    mix.cycles - n * (4.0 - branch)
+}
+
+/// Class counts and cycles of a set of instructions.
+#[derive(Debug, Clone, Default)]
+pub struct Mix {
+    /// Instructions per class.
+    pub classes: BTreeMap<&'static str, f64>,
+    /// Instructions.
+    pub instructions: f64,
+    /// Worst-case cycles.
+    pub cycles: f64,
+}
+
+impl Mix {
+    fn add(&mut self, i: &Insn, weight: f64) {
+        let (class, cyc) = classify(i);
+        *self.classes.entry(class).or_default() += weight;
+        self.instructions += weight;
+        self.cycles += weight * f64::from(cyc);
+    }
+
+    /// Cycles per instruction.
+    pub fn cpi(&self) -> f64 {
+        if self.instructions > 0.0 { self.cycles / self.instructions } else { 0.0 }
+    }
+}
+
+/// The cycle estimate's inputs from the disassembly of the measured image.
+#[derive(Debug, Clone)]
+pub struct MixAnalysis {
+    /// The mix of one sample point: the instructions between consecutive `vdiv.f32` of the
+    /// fitness kernel (`camera_counts`, inlined rows), averaged over those windows.
+    pub point: Mix,
+    /// Number of point windows found.
+    pub windows: usize,
+    /// Static mix of every other instruction reachable from the generation function.
+    pub rest: Mix,
+    /// Flash wait-state inputs of one sample point (averaged over the windows).
+    pub point_waits: Waits,
+    /// Flash wait-state inputs of the rest (totals over its static instructions).
+    pub rest_waits: Waits,
+    /// The point windows' code span and whether it fits the ART instruction cache.
+    pub hot: HotLoop,
+}
+
+/// The point and rest mixes of the generation in `elf`.
+pub(super) fn analyse_mix(objdump: &Path, elf: &Path) -> Result<MixAnalysis> {
+    let funcs = disassemble(objdump, elf)?;
+    let image = FlashImage::new(fs::read(elf).with_context(|| format!("reading {}", elf.display()))?)?;
+    let g = Graph { funcs: &funcs, calls: call_graph(&funcs), frame: Vec::new() };
+    let root =
+        g.find(is_default_generation).ok_or_else(|| anyhow!("no P40G5 generation function in {}", elf.display()))?;
+    let reach = g.reachable(root);
+    let kernel = reach
+        .iter()
+        .copied()
+        .find(|&f| funcs.get(f).is_some_and(|x| x.name.contains("camera_counts")))
+        .ok_or_else(|| anyhow!("no camera_counts reachable from the generation in {}", elf.display()))?;
+    // Windows from one vdiv to the next (a point each), where the row is unrolled.
+    let kf = funcs.get(kernel).ok_or_else(|| anyhow!("kernel index"))?;
+    let divs: Vec<usize> =
+        kf.insns.iter().enumerate().filter(|(_, (_, i))| i.mnemonic.starts_with("vdiv")).map(|(k, _)| k).collect();
+    let mut gaps: Vec<usize> = divs.windows(2).map(|w| w[1] - w[0]).collect();
+    gaps.sort_unstable();
+    let median = gaps.get(gaps.len() / 2).copied().unwrap_or(0);
+    let mut in_window = vec![false; kf.insns.len()];
+    let kernel_loads = flash::loads(kf, &image);
+    let mut point = Mix::default();
+    let mut point_waits = Waits::default();
+    let (mut lo, mut hi) = (u32::MAX, 0u32);
+    let mut windows = 0usize;
+    for w in divs.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        if b - a <= median + median / 4 {
+            windows += 1;
+            let window = kf.insns.get(a..b).unwrap_or_default();
+            point_waits.add_line_stalls(window);
+            lo = lo.min(window.first().map_or(u32::MAX, |x| x.0));
+            hi = hi.max(kf.insns.get(b).map_or(0, |x| x.0));
+            for k in a..b {
+                if let Some((_, i)) = kf.insns.get(k) {
+                    point.add(i, 1.0);
+                    point_waits.add(i, kernel_loads.get(k).copied().unwrap_or(flash::Load::Other));
+                }
+                if let Some(x) = in_window.get_mut(k) {
+                    *x = true;
+                }
+            }
+        }
+    }
+    if windows > 0 {
+        let n = windows as f64;
+        point.instructions /= n;
+        point.cycles /= n;
+        point.classes.values_mut().for_each(|v| *v /= n);
+        point_waits = point_waits.scaled(n);
+    }
+    let mut rest = Mix::default();
+    let mut rest_waits = Waits::default();
+    for &f in &reach {
+        let Some(func) = funcs.get(f) else { continue };
+        let fl = flash::loads(func, &image);
+        let outside = |k: usize| !(f == kernel && in_window.get(k).copied().unwrap_or(false));
+        for (k, (_, i)) in func.insns.iter().enumerate().filter(|(k, _)| outside(*k)) {
+            rest.add(i, 1.0);
+            rest_waits.add(i, fl.get(k).copied().unwrap_or(flash::Load::Other));
+        }
+        rest_waits.add_line_stalls(func.insns.iter().enumerate().filter(|(k, _)| outside(*k)).map(|(_, x)| x));
+    }
+    let hot = HotLoop::new(lo.min(hi), hi);
+    Ok(MixAnalysis { point, windows, rest, point_waits, rest_waits, hot })
+}
+
+/// Cycle ESTIMATE of one worst-case generation.
+#[derive(Debug, Clone)]
+pub struct CycleEstimate {
+    /// Cycles attributed to the sample points (`points · point.cycles`).
+    pub point_cycles: f64,
+    /// Cycles of all other instructions (measured remainder × rest CPI).
+    pub rest_cycles: f64,
+    /// Total.
+    pub cycles: f64,
+    /// At [`ESTIMATE_CLOCK_HZ`].
+    pub microseconds: f64,
+    /// Flash wait-state cycles of the sample points (data loads; code fetch unless the hot
+    /// loop hits the ART instruction cache, then its cold misses per kernel call).
+    pub flash_point_cycles: f64,
+    /// Flash wait-state cycles of the rest (code misses and data loads at worst).
+    pub flash_rest_cycles: f64,
+    /// Worst case with flash wait states: `cycles + flash_point_cycles + flash_rest_cycles`.
+    pub flash_cycles: f64,
+    /// `flash_cycles` at [`ESTIMATE_CLOCK_HZ`].
+    pub flash_microseconds: f64,
+    /// Sensitivity: the sample points' code missing the instruction cache too and every load of
+    /// unknown provenance in them read from flash (µs at [`ESTIMATE_CLOCK_HZ`]).
+    pub flash_uncached_microseconds: f64,
+}
+
+/// The estimate for `worst_instructions` of which `points` are sample points in `calls` kernel
+/// calls (population × 2 cameras), every branch at `branch` cycles.
+pub(super) fn estimate(
+    mix: &MixAnalysis,
+    worst_instructions: f64,
+    points: f64,
+    calls: f64,
+    branch: f64,
+) -> CycleEstimate {
+    let cpi = |m: &Mix| if m.instructions > 0.0 { cycles_with_branch_cost(m, branch) / m.instructions } else { 0.0 };
+    let point_ins = (points * mix.point.instructions).min(worst_instructions);
+    let point_cycles = point_ins * cpi(&mix.point);
+    let rest_ins = worst_instructions - point_ins;
+    let rest_cycles = rest_ins * cpi(&mix.rest);
+    let cycles = point_cycles + rest_cycles;
+    let points_done = if mix.point.instructions > 0.0 { point_ins / mix.point.instructions } else { 0.0 };
+    let flash_point_cycles = if mix.hot.cached {
+        points_done * mix.point_waits.cycles_cached(false) + calls * mix.hot.cold_cycles()
+    } else {
+        points_done * mix.point_waits.cycles_uncached(false)
+    };
+    let per_rest =
+        if mix.rest.instructions > 0.0 { mix.rest_waits.cycles_uncached(true) / mix.rest.instructions } else { 0.0 };
+    let flash_rest_cycles = rest_ins * per_rest;
+    let flash_cycles = cycles + flash_point_cycles + flash_rest_cycles;
+    let uncached = cycles + points_done * mix.point_waits.cycles_uncached(true) + flash_rest_cycles;
+    let us = |c: f64| c / ESTIMATE_CLOCK_HZ * 1e6;
+    CycleEstimate {
+        point_cycles,
+        rest_cycles,
+        cycles,
+        microseconds: us(cycles),
+        flash_point_cycles,
+        flash_rest_cycles,
+        flash_cycles,
+        flash_microseconds: us(flash_cycles),
+        flash_uncached_microseconds: us(uncached),
+    }
+}
+
+/// The assumptions of the estimate, as stated in the report.
+pub(super) fn assumptions() -> Vec<&'static str> {
+    vec![
+        "Cortex-M4F at 168 MHz; the zero-wait-state figure assumes every code and data access at 0 wait states, the flash figure adds the wait states of the model below",
+        "per-class worst-case costs from the Cortex-M4 TRM: ALU/IT 1, MUL/UMULL/UMLAL 1, MLA/MLS 2, SDIV/UDIV 12, LDR/STR 2, LDRD/STRD 3, LDM/STM/PUSH/POP 1+N (+3 if PC is loaded), every branch 1+P with P = 3 (pipeline refill, conditional branches counted as taken), VADD/VSUB/VMUL/VCVT/VMOV/VCMP 1, VMLA/VMLS 3, VDIV.F32/VSQRT.F32 14, VLDR/VSTR 2, VLDM/VSTM/VPUSH/VPOP 1+N words",
+        "instruction mix: sample points = measured points x the mean static mix of one point (the instructions between consecutive vdiv.f32 in the unrolled fitness kernel camera_counts, both arms of the bounds test included); every other measured instruction x the cycles per instruction of the static mix of all other code reachable from the generation function (llvm-objdump)",
+        "no interrupts, no DMA contention, FPU lazy stacking not triggered",
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn classes_and_costs() {
+        let i = |m: &str, o: &str| Insn { mnemonic: m.to_owned(), operands: o.to_owned(), comment_addr: None };
+        assert_eq!(classify(&i("vdiv.f32", "s0, s1, s2")).1, 14);
+        assert_eq!(classify(&i("vmla.f32", "s0, s1, s2")).1, 3);
+        assert_eq!(classify(&i("ldrb.w", "r1, [r11, r2]")).1, 2);
+        assert_eq!(classify(&i("bhs", "0x67cc <$t+0x1d4>")).1, 4);
+        assert_eq!(classify(&i("pop", "{r4, r5, pc}")).1, 7);
+        assert_eq!(classify(&i("umlal", "r2, r4, r3, r6")).1, 1);
+        assert_eq!(classify(&i("adds", "r2, r1, r0")).1, 1);
+    }
+}

@@ -1,0 +1,249 @@
+//! Finding the images and tools, running QEMU, and parsing the timing firmware's output.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, anyhow, bail};
+use evorec_firmware::timing::{BANNER, GenLine, ICOUNT_SHIFT};
+
+use super::{BUILD_HINT, LLVM_HINT, QEMU_HINT, QEMU_TIMEOUT, TARGET, TIMING_ELF_ENV, TIMING_IMAGE};
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Target directories searched for the firmware: `$CARGO_TARGET_DIR` (relative to the
+/// workspace root), then the workspace's `target/`.
+fn target_dirs() -> Vec<PathBuf> {
+    let ws = workspace();
+    let mut dirs = Vec::new();
+    if let Some(dir) = std::env::var_os("CARGO_TARGET_DIR") {
+        dirs.push(ws.join(dir));
+    }
+    let default = ws.join("target");
+    if !dirs.contains(&default) {
+        dirs.push(default);
+    }
+    dirs
+}
+
+/// The release image `name` built in `hil-stubs/` (`$EVOREC_TIMING_ELF` for the timing image,
+/// `$EVOREC_FIRMWARE_ELF` for the firmware, if set).
+///
+/// # Errors
+/// The image does not exist; the message says how to build it.
+pub fn find_image(name: &str) -> Result<PathBuf> {
+    let env = if name == TIMING_IMAGE { TIMING_ELF_ENV } else { evorec_firmware::host::FIRMWARE_ENV };
+    if let Some(p) = std::env::var_os(env) {
+        let p = PathBuf::from(p);
+        if p.is_file() {
+            return Ok(p);
+        }
+        bail!("{env}={} does not exist: build the firmware with `{BUILD_HINT}`", p.display());
+    }
+    let candidates: Vec<PathBuf> =
+        target_dirs().into_iter().map(|d| d.join(TARGET).join("release").join(name)).collect();
+    if let Some(p) = candidates.iter().find(|p| p.is_file()) {
+        return Ok(p.clone());
+    }
+    let list: Vec<String> = candidates.iter().map(|p| p.display().to_string()).collect();
+    bail!(
+        "firmware image `{name}` not found (looked at {}): build it with `{BUILD_HINT}` \
+         (needs `rustup target add {TARGET}`), or point {env} at it",
+        list.join(", ")
+    )
+}
+
+/// The `.stack_sizes` build of image `name` by [`STACK_SIZES_HINT`], if it exists.
+pub fn find_stack_sizes_image(name: &str) -> Option<PathBuf> {
+    target_dirs()
+        .into_iter()
+        .map(|d| d.join("stack-sizes").join(TARGET).join("release").join(name))
+        .find(|p| p.is_file())
+}
+
+/// `qemu-system-arm` (or `$EVOREC_QEMU`), checked by running `--version`.
+///
+/// # Errors
+/// QEMU is not installed; the message says how to install it.
+pub fn find_qemu() -> Result<PathBuf> {
+    let qemu = std::env::var_os("EVOREC_QEMU").map_or_else(|| PathBuf::from("qemu-system-arm"), PathBuf::from);
+    match Command::new(&qemu).arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status() {
+        Ok(_) => Ok(qemu),
+        Err(e) => bail!("{} not usable ({e}): install it with `{QEMU_HINT}`", qemu.display()),
+    }
+}
+
+/// An LLVM tool (`llvm-objdump`): the Rust toolchain's llvm-tools first, else `PATH`.
+///
+/// # Errors
+/// Not found; the message says how to get it.
+pub fn find_llvm_tool(tool: &str) -> Result<PathBuf> {
+    let rustc = std::env::var_os("RUSTC").unwrap_or_else(|| "rustc".into());
+    let sysroot = Command::new(&rustc).args(["--print", "sysroot"]).output().ok();
+    let host = Command::new(&rustc).arg("-vV").output().ok().and_then(|o| {
+        String::from_utf8_lossy(&o.stdout).lines().find_map(|l| l.strip_prefix("host: ").map(str::to_owned))
+    });
+    if let (Some(s), Some(host)) = (sysroot, host) {
+        let p = PathBuf::from(String::from_utf8_lossy(&s.stdout).trim())
+            .join("lib/rustlib")
+            .join(host)
+            .join("bin")
+            .join(tool);
+        if p.is_file() {
+            return Ok(p);
+        }
+    }
+    match Command::new(tool).arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status() {
+        Ok(_) => Ok(PathBuf::from(tool)),
+        Err(_) => bail!("{tool} not found: {LLVM_HINT}"),
+    }
+}
+
+/// Runs `elf` on QEMU mps2-an386 (with `-icount shift=`[`ICOUNT_SHIFT`] if `icount`) in
+/// `workdir`, its output to `workdir/log_name`, and returns that output.
+///
+/// # Errors
+/// QEMU could not start, timed out or exited with failure (the log's end is in the message).
+pub fn run_qemu(qemu: &Path, elf: &Path, workdir: &Path, log_name: &str, icount: bool) -> Result<String> {
+    fs::create_dir_all(workdir).with_context(|| format!("creating {}", workdir.display()))?;
+    let log_path = workdir.join(log_name);
+    let log = fs::File::create(&log_path).with_context(|| format!("creating {}", log_path.display()))?;
+    let mut cmd = Command::new(qemu);
+    cmd.args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none"])
+        .args(["-semihosting-config", "enable=on,target=native"]);
+    if icount {
+        cmd.args(["-icount", &format!("shift={ICOUNT_SHIFT}")]);
+    }
+    let elf_abs = elf.canonicalize().with_context(|| format!("{}", elf.display()))?;
+    cmd.arg("-kernel").arg(&elf_abs).current_dir(workdir).stdin(Stdio::null()).stdout(log.try_clone()?).stderr(log);
+    let mut child =
+        cmd.spawn().with_context(|| format!("starting {} (install it with `{QEMU_HINT}`)", qemu.display()))?;
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait()? {
+            break s;
+        }
+        if start.elapsed() > QEMU_TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            bail!("QEMU timed out after {:?} running {}; log: {}", QEMU_TIMEOUT, elf.display(), log_path.display());
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let text = fs::read_to_string(&log_path).with_context(|| format!("reading {}", log_path.display()))?;
+    if !status.success() {
+        let tail: Vec<&str> = text.lines().rev().take(15).collect::<Vec<_>>().into_iter().rev().collect();
+        bail!("QEMU running {} exited with {status}; its log ends:\n{}", elf.display(), tail.join("\n"));
+    }
+    Ok(text)
+}
+
+/// The generations of one configuration.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// `full` (the default configuration's long run) or `sweep`.
+    pub name: String,
+    /// Population size.
+    pub population: u32,
+    /// Points per row.
+    pub grid: u32,
+    /// Sample points per camera and pose (`SurfaceStrips::POINTS_PER_CAMERA`).
+    pub points_per_camera: u32,
+    /// Every measured generation.
+    pub generations: Vec<GenLine>,
+}
+
+/// Everything the timing firmware printed.
+#[derive(Debug, Clone)]
+pub struct Measurement {
+    /// Ticks between two back-to-back TIMER0 reads (one read's cost).
+    pub read_pair_ticks: u32,
+    /// The runs in order.
+    pub runs: Vec<Run>,
+}
+
+/// Parses the timing firmware's output.
+///
+/// # Errors
+/// The banner or the final `END ok` is missing, or a `GEN` line comes before any `RUN`.
+pub fn parse_output(text: &str) -> Result<Measurement> {
+    if !text.lines().any(|l| l.trim() == BANNER) {
+        bail!("not the output of the timing firmware (no `{BANNER}` line)");
+    }
+    let mut m = Measurement { read_pair_ticks: 0, runs: Vec::new() };
+    let mut ended = false;
+    for line in text.lines() {
+        let line = line.trim();
+        let field = |key: &str| -> Option<&str> {
+            line.split_whitespace().find_map(|w| w.strip_prefix(key).and_then(|r| r.strip_prefix('=')))
+        };
+        let num = |key: &str| -> Result<u32> {
+            field(key).and_then(|v| v.parse().ok()).ok_or_else(|| anyhow!("no {key}= in `{line}`"))
+        };
+        if line.starts_with("CALIBRATION") {
+            m.read_pair_ticks = num("read_pair")?;
+        } else if line.starts_with("RUN ") {
+            m.runs.push(Run {
+                name: field("name").unwrap_or("?").to_owned(),
+                population: num("p")?,
+                grid: num("g")?,
+                points_per_camera: num("points_per_camera")?,
+                generations: Vec::new(),
+            });
+        } else if line.starts_with("GEN ") {
+            let g = GenLine::parse(line).ok_or_else(|| anyhow!("malformed line `{line}`"))?;
+            m.runs.last_mut().ok_or_else(|| anyhow!("GEN before RUN"))?.generations.push(g);
+        } else if line.starts_with("END ") {
+            if line != "END ok" {
+                bail!("the timing firmware failed: `{line}`");
+            }
+            ended = true;
+        } else if line.starts_with("ERROR") || line.starts_with("PANIC") {
+            bail!("the timing firmware failed: `{line}`");
+        }
+    }
+    if !ended {
+        bail!("the timing firmware's output has no `END ok` line");
+    }
+    Ok(m)
+}
+
+/// Runs the timing image `elf` under QEMU (log in `workdir/timing-firmware.log`) and parses it.
+///
+/// # Errors
+/// As [`run_qemu`] and [`parse_output`].
+pub fn measure(qemu: &Path, elf: &Path, workdir: &Path) -> Result<Measurement> {
+    parse_output(&run_qemu(qemu, elf, workdir, "timing-firmware.log", true)?)
+}
+
+/// Parses `stack high-water mark: N of M bytes` from the firmware's log.
+pub(super) fn painted_stack(log: &str) -> Option<(u32, u32)> {
+    let line = log.lines().rev().find(|l| l.contains("stack high-water mark:"))?;
+    let rest = line.split("stack high-water mark:").nth(1)?;
+    let mut words = rest.split_whitespace();
+    let used = words.next()?.parse().ok()?;
+    let size = words.nth(1)?.parse().ok()?;
+    Some((used, size))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn output_is_parsed() {
+        let text = "EVOREC-TIMING v1\nCALIBRATION read_pair=25\nRUN name=full p=40 g=8 frames=1 points_per_camera=480 width=160 height=120\n\
+                    GEN p=40 g=8 k=0 kind=blank call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0\nEND ok\n";
+        let m = parse_output(text).unwrap();
+        assert_eq!(m.read_pair_ticks, 25);
+        let s = m.runs[0].stats();
+        assert_eq!(s.call.max, 80.0);
+        assert_eq!(s.points_per_individual, 960);
+        assert!(parse_output("EVOREC-TIMING v1\nEND failed\n").is_err());
+        assert!(parse_output("hello\n").is_err());
+        assert_eq!(painted_stack("[INFO ] stack high-water mark: 13892 of 90000 bytes"), Some((13892, 90000)));
+    }
+}

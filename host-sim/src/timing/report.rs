@@ -1,0 +1,367 @@
+//! The report of `evorec timing`: `timing.json`, `timing.md` and the one-line summary.
+
+use std::fmt::Write as _;
+
+use evorec_firmware::timing::{NS_PER_TICK, ticks_to_instructions};
+use serde_json::{Value, json};
+
+use super::cycles::assumptions;
+use super::flash::assumptions as flash_assumptions;
+use super::{
+    BUILD_HINT, GENERATION_BUDGET, POINT_TARGET, RAM_BYTES, RATIO_TARGET, Range, Results, STACK_SIZES_HINT,
+    StackAnalysis,
+};
+
+/// Worst-case stack: the static analysis or the painted mark of a generation, whichever is larger.
+fn stack_bytes(r: &Results) -> u32 {
+    r.stack.total().max(r.full.stack)
+}
+
+/// Instructions of one TIMER0 read.
+fn read_instructions(r: &Results) -> f64 {
+    ticks_to_instructions(u64::from(r.read_pair_ticks))
+}
+
+/// The flash wait-state part of `timing.json`.
+fn flash_json(r: &Results) -> Value {
+    json!({
+        "label": "ESTIMATE (not a measurement): the above plus STM32F4 flash wait states (5 at 168 MHz) behind the ART accelerator",
+        "cycles_per_generation": r.cyc.flash_cycles.round(),
+        "milliseconds_per_generation": round2(r.cyc.flash_microseconds / 1000.0),
+        "target_milliseconds_per_frame": FRAME_TARGET_MS,
+        "within_target": r.cyc.flash_microseconds / 1000.0 <= FRAME_TARGET_MS,
+        "point_wait_cycles": r.cyc.flash_point_cycles.round(),
+        "rest_wait_cycles": r.cyc.flash_rest_cycles.round(),
+        "milliseconds_if_hot_loop_uncached_and_unknown_point_loads_from_flash": round2(r.cyc.flash_uncached_microseconds / 1000.0),
+        "milliseconds_if_branches_cost_2": round2(r.cyc_b2.flash_microseconds / 1000.0),
+        "hot_loop_span_bytes": r.mix.hot.span_bytes,
+        "hot_loop_in_art_icache": r.mix.hot.cached,
+        "flash_loads_per_point": round2(r.mix.point_waits.flash_loads),
+        "unknown_base_loads_per_point": round2(r.mix.point_waits.other_loads),
+        "rest_static": {
+            "instructions": r.mix.rest.instructions, "flash_loads": r.mix.rest_waits.flash_loads,
+            "unknown_base_loads": r.mix.rest_waits.other_loads, "branches": r.mix.rest_waits.branches,
+            "sequential_fetch_stall_cycles": r.mix.rest_waits.fetch_stall,
+        },
+        "assumptions": flash_assumptions(),
+    })
+}
+
+/// `timing.json`.
+pub(super) fn json(r: &Results) -> Value {
+    let stack_bytes = stack_bytes(r);
+    let ram_check_fw = r.demo_stack.map(|(u, _)| r.fw_mem.static_ram_bytes + u64::from(u));
+    let ram_check_timing = r.timing_mem.static_ram_bytes + u64::from(stack_bytes);
+    let read_ins = read_instructions(r);
+    json!({
+        "population": r.full.population,
+        "points_per_individual": r.full.points_per_individual,
+        "points_per_row": r.full.grid,
+        "frames": r.full.generations,
+        "frame_source": "generated on the board before each generation (core synth rasterizer + xorshift32 noise); not in the measured window",
+        "instructions_per_generation": {
+            "min": r.full.call.min.round(), "max": r.full.call.max.round(), "mean": r.full.call.mean.round(),
+            "ratio_max_min": (r.full.call.ratio() * 1e4).round() / 1e4,
+            "budget": GENERATION_BUDGET, "within_budget": r.full.call.max <= GENERATION_BUDGET,
+            "over_budget_percent": round1((r.full.call.max / GENERATION_BUDGET - 1.0) * 100.0),
+        },
+        "phases": {
+            "feedforward": r.full.feedforward.json(),
+            "evaluate": r.full.evaluate.json(),
+            "breed": r.full.breed.json(),
+        },
+        "frame_kinds": r.full.by_kind.iter().map(|(k, n, r)| (k.name().to_owned(), json!({"frames": n, "min": r.min.round(), "max": r.max.round()}))).collect::<serde_json::Map<_, _>>(),
+        "instructions_per_point_eval": round2(r.full.per_point.max),
+        "instructions_per_point_eval_range": { "min": round2(r.full.per_point.min), "max": round2(r.full.per_point.max) },
+        "instructions_per_point_eval_marginal": r.marginal.map(round2),
+        "point_eval_target": POINT_TARGET,
+        "stack_bytes": stack_bytes,
+        "stack": {
+            "static_generation_bytes": r.stack.generation.bytes,
+            "static_callers_bytes": r.stack.callers.bytes,
+            "static_total_bytes": r.stack.total(),
+            "static_method": r.stack.method,
+            "static_image": r.stack.image.display().to_string(),
+            "static_prologue_total_bytes": r.stack_prologue.as_ref().map(StackAnalysis::total),
+            "indirect_calls_in_generation": r.stack.indirect_calls,
+            "recursion": r.stack.recursion,
+            "stack_sizes_vs_prologue_mismatches": r.stack.prologue_mismatches.len(),
+            "painted_generation_bytes": r.full.stack,
+            "firmware_painted_bytes": r.demo_stack.map(|(u, _)| u),
+            "firmware_stack_region_bytes": r.demo_stack.map(|(_, s)| s),
+        },
+        "static_ram_bytes": r.fw_mem.static_ram_bytes,
+        "flash_bytes": r.fw_mem.flash_bytes,
+        "ram_bytes": RAM_BYTES,
+        "ram_check": {
+            "firmware_static_plus_painted_bytes": ram_check_fw,
+            "timing_static_plus_stack_bytes": ram_check_timing,
+            "fits": ram_check_fw.is_none_or(|v| v <= RAM_BYTES) && ram_check_timing <= RAM_BYTES,
+        },
+        "timing_firmware": { "flash_bytes": r.timing_mem.flash_bytes, "static_ram_bytes": r.timing_mem.static_ram_bytes },
+        "sweep": r.sweep.iter().map(|s| json!({
+            "population": s.population, "points_per_row": s.grid, "points_per_individual": s.points_per_individual,
+            "frames": s.generations,
+            "min": s.call.min.round(), "max": s.call.max.round(), "ratio_max_min": (s.call.ratio() * 1e4).round() / 1e4,
+            "evaluate_max": s.evaluate.max.round(), "feedforward_max": s.feedforward.max.round(), "breed_max": s.breed.max.round(),
+            "instructions_per_point_eval": round2(s.per_point.max),
+        })).collect::<Vec<_>>(),
+        "cycle_estimate_168mhz": {
+            "label": "ESTIMATE (not a measurement): measured worst-case instruction count x per-class worst-case Cortex-M4 cycle costs",
+            "cycles_per_generation": r.cyc.cycles.round(),
+            "microseconds_per_generation": round1(r.cyc.microseconds),
+            "evaluate_cycles": r.cyc_eval.cycles.round(),
+            "cycles_per_generation_if_branches_cost_2": r.cyc_b2.cycles.round(),
+            "microseconds_per_generation_if_branches_cost_2": round1(r.cyc_b2.microseconds),
+            "point_cycles_per_point": round2(r.mix.point.cycles),
+            "point_instructions_static": round2(r.mix.point.instructions),
+            "point_windows": r.mix.windows,
+            "rest_cycles_per_instruction": round2(r.mix.rest.cpi()),
+            "point_mix": r.mix.point.classes.iter().map(|(k, v)| ((*k).to_owned(), json!(round2(*v)))).collect::<serde_json::Map<_, _>>(),
+            "rest_mix": r.mix.rest.classes.iter().map(|(k, v)| ((*k).to_owned(), json!(v.round()))).collect::<serde_json::Map<_, _>>(),
+            "assumptions": assumptions(),
+            "with_flash_wait_states": flash_json(r),
+        },
+        "measurement": {
+            "qemu": "qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -icount shift=10 (1 instruction = 1024 ns virtual)",
+            "timer": format!("CMSDK APB TIMER0 @ 0x40000000, SYSCLK 25 MHz ({NS_PER_TICK} ns/tick): instructions = ticks * 40 / 1024"),
+            "timer_read_pair_ticks": r.read_pair_ticks,
+            "timer_read_instructions": round2(read_ins),
+            "window": "instructions_per_generation = the whole Tracker::step_probed call (input checks, 4 probe marks of ~4 instructions each included); phases between probe marks",
+            "timing_image": r.timing_elf.display().to_string(),
+            "firmware_image": r.firmware_elf.display().to_string(),
+        },
+    })
+}
+
+/// The line printed at the end of a run.
+pub(super) fn summary(r: &Results) -> String {
+    let f = &r.full;
+    format!(
+        "instructions per generation (P = {}, G = {}): min {:.0}, max {:.0} (max/min {:.4}); {:.2} per point; stack {} B; \
+         flash {} B; static RAM {} B; ESTIMATE {:.0} cycles = {:.0} µs at 168 MHz",
+        f.population,
+        f.grid,
+        f.call.min,
+        f.call.max,
+        f.call.ratio(),
+        f.per_point.max,
+        stack_bytes(r),
+        r.fw_mem.flash_bytes,
+        r.fw_mem.static_ram_bytes,
+        r.cyc.cycles,
+        r.cyc.microseconds
+    )
+}
+
+/// Target for the worst-case time of one frame at 168 MHz (half of a 30 fps period).
+pub const FRAME_TARGET_MS: f64 = 16.0;
+
+/// The flash wait-state part of `timing.md`.
+fn flash_section(s: &mut String, r: &Results) {
+    let (c, w, hot) = (&r.cyc, &r.mix.point_waits, &r.mix.hot);
+    let ms = c.flash_microseconds / 1000.0;
+    let verdict = if ms <= FRAME_TARGET_MS { "✔" } else { "✘" };
+    let _ = writeln!(
+        s,
+        "\n### With flash wait states (STM32F4, 168 MHz, 5 wait states, ART accelerator)\n\n\
+         **≈ {:.0} cycles = {ms:.2} ms per worst-case generation** (target ≤ {FRAME_TARGET_MS} ms per frame {verdict}): \
+         {:.0} zero-wait cycles + {:.0} wait cycles at the sample points + {:.0} in the rest.\n",
+        c.flash_cycles, c.cycles, c.flash_point_cycles, c.flash_rest_cycles
+    );
+    let _ = writeln!(
+        s,
+        "- hot loop: the point windows span {} B, {} the 1 KiB ART instruction cache;\n\
+         - per point: {:.2} loads from flash (+5 cycles each), {:.2} loads through registers of unknown provenance \
+         (SRAM in the estimate);\n\
+         - sensitivity: hot loop missing the cache and every unknown point load from flash: {:.2} ms; every branch \
+         at 2 cycles: {:.2} ms.\n",
+        hot.span_bytes,
+        if hot.cached { "inside" } else { "larger than" },
+        w.flash_loads,
+        w.other_loads,
+        c.flash_uncached_microseconds / 1000.0,
+        r.cyc_b2.flash_microseconds / 1000.0
+    );
+    let _ = writeln!(s, "Wait-state assumptions:\n");
+    for a in flash_assumptions() {
+        let _ = writeln!(s, "- {a}");
+    }
+}
+
+/// `timing.md`.
+pub(super) fn markdown(r: &Results) -> String {
+    let (full, sweep, stack, mix) = (&r.full, &r.sweep, &r.stack, &r.mix);
+    let (stack_prologue, cyc, cyc_b2, marginal) = (r.stack_prologue.as_ref(), &r.cyc, &r.cyc_b2, r.marginal);
+    let (fw, timing, demo_stack, read_ins) = (r.fw_mem, r.timing_mem, r.demo_stack, read_instructions(r));
+    let mut s = String::new();
+    let _ = writeln!(s, "# Worst-case timing and memory of one GA generation (Cortex-M4, QEMU `-icount shift=10`)\n");
+    let _ = writeln!(
+        s,
+        "Default configuration: population {}, {} points per row ({} sample points per individual, both cameras), \
+         160×120 frames, feedforward on. {} generations on frames made on the board: every kind below, one tracker \
+         running through all of them. Instructions are counted with TIMER0 on QEMU's instruction clock \
+         (`ticks · 40 / 1024`, deterministic); a generation is the whole `Tracker::step_probed` call.\n",
+        full.population, full.grid, full.points_per_individual, full.generations
+    );
+    let _ = writeln!(s, "| quantity | min | max | mean | target |\n|---|---:|---:|---:|---|");
+    let row = |s: &mut String, name: &str, r: &Range, target: &str| {
+        let _ = writeln!(s, "| {name} | {:.0} | {:.0} | {:.0} | {target} |", r.min, r.max, r.mean);
+    };
+    row(&mut s, "instructions per generation", &full.call, &format!("≤ {GENERATION_BUDGET:.0}"));
+    row(&mut s, "— feedforward", &full.feedforward, "");
+    row(&mut s, "— projection + fitness (Evaluate)", &full.evaluate, "");
+    row(&mut s, "— selection/crossover/mutation (Breed)", &full.breed, "");
+    let _ = writeln!(
+        s,
+        "| instructions per point evaluation (Evaluate / ({} · {})) | {:.2} | {:.2} | {:.2} | ≤ {POINT_TARGET} |",
+        full.population, full.points_per_individual, full.per_point.min, full.per_point.max, full.per_point.mean
+    );
+    let _ = writeln!(s);
+    let verdict = if full.call.max <= GENERATION_BUDGET {
+        "within budget".to_owned()
+    } else {
+        format!("**over budget by {:.1} %**", (full.call.max / GENERATION_BUDGET - 1.0) * 100.0)
+    };
+    let _ = writeln!(
+        s,
+        "- max/min over the frames: **{:.4}** (target ≤ {RATIO_TARGET}); worst case {:.0} instructions: {verdict}.",
+        full.call.ratio(),
+        full.call.max
+    );
+    let _ = writeln!(
+        s,
+        "- per point: the Evaluate phase divided by the points; it includes the per-pose overhead (ψ → rotation, two \
+         projectors, face choice and visibility, row starts, the GA's best-of bookkeeping). Marginal cost of a point \
+         (Evaluate at 8 minus 4 points per row, population 40): {}.",
+        marginal.map_or("n/a".to_owned(), |v| format!("{v:.2} instructions"))
+    );
+    let _ = writeln!(
+        s,
+        "- one TIMER0 read costs {read_ins:.2} instructions; the 4 probe marks add ≈ 16 to a generation.\n"
+    );
+    let _ = writeln!(
+        s,
+        "## By kind of frame (whole call, instructions)\n\n| frames | n | min | max |\n|---|---:|---:|---:|"
+    );
+    for (k, n, r) in &full.by_kind {
+        let _ = writeln!(s, "| {} | {n} | {:.0} | {:.0} |", k.name(), r.min, r.max);
+    }
+    let _ = writeln!(
+        s,
+        "\n## Sweep: population × points per row ({} frames each, every kind)\n\n\
+         | population | points/row | points/individual | min | max | max/min | Evaluate max | per point (max) |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|",
+        sweep.first().map_or(0, |r| r.generations)
+    );
+    for r in sweep {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.0} | {:.0} | {:.4} | {:.0} | {:.2} |",
+            r.population,
+            r.grid,
+            r.points_per_individual,
+            r.call.min,
+            r.call.max,
+            r.call.ratio(),
+            r.evaluate.max,
+            r.per_point.max
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n## Cycle ESTIMATE for a 168 MHz Cortex-M4F (not a measurement)\n\n\
+         **≈ {:.0} cycles = {:.0} µs per worst-case generation** ({:.0} cycles in the {} sample points at {:.1} cycles \
+         each, {:.0} in the rest at {:.2} cycles per instruction).\n",
+        cyc.cycles,
+        cyc.microseconds,
+        cyc.point_cycles,
+        full.population * full.points_per_individual,
+        mix.point.cycles,
+        cyc.rest_cycles,
+        mix.rest.cpi()
+    );
+    let _ = writeln!(
+        s,
+        "Sensitivity: with every branch at 2 cycles instead of 4 (a 1-cycle refill), {:.0} cycles = {:.0} µs.\n",
+        cyc_b2.cycles, cyc_b2.microseconds
+    );
+    let _ = writeln!(
+        s,
+        "One sample point ({} windows between `vdiv.f32` in the fitness kernel; {:.1} static instructions per point):\n",
+        mix.windows, mix.point.instructions
+    );
+    let _ = writeln!(s, "| class (worst-case cycles) | instructions per point |\n|---|---:|");
+    for (k, v) in &mix.point.classes {
+        let _ = writeln!(s, "| {k} | {v:.2} |");
+    }
+    let _ = writeln!(s, "\nAssumptions:\n");
+    for a in assumptions() {
+        let _ = writeln!(s, "- {a}");
+    }
+    flash_section(&mut s, r);
+    let _ = writeln!(s, "\n## Stack and memory\n");
+    let _ = writeln!(s, "| quantity | bytes | how |\n|---|---:|---|");
+    let _ = writeln!(
+        s,
+        "| static worst case, one generation (below the generation function) | {} | {} |",
+        stack.generation.bytes, stack.method
+    );
+    let _ = writeln!(s, "| static worst case, `Reset` → generation | {} | same, deepest caller path |", stack.total());
+    if let Some(p) = stack_prologue {
+        let _ = writeln!(s, "| same from the prologues of the measured image | {} | cross-check |", p.total());
+    }
+    let _ = writeln!(
+        s,
+        "| painted high-water mark, one generation (max over the run) | {} | stack re-painted before each generation |",
+        full.stack
+    );
+    if let Some((u, sz)) = demo_stack {
+        let _ = writeln!(
+            s,
+            "| firmware painted high-water mark (demo, 30 frames, incl. tracker construction) | {u} | of a {sz}-byte stack region |"
+        );
+    }
+    let _ = writeln!(
+        s,
+        "| firmware flash (`.vector_table + .text + .rodata + .data`) | {} | ELF section headers |",
+        fw.flash_bytes
+    );
+    let _ = writeln!(
+        s,
+        "| firmware static RAM (`.data + .bss + .uninit`) | {} | ELF section headers |",
+        fw.static_ram_bytes
+    );
+    if let Some((u, _)) = demo_stack {
+        let total = fw.static_ram_bytes + u64::from(u);
+        let _ = writeln!(s, "| firmware static RAM + painted stack | {total} | of {RAM_BYTES} (memory.x) |");
+    }
+    let _ = writeln!(
+        s,
+        "| timing firmware flash / static RAM (9 trackers) | {} / {} | ELF section headers |",
+        timing.flash_bytes, timing.static_ram_bytes
+    );
+    let _ = writeln!(
+        s,
+        "\nIndirect calls reachable from the generation: {}; recursion: {}.\n\nDeepest static path:\n",
+        stack.indirect_calls,
+        if stack.recursion { "yes (bound void)" } else { "none" }
+    );
+    for (name, frame) in stack.callers.frames.iter().chain(stack.generation.frames.iter()) {
+        let _ = writeln!(s, "- {frame:>6} B  `{name}`");
+    }
+    let _ = writeln!(
+        s,
+        "\nReproduce: `{BUILD_HINT}` (and optionally `{STACK_SIZES_HINT}`), then \
+         `cargo run --release -p evorec-sim -- timing --out DIR`."
+    );
+    s
+}
+
+pub(super) fn round1(v: f64) -> f64 {
+    (v * 10.0).round() / 10.0
+}
+
+pub(super) fn round2(v: f64) -> f64 {
+    (v * 100.0).round() / 100.0
+}

@@ -1,0 +1,231 @@
+//! The sequence as a camera-controller board: a reader thread decodes the PNGs ahead of the
+//! tracker (bounded channel) and converts them to hue, as a board's camera interface would;
+//! [`SequenceBoard`] hands them to the core's loop with the joint state interpolated at each
+//! capture time, and records every published estimate.
+
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::thread::JoinHandle;
+
+use evorec_core::board::{CameraController, Error as BoardError, ErrorKind, ErrorType, FrameInfo};
+use evorec_core::camera::Pinhole;
+use evorec_core::pose::Psi;
+use evorec_core::tracker::{Estimate, JointSample};
+use image::RgbImage;
+use indicatif::ProgressBar;
+
+use crate::render;
+use crate::sequence::{self, FrameRow, JointTable, SequenceError};
+
+/// Frames decoded ahead of the tracker at most.
+pub const READ_AHEAD: usize = 8;
+
+/// A decoded frame pair.
+pub struct Decoded {
+    /// Position in `frames.csv` (0-based).
+    pub i: usize,
+    /// Left hue image.
+    pub left: Vec<u8>,
+    /// Right hue image.
+    pub right: Vec<u8>,
+    /// The RGB images, kept for frames that get an overlay.
+    pub rgb: Option<(RgbImage, RgbImage)>,
+}
+
+/// Decodes frame `i` (both PNGs in parallel) into hue images.
+///
+/// # Errors
+/// As [`sequence::decode_pair`].
+pub fn decode(
+    frames: &[FrameRow],
+    i: usize,
+    cams: (&Pinhole, &Pinhole),
+    keep_rgb: bool,
+) -> Result<Decoded, SequenceError> {
+    let f = &frames[i];
+    let (w, h) = (|c: &Pinhole| u32::from(c.width()), |c: &Pinhole| u32::from(c.height()));
+    let (l, r) = rayon::join(
+        || sequence::images::decode(&f.left, w(cams.0), h(cams.0)),
+        || sequence::images::decode(&f.right, w(cams.1), h(cams.1)),
+    );
+    let (l, r) = (l?, r?);
+    let (left, right) = (render::hue_image(&l), render::hue_image(&r));
+    Ok(Decoded { i, left, right, rgb: keep_rgb.then_some((l, r)) })
+}
+
+/// Starts the reader thread for frames `from..to`; `keep_rgb(i)` says which frames keep their
+/// RGB images. The thread stops at the first error (sent as the last item) or when the
+/// receiver is dropped.
+pub fn spawn_reader(
+    frames: Arc<Vec<FrameRow>>,
+    cams: (Pinhole, Pinhole),
+    range: std::ops::Range<usize>,
+    keep_rgb: Arc<dyn Fn(usize) -> bool + Send + Sync>,
+) -> (Receiver<Result<Decoded, SequenceError>>, JoinHandle<()>) {
+    let (tx, rx): (SyncSender<_>, _) = sync_channel(READ_AHEAD);
+    let handle = std::thread::spawn(move || {
+        for i in range {
+            let item = decode(&frames, i, (&cams.0, &cams.1), keep_rgb(i));
+            let failed = item.is_err();
+            if tx.send(item).is_err() || failed {
+                break;
+            }
+        }
+    });
+    (rx, handle)
+}
+
+/// Why the sequence board stopped.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SeqBoardError {
+    /// All frames were delivered.
+    EndOfStream,
+    /// A PNG could not be decoded.
+    Decode(SequenceError),
+    /// The reader thread stopped without saying why.
+    ReaderGone,
+    /// The caller's buffers are smaller than a frame.
+    BufferTooSmall,
+}
+
+impl BoardError for SeqBoardError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::EndOfStream => ErrorKind::EndOfStream,
+            Self::Decode(_) | Self::ReaderGone | Self::BufferTooSmall => ErrorKind::Other,
+        }
+    }
+}
+
+impl std::fmt::Display for SeqBoardError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::EndOfStream => f.write_str("end of the sequence"),
+            Self::Decode(e) => write!(f, "{e}"),
+            Self::ReaderGone => f.write_str("the image reader thread stopped"),
+            Self::BufferTooSmall => f.write_str("frame buffers are too small"),
+        }
+    }
+}
+
+/// One tracked frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackedFrame {
+    /// Position in `frames.csv`.
+    pub i: usize,
+    /// Joint positions at the capture time (as given to the tracker).
+    pub q: Vec<f32>,
+    /// Joint velocities at the capture time.
+    pub qd: Vec<f32>,
+    /// The estimate.
+    pub estimate: Psi,
+    /// Its fitness.
+    pub fitness: f32,
+}
+
+/// The board over a sequence.
+pub struct SequenceBoard<'a> {
+    frames: &'a [FrameRow],
+    joints: &'a JointTable,
+    size: (u16, u16),
+    rx: Receiver<Result<Decoded, SequenceError>>,
+    first: Option<Decoded>,
+    next: usize,
+    end: usize,
+    current: Option<(usize, Vec<f32>, Vec<f32>)>,
+    /// Published frames, in order.
+    pub tracked: Vec<TrackedFrame>,
+    /// RGB images kept for overlays: (position in frames.csv, left, right).
+    pub kept: Vec<(usize, RgbImage, RgbImage)>,
+    progress: Option<ProgressBar>,
+}
+
+impl<'a> SequenceBoard<'a> {
+    /// A board delivering frames `0..end`: `first` is frame 0, already decoded, and `rx` the
+    /// reader thread's channel for the others.
+    pub fn new(
+        seq: &'a sequence::Sequence,
+        first: Decoded,
+        rx: Receiver<Result<Decoded, SequenceError>>,
+        end: usize,
+        progress: Option<ProgressBar>,
+    ) -> Self {
+        Self {
+            frames: &seq.frames,
+            joints: &seq.joints,
+            size: (seq.rig.right.width(), seq.rig.right.height()),
+            rx,
+            first: Some(first),
+            next: 0,
+            end,
+            current: None,
+            tracked: Vec::with_capacity(end),
+            kept: Vec::new(),
+            progress,
+        }
+    }
+
+    fn capture_time_us(&self, i: usize) -> u64 {
+        // Relative to the first frame, so recordings stamped with epoch times work too.
+        ((self.frames[i].t_s - self.frames[0].t_s) * 1e6).round().max(0.0) as u64
+    }
+}
+
+impl ErrorType for SequenceBoard<'_> {
+    type Error = SeqBoardError;
+}
+
+impl<const DOF: usize> CameraController<DOF> for SequenceBoard<'_> {
+    type Format = evorec_core::image::Hue;
+
+    fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SeqBoardError> {
+        if self.next >= self.end {
+            return Err(SeqBoardError::EndOfStream);
+        }
+        let d = match self.first.take() {
+            Some(d) => d,
+            None => self.rx.recv().map_err(|_| SeqBoardError::ReaderGone)?.map_err(SeqBoardError::Decode)?,
+        };
+        let n = usize::from(self.size.0) * usize::from(self.size.1);
+        if left.len() < n || right.len() < n || d.left.len() != n || d.right.len() != n {
+            return Err(SeqBoardError::BufferTooSmall);
+        }
+        left[..n].copy_from_slice(&d.left);
+        right[..n].copy_from_slice(&d.right);
+        if let Some((l, r)) = d.rgb {
+            self.kept.push((d.i, l, r));
+        }
+        let state = self.joints.at(self.frames[d.i].t_s);
+        let (q, qd) = match state {
+            Some(s) if s.q.len() == DOF && s.qd.len() == DOF => {
+                (s.q.iter().map(|v| *v as f32).collect(), s.qd.iter().map(|v| *v as f32).collect())
+            }
+            // Checked at load time; a NaN sample is refused by the tracker, not used.
+            _ => (vec![f32::NAN; DOF], vec![f32::NAN; DOF]),
+        };
+        self.current = Some((d.i, q, qd));
+        self.next += 1;
+        if let Some(p) = &self.progress {
+            p.inc(1);
+        }
+        Ok(FrameInfo {
+            sequence: u32::try_from(self.frames[d.i].index).unwrap_or(u32::MAX),
+            capture_time_us: self.capture_time_us(d.i),
+            width: self.size.0,
+            height: self.size.1,
+        })
+    }
+
+    fn joint_sample(&mut self) -> Result<JointSample<DOF>, SeqBoardError> {
+        let (i, q, qd) = self.current.as_ref().ok_or(SeqBoardError::ReaderGone)?;
+        let arr = |v: &[f32]| std::array::from_fn(|k| v.get(k).copied().unwrap_or(f32::NAN));
+        Ok(JointSample { q: arr(q), qd: arr(qd), time_us: self.capture_time_us(*i) })
+    }
+
+    fn publish(&mut self, _frame: &FrameInfo, estimate: &Estimate) -> Result<(), SeqBoardError> {
+        if let Some((i, q, qd)) = self.current.take() {
+            self.tracked.push(TrackedFrame { i, q, qd, estimate: estimate.psi, fitness: estimate.fitness });
+        }
+        Ok(())
+    }
+}

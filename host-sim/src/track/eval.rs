@@ -1,0 +1,200 @@
+//! Accuracy of a tracked sequence against its ground truth, modulo the block's colour
+//! symmetry.
+//!
+//! A half turn about a block axis maps the box onto itself; when it also maps every face onto
+//! a face of the same hue, the two poses give identical images and no tracker can tell them
+//! apart. [`colour_symmetries`] finds which of `{I, Rx(π), Ry(π), Rz(π)}` do so for the
+//! block's face hues; each frame's truth `^CR T_M` is replaced by the equivalent `^CR T_M · S`
+//! nearest (in rotation angle) to the estimate before errors are taken.
+
+use evorec_core::hue::degrees_to_units;
+use evorec_core::pose::Psi;
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use serde::Serialize;
+
+/// A frame's estimate stays "within" the truth when its position error is at most this (m)…
+pub const WITHIN_POSITION_M: f64 = 0.010;
+/// …and its rotation error at most this (degrees).
+pub const WITHIN_ROTATION_DEG: f64 = 5.0;
+
+/// The half turns (named) that map every face onto a face of the same hue.
+/// Faces are +x, +y, +z, −x, −y, −z; face `k` and `k + 3` are opposite.
+pub fn colour_symmetries(face_hues_deg: &[f32; 6]) -> Vec<(&'static str, UnitQuaternion<f64>)> {
+    let h = face_hues_deg.map(degrees_to_units);
+    let same = |a: usize| h[a] == h[a + 3];
+    let mut out = vec![("I", UnitQuaternion::identity())];
+    for (name, axis, keep) in
+        [("Rx(pi)", Vector3::x_axis(), 0), ("Ry(pi)", Vector3::y_axis(), 1), ("Rz(pi)", Vector3::z_axis(), 2)]
+    {
+        // A half turn about axis `keep` swaps the two other pairs of opposite faces.
+        if (0..3).filter(|a| *a != keep).all(same) {
+            out.push((name, UnitQuaternion::from_axis_angle(&axis, std::f64::consts::PI)));
+        }
+    }
+    out
+}
+
+/// The pose of an estimate (f64).
+pub fn isometry_of(psi: &Psi) -> Isometry3<f64> {
+    let t = psi.translation().cast::<f64>();
+    let e = psi.eps().cast::<f64>();
+    let w = (1.0 - e.norm_squared()).max(0.0).sqrt();
+    let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, e.x, e.y, e.z));
+    Isometry3::from_parts(t.into(), q)
+}
+
+/// `ψ` (f64) of a pose, with `η ≥ 0`.
+pub fn psi_of(iso: &Isometry3<f64>) -> [f64; 6] {
+    let t = iso.translation.vector;
+    let mut q = *iso.rotation.quaternion();
+    if q.w < 0.0 {
+        q = -q;
+    }
+    [t.x, t.y, t.z, q.i, q.j, q.k]
+}
+
+/// The truth equivalent under `symmetries` nearest to `estimate`, and the rotation error (rad).
+pub fn aligned_truth(
+    estimate: &Isometry3<f64>,
+    truth: &Isometry3<f64>,
+    symmetries: &[(&'static str, UnitQuaternion<f64>)],
+) -> (Isometry3<f64>, f64) {
+    let mut best = (*truth, f64::INFINITY);
+    for (_, s) in symmetries {
+        let cand = Isometry3::from_parts(truth.translation, truth.rotation * s);
+        let angle = estimate.rotation.angle_to(&cand.rotation);
+        if angle < best.1 {
+            best = (cand, angle);
+        }
+    }
+    best
+}
+
+/// One frame's errors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameError {
+    /// Estimate minus aligned truth: x, y, z (m), ε₁, ε₂, ε₃.
+    pub d: [f64; 6],
+    /// Rotation error (degrees).
+    pub rot_deg: f64,
+}
+
+impl FrameError {
+    /// Whether the estimate is within [`WITHIN_POSITION_M`] and [`WITHIN_ROTATION_DEG`].
+    pub fn within(&self) -> bool {
+        Vector3::new(self.d[0], self.d[1], self.d[2]).norm() <= WITHIN_POSITION_M && self.rot_deg <= WITHIN_ROTATION_DEG
+    }
+}
+
+/// The errors of one estimate against one truth, and the aligned truth's ψ.
+pub fn frame_error(
+    estimate: &Psi,
+    truth: &Isometry3<f64>,
+    symmetries: &[(&'static str, UnitQuaternion<f64>)],
+) -> (FrameError, [f64; 6]) {
+    let est = isometry_of(estimate);
+    let (aligned, angle) = aligned_truth(&est, truth, symmetries);
+    let t = psi_of(&aligned);
+    let e = estimate.0.map(f64::from);
+    (FrameError { d: std::array::from_fn(|k| e[k] - t[k]), rot_deg: angle.to_degrees() }, t)
+}
+
+/// RMS errors over a set of frames.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Rms {
+    /// RMS x error (mm).
+    pub rms_x_mm: f64,
+    /// RMS y error (mm).
+    pub rms_y_mm: f64,
+    /// RMS z error (mm).
+    pub rms_z_mm: f64,
+    /// RMS ε₁ error.
+    pub rms_e1: f64,
+    /// RMS ε₂ error.
+    pub rms_e2: f64,
+    /// RMS ε₃ error.
+    pub rms_e3: f64,
+    /// RMS rotation error (degrees).
+    pub rms_rot_deg: f64,
+    /// Largest rotation error (degrees).
+    pub max_rot_deg: f64,
+    /// Frames.
+    pub frames: usize,
+}
+
+impl Rms {
+    /// The RMS of `errors` (`None` when empty).
+    pub fn of(errors: &[FrameError]) -> Option<Self> {
+        if errors.is_empty() {
+            return None;
+        }
+        let n = errors.len() as f64;
+        let ms = |f: &dyn Fn(&FrameError) -> f64| (errors.iter().map(|e| f(e).powi(2)).sum::<f64>() / n).sqrt();
+        Some(Self {
+            rms_x_mm: ms(&|e| e.d[0]) * 1e3,
+            rms_y_mm: ms(&|e| e.d[1]) * 1e3,
+            rms_z_mm: ms(&|e| e.d[2]) * 1e3,
+            rms_e1: ms(&|e| e.d[3]),
+            rms_e2: ms(&|e| e.d[4]),
+            rms_e3: ms(&|e| e.d[5]),
+            rms_rot_deg: ms(&|e| e.rot_deg),
+            max_rot_deg: errors.iter().map(|e| e.rot_deg).fold(0.0, f64::max),
+            frames: errors.len(),
+        })
+    }
+}
+
+/// The first position from which every error is [`FrameError::within`] to the end.
+pub fn settled_from(errors: &[FrameError]) -> Option<usize> {
+    let last_bad = errors.iter().rposition(|e| !e.within());
+    match last_bad {
+        None if errors.is_empty() => None,
+        None => Some(0),
+        Some(k) if k + 1 < errors.len() => Some(k + 1),
+        Some(_) => None,
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn symmetries_follow_the_face_hues() {
+        let names = |h: [f32; 6]| colour_symmetries(&h).into_iter().map(|(n, _)| n).collect::<Vec<_>>();
+        assert_eq!(names([0.0, 120.0, 240.0, 0.0, 120.0, 240.0]), ["I", "Rx(pi)", "Ry(pi)", "Rz(pi)"]);
+        // ±y differ: only the half turn about y keeps them.
+        assert_eq!(names([0.0, 120.0, 240.0, 0.0, 60.0, 240.0]), ["I", "Ry(pi)"]);
+        assert_eq!(names([0.0, 60.0, 120.0, 180.0, 240.0, 300.0]), ["I"]);
+    }
+
+    #[test]
+    fn a_symmetric_estimate_has_no_rotation_error() {
+        let truth = Isometry3::new(Vector3::new(0.01, 0.0, 0.7), Vector3::new(0.3, -0.2, 0.1));
+        let flipped = Isometry3::from_parts(
+            truth.translation,
+            truth.rotation * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI),
+        );
+        let est = Psi::from_isometry(&flipped.cast::<f32>());
+        let all = colour_symmetries(&[0.0, 120.0, 240.0, 0.0, 120.0, 240.0]);
+        let (e, _) = frame_error(&est, &truth, &all);
+        assert!(e.rot_deg < 1e-3 && e.d.iter().all(|d| d.abs() < 1e-5), "{e:?}");
+        // Without the symmetry the same estimate is 180° off.
+        let (e, _) = frame_error(&est, &truth, &all[..1]);
+        assert!((e.rot_deg - 180.0).abs() < 1e-3, "{e:?}");
+    }
+
+    #[test]
+    fn settling_frame_is_the_first_of_the_final_good_run() {
+        let good = FrameError { d: [0.001, 0.0, 0.0, 0.0, 0.0, 0.0], rot_deg: 1.0 };
+        let bad = FrameError { d: [0.02, 0.0, 0.0, 0.0, 0.0, 0.0], rot_deg: 1.0 };
+        let turned = FrameError { rot_deg: 6.0, ..good };
+        assert_eq!(settled_from(&[bad, good, bad, good, good]), Some(3));
+        assert_eq!(settled_from(&[good, good]), Some(0));
+        assert_eq!(settled_from(&[good, turned]), None);
+        assert_eq!(settled_from(&[]), None);
+        let r = Rms::of(&[good, bad]).unwrap();
+        assert!((r.rms_x_mm - (0.5f64 * (1.0 + 400.0)).sqrt()).abs() < 1e-9 && r.max_rot_deg == 1.0);
+    }
+}

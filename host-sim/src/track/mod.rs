@@ -1,0 +1,205 @@
+//! `evorec track`: the tracker on a recorded sequence (`evorec-seq/1`).
+//!
+//! The sequence is a camera-controller board ([`board::SequenceBoard`]) driven by the core's
+//! `board::run`, the same loop as the simulator's and the firmware's. A reader thread decodes
+//! the PNGs ahead of the tracker. The tracker is built from the sequence: the rig from the
+//! calibration, the arm from the URDF chain (any number of joints the dispatch in [`run`]
+//! lists), the hand-eye transform from `flange_to_right`, the block from `[target]`, the search
+//! space from `[search]` (else [`crate::experiment::search_space`]). With an `initial_pose`
+//! the population starts around it as `evorec run` starts around the truth.
+//!
+//! Nothing is written before the input is known good: all metadata is checked and frame 0
+//! decoded before tracking starts, and the outputs are written only after the last frame, so
+//! a bad PNG found later fails with an error naming it and leaves no output file behind.
+
+pub mod board;
+pub mod eval;
+pub mod output;
+
+use std::collections::BTreeSet;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Result, anyhow, bail};
+use evorec_core::acquire::AcquireConfig;
+use evorec_core::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, DEFAULT_POPULATION};
+use evorec_core::ga::{GaParams, SearchSpace};
+use evorec_core::kinematics::Chain;
+use evorec_core::pose::Psi;
+use evorec_core::status::StatusConfig;
+use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
+use image::RgbImage;
+use indicatif::{ProgressBar, ProgressStyle};
+use nalgebra::Isometry3;
+
+use crate::experiment::{INITIAL_SPREAD, search_space};
+use crate::sequence::Sequence;
+use board::{SequenceBoard, TrackedFrame};
+
+/// What `evorec track` was asked to do.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackOptions {
+    /// Motion feedforward on or off.
+    pub feedforward: Feedforward,
+    /// Seed of the GA.
+    pub seed: u64,
+    /// GA population (default: the compiled one).
+    pub population: Option<usize>,
+    /// Sample points per model row (default: the compiled one).
+    pub points_per_row: Option<usize>,
+    /// Track only the first N frames.
+    pub frames: Option<usize>,
+    /// `frames.csv` indices to draw overlays of.
+    pub overlay: BTreeSet<u64>,
+    /// Show a progress bar.
+    pub progress: bool,
+}
+
+impl Default for TrackOptions {
+    fn default() -> Self {
+        Self {
+            feedforward: Feedforward::On,
+            seed: 1,
+            population: None,
+            points_per_row: None,
+            frames: None,
+            overlay: BTreeSet::new(),
+            progress: false,
+        }
+    }
+}
+
+/// The result of tracking a sequence.
+#[derive(Debug, Clone)]
+pub struct TrackOutput {
+    /// Published frames, in order.
+    pub tracked: Vec<TrackedFrame>,
+    /// Frames the tracker refused.
+    pub rejected: u32,
+    /// RGB images of the overlay frames: (position in frames.csv, left, right).
+    pub kept: Vec<(usize, RgbImage, RgbImage)>,
+    /// Wall-clock time of the tracking loop, decoding included (s).
+    pub seconds: f64,
+    /// The options used.
+    pub options: TrackOptions,
+}
+
+/// TODO(lead): runtime sizes. The one place where `--population` / `--points-per-row` are
+/// checked: the core is compiled for one population and one row size, so only those are
+/// accepted until the sizes can be chosen at run time (then pass them to the config here).
+fn check_sizes(opts: &TrackOptions) -> Result<()> {
+    if let Some(p) = opts.population
+        && p != DEFAULT_POPULATION
+    {
+        bail!("--population {p}: only {DEFAULT_POPULATION} is supported yet (the size is compiled into the core)");
+    }
+    if let Some(g) = opts.points_per_row
+        && g != DEFAULT_GRID
+    {
+        bail!("--points-per-row {g}: only {DEFAULT_GRID} is supported yet (the size is compiled into the core)");
+    }
+    Ok(())
+}
+
+/// The search space of a sequence: `[search]`, else the simulator's default box.
+///
+/// # Errors
+/// An invalid `[search]` box.
+pub fn search_of(seq: &Sequence) -> Result<SearchSpace> {
+    match &seq.manifest.raw.search {
+        Some(s) => SearchSpace::new_checked(s.min_m.map(|v| v as f32), s.max_m.map(|v| v as f32))
+            .map_err(|e| anyhow!("{}: search: {e}", seq.dir.join("sequence.toml").display())),
+        None => Ok(search_space()),
+    }
+}
+
+/// Tracks `seq`: dispatches on the arm's number of joints.
+///
+/// # Errors
+/// Unsupported options or arm, a bad first frame, a bad PNG found later (naming the file).
+pub fn run(seq: &Sequence, opts: &TrackOptions) -> Result<TrackOutput> {
+    check_sizes(opts)?;
+    match seq.robot.dof() {
+        6 => run_dof::<6>(seq, opts, seq.robot.chain::<6>()?),
+        7 => run_dof::<7>(seq, opts, seq.robot.chain::<7>()?),
+        n => bail!(
+            "{}: the chain from {} to {} has {n} movable joints; evorec tracks arms of 6 or 7",
+            seq.dir.join(&seq.manifest.raw.robot.urdf).display(),
+            seq.manifest.raw.robot.base_link,
+            seq.manifest.raw.robot.flange_link
+        ),
+    }
+}
+
+/// The tracker configuration of a sequence.
+///
+/// # Errors
+/// Invalid search box.
+pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, seed: u64) -> Result<TrackerConfig<DOF>> {
+    Ok(TrackerConfig {
+        rig: seq.rig,
+        block: seq.block,
+        arm,
+        flange_to_camera: seq.manifest.flange_to_right.cast(),
+        search: search_of(seq)?,
+        ga: GaParams::DEFAULT,
+        hue_tolerance: DEFAULT_HUE_TOLERANCE,
+        seed,
+        max_dt_s: 0.5,
+        acquire: AcquireConfig::DEFAULT,
+        status: StatusConfig::DEFAULT,
+    })
+}
+
+/// The tracker over `seq` with `DOF` joints.
+fn run_dof<const DOF: usize>(seq: &Sequence, opts: &TrackOptions, arm: Chain<DOF>) -> Result<TrackOutput> {
+    let mut tracker: Tracker<DOF, DEFAULT_POPULATION, DEFAULT_GRID> =
+        Tracker::new(config(seq, arm, opts.seed)?).map_err(|e| anyhow!("tracker: {e}"))?;
+    match &seq.manifest.initial_pose {
+        Some(pose) => {
+            let psi = Psi::from_isometry(&pose.cast::<f32>());
+            tracker.reset_around(&psi, &INITIAL_SPREAD).map_err(|e| anyhow!("target.initial_pose: {e}"))?;
+        }
+        // TODO(lead): acquisition. Without an initial pose the population starts uniform over
+        // the search space (until the tracker acquires by itself).
+        None => tracker.reset_uniform(),
+    }
+    let end = opts.frames.map_or(seq.frames.len(), |n| n.min(seq.frames.len()));
+    if end == 0 {
+        bail!("--frames 0: nothing to track");
+    }
+    let overlay: BTreeSet<usize> =
+        seq.frames.iter().enumerate().filter(|(_, f)| opts.overlay.contains(&f.index)).map(|(i, _)| i).collect();
+    let keep: Arc<dyn Fn(usize) -> bool + Send + Sync> = Arc::new(move |i| overlay.contains(&i));
+    let cams = (seq.rig.left, seq.rig.right);
+    // Frame 0 is decoded here, so a bad first image fails before anything runs.
+    let first = board::decode(&seq.frames, 0, (&cams.0, &cams.1), keep(0))?;
+    let (rx, reader) = board::spawn_reader(Arc::new(seq.frames.clone()), cams, 1..end, keep);
+    let progress = opts.progress.then(|| progress_bar(end as u64));
+    let mut b = SequenceBoard::new(seq, first, rx, end, progress.clone());
+    let n = usize::from(seq.rig.right.width()) * usize::from(seq.rig.right.height());
+    let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
+    let t0 = Instant::now();
+    let stats = evorec_core::board::run(&mut b, &mut tracker, opts.feedforward, &mut left, &mut right, u32::MAX);
+    let seconds = t0.elapsed().as_secs_f64();
+    let SequenceBoard { tracked, kept, .. } = b;
+    reader.join().map_err(|_| anyhow!("the image reader thread panicked"))?;
+    if let Some(p) = progress {
+        p.finish_and_clear();
+    }
+    let stats = stats.map_err(|e| anyhow!("tracking stopped: {e}"))?;
+    Ok(TrackOutput { tracked, rejected: stats.rejected, kept, seconds, options: opts.clone() })
+}
+
+fn progress_bar(len: u64) -> ProgressBar {
+    let bar = ProgressBar::new(len);
+    if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} {eta}") {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// The estimate of a tracked frame as a pose (f64).
+pub fn estimate_pose(t: &TrackedFrame) -> Isometry3<f64> {
+    eval::isometry_of(&t.estimate)
+}

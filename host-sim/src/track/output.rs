@@ -1,0 +1,202 @@
+//! What `evorec track` writes: `trace.csv` (the columns of `evorec run`'s trace), the estimates
+//! as `estimate.tum`, `summary.json`, the plots and `overlay_<N>.png`.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use evorec_core::camera::Pinhole;
+use evorec_core::config::DEFAULT_GRID;
+use evorec_core::model::{Block, SurfaceStrips};
+use evorec_core::tracker::Feedforward;
+use image::RgbImage;
+use nalgebra::{Isometry3, Point3};
+use serde::Serialize;
+
+use super::TrackOutput;
+use super::eval::{self, FrameError, Rms};
+use crate::render;
+use crate::sequence::{Sequence, tum};
+
+/// `summary.json` of a tracked sequence.
+#[derive(Debug, Clone, Serialize)]
+pub struct TrackSummary {
+    /// The sequence's name.
+    pub sequence: String,
+    /// Feedforward on.
+    pub feedforward: bool,
+    /// GA seed.
+    pub seed: u64,
+    /// Frames tracked.
+    pub frames: usize,
+    /// Frames the tracker refused.
+    pub rejected: u32,
+    /// Mean fitness `F̄`.
+    #[serde(rename = "F_mean")]
+    pub f_mean: f64,
+    /// Errors over all frames against `groundtruth.tum` (null without it).
+    pub all: Option<Rms>,
+    /// `frames.csv` index of the first frame from which the estimate stays within 10 mm and
+    /// 5° to the end (null if never, or without ground truth).
+    pub within_from_frame: Option<u64>,
+    /// Its capture time (s).
+    pub within_from_t_s: Option<f64>,
+    /// Errors over the frames from `within_from_frame` on.
+    pub after_within: Option<Rms>,
+    /// The half turns errors are taken modulo (the block's colour symmetry).
+    pub symmetries: Vec<&'static str>,
+    /// Frames per second of the tracking loop, PNG decoding included.
+    pub frames_per_s: f64,
+    /// Version of evorec.
+    pub evorec_version: &'static str,
+}
+
+/// One `trace.csv` row's truth (aligned modulo symmetry) and the errors, per frame.
+pub struct Evaluation {
+    /// Aligned truth ψ per tracked frame (`None` without ground truth).
+    pub truth: Vec<Option<[f64; 6]>>,
+    /// Errors per tracked frame (empty without ground truth).
+    pub errors: Vec<FrameError>,
+    /// The summary.
+    pub summary: TrackSummary,
+}
+
+/// Evaluates a run against the sequence's ground truth.
+pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
+    let syms = eval::colour_symmetries(&seq.block.face_hues_deg);
+    let mut truth = Vec::with_capacity(out.tracked.len());
+    let mut errors = Vec::new();
+    for t in &out.tracked {
+        match seq.groundtruth.as_ref().and_then(|g| g.get(t.i)) {
+            Some(gt) => {
+                let (e, aligned) = eval::frame_error(&t.estimate, gt, &syms);
+                errors.push(e);
+                truth.push(Some(aligned));
+            }
+            None => truth.push(None),
+        }
+    }
+    let n = out.tracked.len().max(1) as f64;
+    let settled = eval::settled_from(&errors);
+    let settled_frame = settled.map(|k| &seq.frames[out.tracked[k].i]);
+    let summary = TrackSummary {
+        sequence: seq.name(),
+        feedforward: out.options.feedforward == Feedforward::On,
+        seed: out.options.seed,
+        frames: out.tracked.len(),
+        rejected: out.rejected,
+        f_mean: out.tracked.iter().map(|t| f64::from(t.fitness)).sum::<f64>() / n,
+        all: Rms::of(&errors),
+        within_from_frame: settled_frame.map(|f| f.index),
+        within_from_t_s: settled_frame.map(|f| f.t_s),
+        after_within: settled.and_then(|k| Rms::of(&errors[k..])),
+        symmetries: syms.iter().map(|(n, _)| *n).collect(),
+        frames_per_s: out.tracked.len() as f64 / out.seconds.max(1e-9),
+        evorec_version: env!("CARGO_PKG_VERSION"),
+    };
+    Evaluation { truth, errors, summary }
+}
+
+/// Header of `trace.csv` for `dof` joints (for 7 joints, exactly `evorec run`'s).
+pub fn trace_header(dof: usize) -> Vec<String> {
+    let mut h = vec!["t".to_owned()];
+    h.extend((1..=dof).map(|i| format!("q{i}")));
+    h.extend((1..=dof).map(|i| format!("qd{i}")));
+    for prefix in ["", "est_"] {
+        for c in ["x_mm", "y_mm", "z_mm", "e1", "e2", "e3"] {
+            h.push(format!("{prefix}{c}"));
+        }
+    }
+    h.push("F".to_owned());
+    h
+}
+
+fn write_trace(path: &Path, seq: &Sequence, out: &TrackOutput, ev: &Evaluation) -> Result<()> {
+    let mut w = csv::Writer::from_path(path).with_context(|| format!("creating {}", path.display()))?;
+    w.write_record(trace_header(seq.joints.dof()))?;
+    let psi_cells = |p: &[f64; 6]| -> Vec<String> {
+        let mut v: Vec<String> = p[..3].iter().map(|x| format!("{:.4}", x * 1e3)).collect();
+        v.extend(p[3..].iter().map(|x| format!("{x:.6}")));
+        v
+    };
+    for (t, truth) in out.tracked.iter().zip(&ev.truth) {
+        let mut rec: Vec<String> = vec![format!("{:.6}", seq.frames[t.i].t_s)];
+        rec.extend(t.q.iter().chain(t.qd.iter()).map(|v| format!("{v:.6}")));
+        match truth {
+            Some(p) => rec.extend(psi_cells(p)),
+            None => rec.extend(std::iter::repeat_n(String::new(), 6)),
+        }
+        rec.extend(psi_cells(&t.estimate.0.map(f64::from)));
+        rec.push(format!("{:.5}", t.fitness));
+        w.write_record(&rec)?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
+/// The model's sample points at `cam_from_model` drawn over `img` (faces turned to the camera:
+/// inner rows white, contour rows black), as `evorec render` draws them.
+pub fn draw_model(img: &mut RgbImage, cam: &Pinhole, cam_from_model: &Isometry3<f32>, block: &Block) -> Result<()> {
+    let model = SurfaceStrips::<DEFAULT_GRID>::new(block).map_err(|e| anyhow::anyhow!("model: {e}"))?;
+    let project = |p: Point3<f32>| cam.project(&(cam_from_model * p)).ok().map(|uv| (uv.x, uv.y));
+    for k in 0..6 {
+        let n_cam = cam_from_model.rotation * Block::normal(k);
+        let c = cam_from_model * Point3::from(Block::normal(k) * model.half_size()[k % 3]);
+        if n_cam.dot(&c.coords) >= 0.0 {
+            continue;
+        }
+        let inner: Vec<_> = model.inner_points(k).filter_map(project).collect();
+        let outer: Vec<_> = model.outer_points(k).filter_map(project).collect();
+        render::draw_points(img, &inner, [255, 255, 255]);
+        render::draw_points(img, &outer, [0, 0, 0]);
+    }
+    Ok(())
+}
+
+/// Left and right images side by side with the model drawn at `estimate` (`^CR T_M`).
+///
+/// # Errors
+/// An invalid block.
+pub fn overlay(seq: &Sequence, left: &RgbImage, right: &RgbImage, estimate: &Isometry3<f32>) -> Result<RgbImage> {
+    let (mut l, mut r) = (left.clone(), right.clone());
+    draw_model(&mut l, &seq.rig.left, &(seq.rig.left_from_right * estimate), &seq.block)?;
+    draw_model(&mut r, &seq.rig.right, estimate, &seq.block)?;
+    let mut out = RgbImage::new(l.width() + r.width(), l.height().max(r.height()));
+    image::imageops::replace(&mut out, &l, 0, 0);
+    image::imageops::replace(&mut out, &r, i64::from(l.width()), 0);
+    Ok(out)
+}
+
+/// Writes every output of a tracked sequence into `dir`; returns the files written.
+///
+/// # Errors
+/// I/O errors.
+pub fn write_all(seq: &Sequence, out: &TrackOutput, ev: &Evaluation, dir: &Path) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut written = Vec::new();
+    let trace = dir.join("trace.csv");
+    write_trace(&trace, seq, out, ev)?;
+    written.push(trace.clone());
+    let poses: Vec<(f64, Isometry3<f64>)> =
+        out.tracked.iter().map(|t| (seq.frames[t.i].t_s, super::estimate_pose(t))).collect();
+    let tum_path = dir.join("estimate.tum");
+    let text = tum::format(
+        "t tx ty tz qx qy qz qw: evorec's estimate of the block in the right camera frame (^CR T_M), metres",
+        &poses,
+    );
+    std::fs::write(&tum_path, text).with_context(|| format!("writing {}", tum_path.display()))?;
+    written.push(tum_path);
+    for (i, l, r) in &out.kept {
+        if let Some(t) = out.tracked.iter().find(|t| t.i == *i) {
+            let img = overlay(seq, l, r, &super::estimate_pose(t).cast())?;
+            let path = dir.join(format!("overlay_{}.png", seq.frames[*i].index));
+            img.save(&path).with_context(|| format!("writing {}", path.display()))?;
+            written.push(path);
+        }
+    }
+    let title = format!("{} ({})", seq.name(), if ev.summary.feedforward { "ff" } else { "ga" });
+    written.extend(crate::plot::plot_trace(&trace, dir, &title)?);
+    let summary = dir.join("summary.json");
+    crate::io::write_json(&summary, &ev.summary)?;
+    written.push(summary);
+    Ok(written)
+}

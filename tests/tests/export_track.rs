@@ -1,0 +1,92 @@
+//! The project's own self-contained test of the sequence reader: a simulator scenario exported
+//! as `evorec-seq/1` (`evorec export`) and tracked from the files (`evorec track`) gives the
+//! very estimates `evorec run` gives on the simulator, bit for bit, with and without
+//! feedforward (the export writes capture times on control steps and joint values that read
+//! back exactly, see `evorec_sim::export`).
+
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+
+use evorec_core::tracker::Feedforward;
+use evorec_sim::scenario::{Method, Scenario};
+use evorec_sim::sequence::Sequence;
+use evorec_sim::{experiment, export, track};
+
+fn scenario(method: Method) -> Scenario {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
+    let text = std::fs::read_to_string(path).expect("scenario");
+    let mut s = Scenario::from_toml_str(&text).expect("valid scenario");
+    // About 2 s of 160x120 frames, the arm swaying fast enough for the feedforward to matter.
+    s.duration_s = 2.0;
+    s.robot.omega_rad_s = 0.5;
+    s.method = method;
+    s
+}
+
+fn work_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("evorec-export-track-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn check(method: Method, ff: Feedforward, tag: &str) {
+    let s = scenario(method);
+    let dir = work_dir(tag);
+    let seq_dir = dir.join("seq");
+    let stats = export::export(&s, tag, &seq_dir, None).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(stats.frames, 62);
+    assert!(stats.joint_samples > 2000, "1 kHz joint samples: {}", stats.joint_samples);
+    let seq = Sequence::load(&seq_dir).unwrap_or_else(|e| panic!("{e}"));
+    let opts = track::TrackOptions { feedforward: ff, seed: s.seed, ..Default::default() };
+    let tracked = track::run(&seq, &opts).unwrap_or_else(|e| panic!("{e:#}"));
+    let run = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(tracked.rejected, 0);
+    assert_eq!(tracked.tracked.len(), run.rows.len());
+    for (t, r) in tracked.tracked.iter().zip(&run.rows) {
+        assert_eq!(t.q, r.q.to_vec(), "joint positions at t = {}", r.t);
+        assert_eq!(t.qd, r.qd.to_vec(), "joint velocities at t = {}", r.t);
+        assert_eq!(t.estimate.0.map(f32::to_bits), r.estimate.0.map(f32::to_bits), "estimate at t = {}", r.t);
+        assert_eq!(t.fitness.to_bits(), r.fitness.to_bits(), "fitness at t = {}", r.t);
+    }
+    // The ground truth read back agrees with the simulator's truth (written to 1e-9).
+    let ev = track::output::evaluate(&seq, &tracked);
+    for (truth, r) in ev.truth.iter().zip(&run.rows) {
+        let truth = truth.expect("ground truth");
+        let sim = r.truth.0.map(f64::from);
+        // Equal up to the colour symmetry the evaluation applies (a half turn flips ε's sign
+        // pattern), so compare positions only, and the rotation error against the estimate.
+        for k in 0..3 {
+            assert!((truth[k] - sim[k]).abs() < 1e-6, "truth {truth:?} vs {sim:?}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn tracking_an_exported_scenario_equals_run_with_feedforward() {
+    check(Method::Ff, Feedforward::On, "ff");
+}
+
+#[test]
+fn tracking_an_exported_scenario_equals_run_without_feedforward() {
+    check(Method::Ga, Feedforward::Off, "ga");
+}
+
+#[test]
+fn a_bad_png_found_while_tracking_is_named_and_nothing_is_written() {
+    let s = scenario(Method::Ff);
+    let dir = work_dir("bad-png");
+    let seq_dir = dir.join("seq");
+    export::export(&s, "bad", &seq_dir, None).unwrap_or_else(|e| panic!("{e:#}"));
+    std::fs::write(seq_dir.join("right/000040.png"), b"truncated").expect("write");
+    // The metadata is good, so loading succeeds; decoding frame 40 fails.
+    let seq = Sequence::load(&seq_dir).unwrap_or_else(|e| panic!("{e}"));
+    let opts = track::TrackOptions { overlay: BTreeSet::from([3]), ..Default::default() };
+    let err = format!("{:#}", track::run(&seq, &opts).expect_err("frame 40 is not a PNG"));
+    assert!(err.contains("right/000040.png") && err.contains("not a readable PNG"), "{err}");
+    // A bad first frame fails before tracking starts.
+    std::fs::write(seq_dir.join("left/000000.png"), b"").expect("write");
+    let err = format!("{:#}", track::run(&seq, &opts).expect_err("frame 0 is not a PNG"));
+    assert!(err.contains("left/000000.png"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -27,6 +27,9 @@
 //!
 //! Bounded work: the update is a few comparisons per generation.
 
+// `!(x > y)` on purpose: true for NaN too, so a NaN never passes a check.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 /// What the tracker knows about the block.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Status {

@@ -8,7 +8,7 @@ use nalgebra::Isometry3;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
-use crate::acquire::{self, AcquireConfig, AcquireError, HueBlobs};
+use crate::acquire::{self, AcquireConfig, AcquireError, Acquisition, HueBlobs};
 use crate::camera::{Pinhole, StereoRig};
 use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, DEFAULT_POPULATION, HUE_UNITS, PA10_DOF};
 use crate::feedforward;
@@ -265,6 +265,7 @@ pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = DEFAULT_POPULAT
     rng: Xoshiro128PlusPlus,
     generation: u32,
     monitor: StatusMonitor,
+    acquisition: Acquisition,
     target: TargetFilter,
 }
 
@@ -286,6 +287,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             rng,
             generation: 0,
             monitor: StatusMonitor::new(Status::Searching),
+            acquisition: Acquisition::new(),
             target: TargetFilter::with_defaults(),
         })
     }
@@ -309,6 +311,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
                 t.rng = rng;
                 t.generation = 0;
                 t.monitor = StatusMonitor::new(Status::Searching);
+                t.acquisition.reset();
                 t.target = TargetFilter::with_defaults();
                 t
             }
@@ -336,6 +339,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             rng,
             generation: 0,
             monitor: StatusMonitor::new(Status::Searching),
+            acquisition: Acquisition::new(),
             target: TargetFilter::with_defaults(),
         })
     }
@@ -422,6 +426,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
         self.ga.reset_around(psi, spread, &self.config.search, &mut self.rng);
         self.monitor = StatusMonitor::new(Status::Tracking);
+        self.acquisition.reset();
         self.target.reset();
         Ok(())
     }
@@ -431,6 +436,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     pub fn reset_uniform(&mut self) {
         self.ga.reset_uniform(&self.config.search, &mut self.rng);
         self.monitor = StatusMonitor::new(Status::Searching);
+        self.acquisition.reset();
         self.target.reset();
     }
 
@@ -507,41 +513,53 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             return Err(StepError::BadDt(dt_s));
         }
 
+        // The work of this generation is decided by the status it starts in.
+        let acquiring = self.monitor.status() != Status::Tracking;
         probe.mark(Phase::Feedforward);
         match feedforward {
             Feedforward::Off => {}
             Feedforward::On => {
                 let twist =
                     feedforward::camera_twist(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
-                self.ga.shift_all(&self.config.search, |psi| {
+                let shift = |psi: &mut Psi| {
                     let rate = feedforward::psi_rate(&twist, psi);
                     feedforward::shift(psi, &rate, dt_s);
-                });
+                };
+                self.ga.shift_all(&self.config.search, shift);
+                if acquiring {
+                    self.acquisition.shift(shift);
+                }
             }
             Feedforward::OnWithTarget => {
                 let motion =
                     feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
                 let target =
                     feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &self.target.feedforward_velocity());
-                self.ga.shift_all(&self.config.search, |psi| {
+                let shift = |psi: &mut Psi| {
                     let rate = feedforward::psi_rate_moving(&motion.twist, &target, psi);
                     feedforward::shift(psi, &rate, dt_s);
-                });
+                };
+                self.ga.shift_all(&self.config.search, shift);
+                if acquiring {
+                    self.acquisition.shift(shift);
+                }
             }
         }
 
         probe.mark(Phase::Evaluate);
-        let stride = self.config.acquire.scan_stride;
-        let (left, right) =
-            (acquire::scan(&frame.left, &self.lut, stride), acquire::scan(&frame.right, &self.lut, stride));
+        let idle = if acquiring { self.config.acquire.idle_individuals } else { 0 };
         let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
-        let best: Best = self.ga.evaluate(|psi| eval.evaluate_psi(psi, &frame.left, &frame.right).total);
+        let best: Best =
+            self.ga.evaluate_first(P - idle, |psi| eval.evaluate_psi(psi, &frame.left, &frame.right).total);
         let status = self.monitor.update(best.fitness, &self.config.status);
 
         probe.mark(Phase::Breed);
         self.ga.breed(&best, &self.config.ga, &self.config.search, &mut self.rng);
-        if status != Status::Tracking {
-            self.seed_from_blobs(&left, &right);
+        if acquiring {
+            self.acquire_step(frame);
+        }
+        if status == Status::Tracking && acquiring {
+            self.acquisition.reset();
         }
         self.generation = self.generation.wrapping_add(1);
         // The target filter (one forward kinematics and a data-dependent update) runs only in the
@@ -562,20 +580,20 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         })
     }
 
-    /// Replaces the last [`AcquireConfig::seed_immigrants`] individuals (never the elite) by
-    /// poses seeded from the blobs; does nothing when the blobs give no pose.
-    fn seed_from_blobs(&mut self, left: &HueBlobs, right: &HueBlobs) {
+    /// One stage of the acquisition ([`Acquisition::step`]), then the
+    /// [`AcquireConfig::seed_immigrants`] children before the idle ones replaced by poses
+    /// seeded from the latest seed (none before the first seed).
+    fn acquire_step<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>) {
         let cfg = &self.config.acquire;
         let half = self.model.half_size();
         let half = [half.x, half.y, half.z];
-        let Some(seed) = acquire::best_seed(&self.config.rig, &half, left, right, cfg.scan_stride, cfg.min_face_hits)
-        else {
-            return;
-        };
-        let n = cfg.seed_immigrants.min(P - 1);
+        self.acquisition.step(&frame.left, &frame.right, &self.lut, &self.config.rig, &half, cfg);
+        let Some(seed) = self.acquisition.seed().copied() else { return };
+        let end = P - cfg.idle_individuals.min(P - 1);
+        let n = cfg.seed_immigrants.min(end - 1);
         for k in 0..n {
             if let Some(psi) = acquire::seed_immigrant(&seed, k, cfg, &mut self.rng) {
-                self.ga.set_individual(P - n + k, psi, &self.config.search);
+                self.ga.set_individual(end - n + k, psi, &self.config.search);
             }
         }
     }

@@ -12,8 +12,13 @@
 //! noise generator), not streamed: the measured window contains nothing but the tracker's
 //! code. [`schedule`] lists the kinds of frames of a run: normal frames with the target
 //! tracked or at random poses, blank frames, target absent (distractor patches only), target
-//! filling the image, pure noise, target under noise, and fast arm motion (large
-//! feedforward shifts that push individuals into the search-space clamps).
+//! filling the image, pure noise, target under noise, fast arm motion (large
+//! feedforward shifts that push individuals into the search-space clamps), and the target
+//! visible while the tracker is forced to search for it or to have lost it (the acquisition's
+//! stages run in those generations: scan, solve, refinement, seeded individuals).
+//!
+//! Every [`GenLine`] carries the status the generation started in (the status decides the
+//! work of a generation), so the host can check every status against the budget.
 //!
 //! Every measured generation is printed as one line ([`GenLine`], `GEN key=value …`), which
 //! `evorec timing` (host) parses with [`GenLine::parse`].
@@ -26,6 +31,7 @@ use evorec_core::hue;
 use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
+use evorec_core::status::Status;
 use evorec_core::synth;
 use evorec_core::tracker::{JointSample, Phase, PhaseProbe};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -125,11 +131,18 @@ pub enum CaseKind {
     NoisyTarget,
     /// The target tracked while the arm moves fast (large feedforward shifts, clamping).
     FastArm,
+    /// The tracker forced to [`Status::Searching`] before each generation (acquisition
+    /// running) on, in turn, the target at a random pose, every pixel one face's hue, and the
+    /// target under noise.
+    Searching,
+    /// The tracker forced to [`Status::Lost`] before each generation (acquisition running)
+    /// on, in turn, the target on its path, the target filling the image, and pure noise.
+    Lost,
 }
 
 impl CaseKind {
     /// Every kind, in schedule order.
-    pub const ALL: [CaseKind; 9] = [
+    pub const ALL: [CaseKind; 11] = [
         Self::Tracking,
         Self::Blank,
         Self::Absent,
@@ -138,6 +151,8 @@ impl CaseKind {
         Self::Noise,
         Self::NoisyTarget,
         Self::RandomPose,
+        Self::Searching,
+        Self::Lost,
         Self::FastArm,
     ];
 
@@ -153,6 +168,19 @@ impl CaseKind {
             Self::Noise => "noise",
             Self::NoisyTarget => "noisy_target",
             Self::FastArm => "fast_arm",
+            Self::Searching => "searching",
+            Self::Lost => "lost",
+        }
+    }
+
+    /// The status the tracker is forced into before each generation of this kind (the status
+    /// decides the work of a generation): searching and lost for those kinds, tracking for
+    /// every other kind, so that the tracking work is measured on every kind of image.
+    pub fn forced_status(self) -> Status {
+        match self {
+            Self::Searching => Status::Searching,
+            Self::Lost => Status::Lost,
+            _ => Status::Tracking,
         }
     }
 
@@ -163,9 +191,9 @@ impl CaseKind {
 }
 
 /// Frames of the default configuration's run.
-pub const FULL_FRAMES: u32 = 126;
+pub const FULL_FRAMES: u32 = 132;
 /// Frames of each configuration of the sweep (every kind at least twice).
-pub const SWEEP_FRAMES: u32 = 27;
+pub const SWEEP_FRAMES: u32 = 33;
 
 /// The kind of frame `k` of a run of `frames` frames: blocks of consecutive frames of one
 /// kind (so the tracker's state evolves as in operation: it loses the target on blank
@@ -326,6 +354,24 @@ impl CaseGen {
         left.fill(NO_HUE);
         right.fill(NO_HUE);
         match kind {
+            CaseKind::Searching => {
+                let as_kind = [CaseKind::RandomPose, CaseKind::UniformHue, CaseKind::NoisyTarget];
+                return self.frame(
+                    k,
+                    as_kind.get((k % 3) as usize).copied().unwrap_or(CaseKind::RandomPose),
+                    left,
+                    right,
+                );
+            }
+            CaseKind::Lost => {
+                let as_kind = [CaseKind::Tracking, CaseKind::Filling, CaseKind::Noise];
+                return self.frame(
+                    k,
+                    as_kind.get((k % 3) as usize).copied().unwrap_or(CaseKind::Tracking),
+                    left,
+                    right,
+                );
+            }
             CaseKind::Tracking | CaseKind::FastArm => {
                 let p = self.truth(k, kind == CaseKind::FastArm);
                 self.render(&p, left, right)?;
@@ -369,9 +415,10 @@ impl CaseGen {
 
 /// One measured generation, as printed by the firmware and parsed by the host.
 ///
-/// `GEN p=40 g=8 k=3 kind=blank call=… ff=… eval=… breed=… stack=… fitness=…`: ticks of the
-/// whole `step_probed` call and of its three phases, the painted stack high-water mark of
-/// the generation (bytes below the top of RAM) and the estimate's fitness.
+/// `GEN p=40 g=8 k=3 kind=blank status=lost call=… ff=… eval=… breed=… stack=… fitness=…`:
+/// the status the generation started in, ticks of the whole `step_probed` call and of its
+/// three phases, the painted stack high-water mark of the generation (bytes below the top of
+/// RAM) and the estimate's fitness.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GenLine {
     /// Population size.
@@ -382,6 +429,8 @@ pub struct GenLine {
     pub frame: u32,
     /// Kind of frame.
     pub kind: CaseKind,
+    /// The tracker's status when the generation started.
+    pub status: Status,
     /// Ticks of the whole `step_probed` call (input checks included).
     pub call: u32,
     /// Ticks of each phase.
@@ -396,11 +445,12 @@ impl fmt::Display for GenLine {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "GEN p={} g={} k={} kind={} call={} ff={} eval={} breed={} stack={} fitness={}",
+            "GEN p={} g={} k={} kind={} status={} call={} ff={} eval={} breed={} stack={} fitness={}",
             self.population,
             self.grid,
             self.frame,
             self.kind.name(),
+            self.status.as_str(),
             self.call,
             self.phases.feedforward,
             self.phases.evaluate,
@@ -423,6 +473,7 @@ impl GenLine {
             grid: 0,
             frame: 0,
             kind: CaseKind::Tracking,
+            status: Status::Tracking,
             call: 0,
             phases: PhaseTicks::default(),
             stack: 0,
@@ -450,12 +501,17 @@ impl GenLine {
                     seen |= 1 << 9;
                     continue;
                 }
+                "status" => {
+                    g.status = Status::ALL.into_iter().find(|s| s.as_str() == value)?;
+                    seen |= 1 << 10;
+                    continue;
+                }
                 _ => continue,
             };
             *slot = value.parse().ok()?;
             seen |= 1 << bit;
         }
-        (seen == 0x3ff).then_some(g)
+        (seen == 0x7ff).then_some(g)
     }
 }
 
@@ -498,7 +554,7 @@ mod tests {
         for frames in [FULL_FRAMES, SWEEP_FRAMES] {
             for kind in CaseKind::ALL {
                 let n = (0..frames).filter(|&k| schedule(k, frames) == kind).count() as u32;
-                assert!(n >= frames / 9 - 1 && n >= 2, "{kind:?}: {n} of {frames}");
+                assert!(n >= frames / 11 - 1 && n >= 2, "{kind:?}: {n} of {frames}");
             }
         }
         assert_eq!(schedule(0, FULL_FRAMES), CaseKind::Tracking);
@@ -512,6 +568,7 @@ mod tests {
             grid: 8,
             frame: 3,
             kind: CaseKind::NoisyTarget,
+            status: Status::Lost,
             call: 123_456,
             phases: PhaseTicks { feedforward: 1, evaluate: 2, breed: 3 },
             stack: 2048,

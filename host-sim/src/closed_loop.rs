@@ -656,7 +656,13 @@ mod tests {
 
     #[test]
     fn gate_needs_good_frames_to_start_and_one_bad_to_stop() {
-        let est = |fitness| Estimate { psi: Psi::IDENTITY, fitness, generation: 1, capture_time_us: 0, status: evorec_core::status::Status::Tracking };
+        let est = |fitness| Estimate {
+            psi: Psi::IDENTITY,
+            fitness,
+            generation: 1,
+            capture_time_us: 0,
+            status: evorec_core::status::Status::Tracking,
+        };
         let mut g = TrackGate::default();
         assert!(!g.update(&est(0.9)) && !g.update(&est(0.9)));
         assert!(g.update(&est(0.9)));

@@ -160,8 +160,8 @@ fn run_dof<const DOF: usize>(seq: &Sequence, opts: &TrackOptions, arm: Chain<DOF
             let psi = Psi::from_isometry(&pose.cast::<f32>());
             tracker.reset_around(&psi, &INITIAL_SPREAD).map_err(|e| anyhow!("target.initial_pose: {e}"))?;
         }
-        // TODO(lead): acquisition. Without an initial pose the population starts uniform over
-        // the search space (until the tracker acquires by itself).
+        // Without an initial pose the tracker starts searching: uniform population, and the
+        // colour-blob acquisition (evorec_core::acquire) seeds it until it tracks.
         None => tracker.reset_uniform(),
     }
     let end = opts.frames.map_or(seq.frames.len(), |n| n.min(seq.frames.len()));

@@ -59,3 +59,12 @@ pub const MIN_SATURATION: u8 = 80;
 /// pixel coordinates stay below 2²² so the fitness can round them exactly (see
 /// `fitness::View::index`).
 pub const MAX_IMAGE_SIDE: u16 = 2048;
+
+/// Default pixel stride of the acquisition scan ([`crate::acquire`]): every `stride`-th pixel
+/// of every `stride`-th row of both images is read, `⌈W/s⌉·⌈H/s⌉` pixels per image
+/// (4,800 for 640×480), whatever the status.
+pub const DEFAULT_SCAN_STRIDE: u16 = 8;
+
+/// Default number of individuals replaced by poses seeded from the colour blobs
+/// ([`crate::acquire`]) in each generation while the tracker is not tracking.
+pub const DEFAULT_SEED_IMMIGRANTS: usize = 8;

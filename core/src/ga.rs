@@ -299,6 +299,17 @@ impl<const P: usize> Ga<P> {
         self.fitness = [0.0; P];
     }
 
+    /// Replaces individual `index` by `psi` clamped into `space` (seeded immigrants; an index
+    /// out of range is ignored). Its stored fitness is cleared to 0 until the next evaluation.
+    pub fn set_individual(&mut self, index: usize, psi: Psi, space: &SearchSpace) {
+        if let (Some(ind), Some(f)) = (self.pop.get_mut(index), self.fitness.get_mut(index)) {
+            let mut p = psi;
+            space.clamp(&mut p);
+            *ind = p;
+            *f = 0.0;
+        }
+    }
+
     /// Applies `f` to every individual, then clamps it into `space` (used for the
     /// feedforward shift, eq. 36).
     pub fn shift_all(&mut self, space: &SearchSpace, mut f: impl FnMut(&mut Psi)) {
@@ -309,9 +320,19 @@ impl<const P: usize> Ga<P> {
     }
 
     /// Step 1–2: evaluates every individual with `fitness` and returns the best.
-    pub fn evaluate(&mut self, mut fitness: impl FnMut(&Psi) -> f32) -> Best {
+    pub fn evaluate(&mut self, fitness: impl FnMut(&Psi) -> f32) -> Best {
+        self.evaluate_first(P, fitness)
+    }
+
+    /// Step 1–2 on the first `count` individuals only (at least the elite, at most all): the
+    /// others keep their pose, get fitness 0 and are never the best.
+    pub fn evaluate_first(&mut self, count: usize, mut fitness: impl FnMut(&Psi) -> f32) -> Best {
         let mut best = Best { psi: Psi::IDENTITY, fitness: f32::NEG_INFINITY };
-        for (ind, f) in self.pop.iter().zip(self.fitness.iter_mut()) {
+        let n = count.clamp(1, P);
+        if let Some(idle) = self.fitness.get_mut(n..) {
+            idle.fill(0.0);
+        }
+        for (ind, f) in self.pop.iter().zip(self.fitness.iter_mut()).take(n) {
             let v = fitness(ind);
             // NaN never wins and is stored as 0.
             *f = if v.is_nan() { 0.0 } else { v };

@@ -21,6 +21,7 @@
 //!   [`feedforward`]: eq. 15–25; [`target_motion`]: the target's own motion (eq. 23's
 //!   `J_n` term) and the hand-over of a pose to a later time; [`servo`]: a position-based
 //!   visual servo law on the handed-over pose.
+//! - [`status`]: searching / tracking / lost; [`acquire`]: the colour-blob pose seed.
 //! - [`tracker`]: one generation per frame pair; [`board`]: the camera-controller trait and
 //!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.
 //!
@@ -77,6 +78,7 @@ extern crate std;
 // carry the lint: `get`, iterators, pattern matching or fixed-size conversions instead. The
 // fitness kernel, model, camera and hue modules still index (bounds proven by construction;
 // the panic probe, hil-stubs/scripts/panic-check.sh, checks what survives in the firmware).
+pub mod acquire;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod board;
 pub mod camera;
@@ -99,6 +101,7 @@ pub mod pose;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod quat;
 pub mod servo;
+pub mod status;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod synth;
 pub mod target_motion;

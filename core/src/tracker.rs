@@ -8,6 +8,7 @@ use nalgebra::Isometry3;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
+use crate::acquire::{self, AcquireConfig, AcquireError, Acquisition, HueBlobs};
 use crate::camera::{Pinhole, StereoRig};
 use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, DEFAULT_POPULATION, HUE_UNITS, PA10_DOF};
 use crate::feedforward;
@@ -18,6 +19,7 @@ use crate::image::{Hue, Image, PixelFormat};
 use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
+use crate::status::{Status, StatusConfig, StatusError, StatusMonitor};
 use crate::target_motion::{self, PredictError, Prediction, TargetFilter};
 
 /// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
@@ -62,6 +64,8 @@ pub struct Estimate {
     pub fitness: f32,
     /// Generation number (1 after the first frame).
     pub generation: u32,
+    /// Whether the tracker has the block (decided after this generation's evaluation).
+    pub status: Status,
     /// Capture time of the frame pair (µs, the board's clock): the time of the joint sample
     /// the estimate was computed with, which the board takes with the frame.
     pub capture_time_us: u64,
@@ -81,6 +85,10 @@ pub enum ConfigError {
     MaxDt,
     /// The flange-to-camera transform is not finite.
     NonFiniteTransform,
+    /// Acquisition settings.
+    Acquire(AcquireError),
+    /// Status thresholds.
+    Status(StatusError),
 }
 
 impl core::fmt::Display for ConfigError {
@@ -91,6 +99,8 @@ impl core::fmt::Display for ConfigError {
             Self::HueTolerance => f.write_str("hue tolerance must be below 90 units"),
             Self::MaxDt => f.write_str("max_dt_s must be finite and positive"),
             Self::NonFiniteTransform => f.write_str("flange-to-camera transform is not finite"),
+            Self::Acquire(e) => write!(f, "acquisition: {e}"),
+            Self::Status(e) => write!(f, "status: {e}"),
         }
     }
 }
@@ -203,11 +213,15 @@ pub struct TrackerConfig<const DOF: usize> {
     pub seed: u64,
     /// Largest accepted time step between frames (s); larger steps are refused.
     pub max_dt_s: f32,
+    /// Acquisition from the colour blobs ([`crate::acquire`]).
+    pub acquire: AcquireConfig,
+    /// Status thresholds ([`crate::status`]).
+    pub status: StatusConfig,
 }
 
 impl TrackerConfig<PA10_DOF> {
-    /// A PA-10 configuration with default GA settings, hue tolerance, seed 0 and
-    /// `max_dt_s = 0.5`.
+    /// A PA-10 configuration with default GA settings, hue tolerance, acquisition and status
+    /// thresholds, seed 0 and `max_dt_s = 0.5`.
     pub fn pa10(rig: StereoRig, block: Block, flange_to_camera: Isometry3<f32>, search: SearchSpace) -> Self {
         Self {
             rig,
@@ -219,6 +233,8 @@ impl TrackerConfig<PA10_DOF> {
             hue_tolerance: DEFAULT_HUE_TOLERANCE,
             seed: 0,
             max_dt_s: 0.5,
+            acquire: AcquireConfig::DEFAULT,
+            status: StatusConfig::DEFAULT,
         }
     }
 }
@@ -248,6 +264,8 @@ pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = DEFAULT_POPULAT
     ga: Ga<P>,
     rng: Xoshiro128PlusPlus,
     generation: u32,
+    monitor: StatusMonitor,
+    acquisition: Acquisition,
     target: TargetFilter,
 }
 
@@ -261,7 +279,17 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
         let mut ga = Ga::new(Psi::IDENTITY);
         ga.reset_uniform(&config.search, &mut rng);
-        Ok(Self { config, model, lut, ga, rng, generation: 0, target: TargetFilter::with_defaults() })
+        Ok(Self {
+            config,
+            model,
+            lut,
+            ga,
+            rng,
+            generation: 0,
+            monitor: StatusMonitor::new(Status::Searching),
+            acquisition: Acquisition::new(),
+            target: TargetFilter::with_defaults(),
+        })
     }
 
     /// [`Tracker::new`] built in `slot` (e.g. a board's static), so that no whole tracker, and
@@ -287,6 +315,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         t.lut.fill(&hues, t.config.hue_tolerance);
         t.rng = Xoshiro128PlusPlus::seed_from_u64(t.config.seed);
         t.generation = 0;
+        t.monitor = StatusMonitor::new(Status::Searching);
+        t.acquisition.reset();
         t.target = TargetFilter::with_defaults();
         t.ga.reset_uniform(&t.config.search, &mut t.rng);
         Ok(t)
@@ -304,6 +334,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             ga: Ga::new(Psi::IDENTITY),
             rng: Xoshiro128PlusPlus::seed_from_u64(config.seed),
             generation: 0,
+            monitor: StatusMonitor::new(Status::Searching),
+            acquisition: Acquisition::new(),
             target: TargetFilter::with_defaults(),
         })
     }
@@ -327,6 +359,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         if !config.max_dt_s.is_finite() || config.max_dt_s <= 0.0 {
             return Err(ConfigError::MaxDt);
         }
+        config.acquire.validate(P).map_err(ConfigError::Acquire)?;
+        config.status.validate().map_err(ConfigError::Status)?;
         let ft = &config.flange_to_camera;
         if !ft.translation.vector.iter().chain(ft.rotation.coords.iter()).all(|v| v.is_finite()) {
             return Err(ConfigError::NonFiniteTransform);
@@ -354,6 +388,18 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.generation
     }
 
+    /// The status after the last generation ([`Status::Searching`] after [`Tracker::new`]).
+    pub fn status(&self) -> Status {
+        self.monitor.status()
+    }
+
+    /// Puts the tracker in `status` with cleared status counters, leaving the population as it
+    /// is. Meant for tests and for measuring the worst-case work of each status on a board
+    /// (`evorec timing`); the tracker decides its status itself otherwise.
+    pub fn set_status(&mut self, status: Status) {
+        self.monitor = StatusMonitor::new(status);
+    }
+
     /// The filter of the target's own motion, updated with every estimate.
     pub fn target_filter(&self) -> &TargetFilter {
         &self.target
@@ -370,7 +416,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     }
 
     /// Re-seeds the population around a known pose (the paper starts with the true pose
-    /// known): the elite at `psi`, the others within `±spread` per gene.
+    /// known): the elite at `psi`, the others within `±spread` per gene. The status becomes
+    /// [`Status::Tracking`]: the pose is known.
     ///
     /// # Errors
     /// [`StepError::Pose`] if `psi` is invalid or `spread` not finite (state unchanged).
@@ -380,14 +427,29 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             return Err(StepError::Pose(PoseError::NonFinite));
         }
         self.ga.reset_around(psi, spread, &self.config.search, &mut self.rng);
+        self.monitor = StatusMonitor::new(Status::Tracking);
+        self.acquisition.reset();
         self.target.reset();
         Ok(())
     }
 
-    /// Re-seeds the population uniformly over the search space.
+    /// Re-seeds the population uniformly over the search space; the status becomes
+    /// [`Status::Searching`].
     pub fn reset_uniform(&mut self) {
         self.ga.reset_uniform(&self.config.search, &mut self.rng);
+        self.monitor = StatusMonitor::new(Status::Searching);
+        self.acquisition.reset();
         self.target.reset();
+    }
+
+    /// The colour blobs of a frame pair as the acquisition scan sees them (left, right).
+    ///
+    /// # Errors
+    /// [`StepError::ImageSize`].
+    pub fn blobs_of<F: PixelFormat>(&self, frame: &StereoFrame<'_, F>) -> Result<(HueBlobs, HueBlobs), StepError> {
+        self.check_frame(frame)?;
+        let stride = self.config.acquire.scan_stride;
+        Ok((acquire::scan(&frame.left, &self.lut, stride), acquire::scan(&frame.right, &self.lut, stride)))
     }
 
     /// `F(ψ)` of any pose on a frame pair (diagnostics; no state change).
@@ -427,8 +489,11 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// One generation: with [`Feedforward::On`] every individual is first moved by
     /// `J_m(q) q̇ · dt` (eq. 36), with [`Feedforward::OnWithTarget`] by
     /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then the population is evaluated on `frame`,
-    /// the best is the estimate, the next population is bred, and the estimate, taken into the
-    /// world at `joints.q`, updates the target filter. `dt_s` is the time since the previous
+    /// the best is the estimate, its fitness updates the [`Status`], the next population is
+    /// bred, and the estimate, taken into the world at `joints.q`, updates the target filter.
+    /// While the status is not [`Status::Tracking`], the last
+    /// [`AcquireConfig::seed_immigrants`] children are replaced by poses seeded from the
+    /// colour blobs of the frame ([`crate::acquire`]). `dt_s` is the time since the previous
     /// frame (0 for the first). `probe` is told when each [`Phase`] begins.
     ///
     /// # Errors
@@ -450,35 +515,54 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             return Err(StepError::BadDt(dt_s));
         }
 
+        // The work of this generation is decided by the status it starts in.
+        let acquiring = self.monitor.status() != Status::Tracking;
         probe.mark(Phase::Feedforward);
         match feedforward {
             Feedforward::Off => {}
             Feedforward::On => {
                 let twist =
                     feedforward::camera_twist(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
-                self.ga.shift_all(&self.config.search, |psi| {
+                let shift = |psi: &mut Psi| {
                     let rate = feedforward::psi_rate(&twist, psi);
                     feedforward::shift(psi, &rate, dt_s);
-                });
+                };
+                self.ga.shift_all(&self.config.search, shift);
+                if acquiring {
+                    self.acquisition.shift(shift);
+                }
             }
             Feedforward::OnWithTarget => {
                 let motion =
                     feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
                 let target =
                     feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &self.target.feedforward_velocity());
-                self.ga.shift_all(&self.config.search, |psi| {
+                let shift = |psi: &mut Psi| {
                     let rate = feedforward::psi_rate_moving(&motion.twist, &target, psi);
                     feedforward::shift(psi, &rate, dt_s);
-                });
+                };
+                self.ga.shift_all(&self.config.search, shift);
+                if acquiring {
+                    self.acquisition.shift(shift);
+                }
             }
         }
 
         probe.mark(Phase::Evaluate);
+        let idle = if acquiring { self.config.acquire.idle_individuals } else { 0 };
         let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
-        let best: Best = self.ga.evaluate(|psi| eval.evaluate_psi(psi, &frame.left, &frame.right).total);
+        let best: Best =
+            self.ga.evaluate_first(P - idle, |psi| eval.evaluate_psi(psi, &frame.left, &frame.right).total);
+        let status = self.monitor.update(best.fitness, &self.config.status);
 
         probe.mark(Phase::Breed);
         self.ga.breed(&best, &self.config.ga, &self.config.search, &mut self.rng);
+        if acquiring {
+            self.acquire_step(frame);
+        }
+        if status == Status::Tracking && acquiring {
+            self.acquisition.reset();
+        }
         self.generation = self.generation.wrapping_add(1);
         // The target filter (one forward kinematics and a data-dependent update) runs only in the
         // mode that uses it, so the other modes keep the paper's constant work per generation.
@@ -493,7 +577,26 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             psi: best.psi,
             fitness: best.fitness,
             generation: self.generation,
+            status,
             capture_time_us: joints.time_us,
         })
+    }
+
+    /// One stage of the acquisition ([`Acquisition::step`]), then the
+    /// [`AcquireConfig::seed_immigrants`] children before the idle ones replaced by poses
+    /// seeded from the latest seed (none before the first seed).
+    fn acquire_step<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>) {
+        let cfg = &self.config.acquire;
+        let half = self.model.half_size();
+        let half = [half.x, half.y, half.z];
+        self.acquisition.step(&frame.left, &frame.right, &self.lut, &self.config.rig, &half, cfg);
+        let Some(seed) = self.acquisition.seed().copied() else { return };
+        let end = P - cfg.idle_individuals.min(P - 1);
+        let n = cfg.seed_immigrants.min(end - 1);
+        for k in 0..n {
+            if let Some(psi) = acquire::seed_immigrant(&seed, k, cfg, &mut self.rng) {
+                self.ga.set_individual(end - n + k, psi, &self.config.search);
+            }
+        }
     }
 }

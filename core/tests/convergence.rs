@@ -37,7 +37,9 @@ fn run_with(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: 
     let cam = Pinhole::new_checked(f, f, f32::from(width) / 2.0, f32::from(height) / 2.0, width, height).unwrap();
     let rig = StereoRig::parallel(cam, 0.1).unwrap();
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_ga(ga);
+    let mut config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_ga(ga);
+    // The plain GA: no colour-blob seeding even if the status drops out of tracking.
+    config.acquire.seed_immigrants = 0;
     let mut tracker: Acquiring = Tracker::new(config).unwrap();
     let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
     let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);

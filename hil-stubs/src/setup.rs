@@ -6,11 +6,13 @@
 //! the PA-10 and the rig two identical parallel cameras ([`StereoRig::parallel`]); other
 //! configurations cannot be sent and are refused by [`Setup::from_tracker_config`].
 
+use evorec_core::acquire::AcquireConfig;
 use evorec_core::camera::{CameraError, Pinhole, StereoRig};
 use evorec_core::ga::{GaError, SearchSpace};
 use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
+use evorec_core::status::StatusConfig;
 use evorec_core::tracker::{ConfigError, Feedforward, StepError, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 
@@ -38,6 +40,9 @@ pub enum SetupError {
     UnsupportedRig,
     /// The arm is not the PA-10 (code 7, host side only).
     UnsupportedArm,
+    /// Acquisition or status settings other than the defaults, which the firmware always
+    /// uses (code 8, host side only).
+    UnsupportedAcquisition,
 }
 
 impl SetupError {
@@ -51,6 +56,7 @@ impl SetupError {
             Self::InitialPose(_) => 5,
             Self::UnsupportedRig => 6,
             Self::UnsupportedArm => 7,
+            Self::UnsupportedAcquisition => 8,
         }
     }
 
@@ -65,6 +71,7 @@ impl SetupError {
             5 => "initial pose or spread rejected",
             6 => "rig is not two identical parallel cameras",
             7 => "arm is not the PA-10",
+            8 => "acquisition or status settings differ from the firmware's defaults",
             _ => "unknown setup error",
         }
     }
@@ -156,7 +163,22 @@ impl Setup {
         initial_spread: &[f32; 6],
     ) -> Result<Self, SetupError> {
         // Destructured so that a new configuration field in the core fails to compile here.
-        let TrackerConfig { rig, block, arm, flange_to_camera, search, ga, hue_tolerance, seed, max_dt_s } = *config;
+        let TrackerConfig {
+            rig,
+            block,
+            arm,
+            flange_to_camera,
+            search,
+            ga,
+            hue_tolerance,
+            seed,
+            max_dt_s,
+            acquire,
+            status,
+        } = *config;
+        if acquire != AcquireConfig::DEFAULT || status != StatusConfig::DEFAULT {
+            return Err(SetupError::UnsupportedAcquisition);
+        }
         let lfr = &rig.left_from_right;
         let t = lfr.translation.vector;
         let identity = lfr.rotation.coords == UnitQuaternion::<f32>::identity().coords;

@@ -17,6 +17,12 @@
 //! patches only), target filling the image, pure RGB565 noise (every table entry), target
 //! under noise, RGB565 extremes (the table's ends and the pure primaries), and fast arm
 //! motion (large feedforward shifts that push individuals into the search-space clamps).
+//! Two more kinds force the tracker's status before each generation: the target visible while
+//! the tracker searches for it or has lost it (the acquisition's stages run in those
+//! generations: scan, solve, refinement, seeded individuals).
+//!
+//! Every [`GenLine`] carries the status the generation started in (the status decides the
+//! work of a generation), so the host can check every status against the budget.
 //!
 //! Every measured generation is printed as one line ([`GenLine`], `GEN key=value …`), which
 //! `evorec timing` (host) parses with [`GenLine::parse`].
@@ -30,6 +36,7 @@ use evorec_core::image::expand_hue_to_rgb565;
 use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
+use evorec_core::status::Status;
 use evorec_core::synth;
 use evorec_core::tracker::{JointSample, Phase, PhaseProbe};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -132,11 +139,18 @@ pub enum CaseKind {
     Rgb565Extremes,
     /// The target tracked while the arm moves fast (large feedforward shifts, clamping).
     FastArm,
+    /// The tracker forced to [`Status::Searching`] before each generation (acquisition
+    /// running) on, in turn, the target at a random pose, every pixel one face's hue, and the
+    /// target under noise.
+    Searching,
+    /// The tracker forced to [`Status::Lost`] before each generation (acquisition running)
+    /// on, in turn, the target on its path, the target filling the image, and pure noise.
+    Lost,
 }
 
 impl CaseKind {
     /// Every kind, in schedule order.
-    pub const ALL: [CaseKind; 10] = [
+    pub const ALL: [CaseKind; 12] = [
         Self::Tracking,
         Self::Blank,
         Self::Absent,
@@ -146,6 +160,8 @@ impl CaseKind {
         Self::NoisyTarget,
         Self::Rgb565Extremes,
         Self::RandomPose,
+        Self::Searching,
+        Self::Lost,
         Self::FastArm,
     ];
 
@@ -162,6 +178,19 @@ impl CaseKind {
             Self::NoisyTarget => "noisy_target",
             Self::Rgb565Extremes => "rgb565_extremes",
             Self::FastArm => "fast_arm",
+            Self::Searching => "searching",
+            Self::Lost => "lost",
+        }
+    }
+
+    /// The status the tracker is forced into before each generation of this kind (the status
+    /// decides the work of a generation): searching and lost for those kinds, tracking for
+    /// every other kind, so that the tracking work is measured on every kind of image.
+    pub fn forced_status(self) -> Status {
+        match self {
+            Self::Searching => Status::Searching,
+            Self::Lost => Status::Lost,
+            _ => Status::Tracking,
         }
     }
 
@@ -171,10 +200,10 @@ impl CaseKind {
     }
 }
 
-/// Frames of the default configuration's run (13 of every kind).
-pub const FULL_FRAMES: u32 = 130;
+/// Frames of the default configuration's run (11 of every kind).
+pub const FULL_FRAMES: u32 = 132;
 /// Frames of each configuration of the sweep (every kind three times).
-pub const SWEEP_FRAMES: u32 = 30;
+pub const SWEEP_FRAMES: u32 = 36;
 
 /// The pixels of [`CaseKind::Rgb565Extremes`]: black and white (the hue table's first and last
 /// entries, no hue) and pure red, green and blue (every colour field at its extreme).
@@ -377,6 +406,24 @@ impl CaseGen {
         left.fill(NO_HUE);
         right.fill(NO_HUE);
         match kind {
+            CaseKind::Searching => {
+                let as_kind = [CaseKind::RandomPose, CaseKind::UniformHue, CaseKind::NoisyTarget];
+                return self.frame(
+                    k,
+                    as_kind.get((k % 3) as usize).copied().unwrap_or(CaseKind::RandomPose),
+                    left,
+                    right,
+                );
+            }
+            CaseKind::Lost => {
+                let as_kind = [CaseKind::Tracking, CaseKind::Filling, CaseKind::Noise];
+                return self.frame(
+                    k,
+                    as_kind.get((k % 3) as usize).copied().unwrap_or(CaseKind::Tracking),
+                    left,
+                    right,
+                );
+            }
             CaseKind::Tracking | CaseKind::FastArm => {
                 let p = self.truth(k, kind == CaseKind::FastArm);
                 self.render(&p, left, right)?;
@@ -414,9 +461,10 @@ impl CaseGen {
 
 /// One measured generation, as printed by the firmware and parsed by the host.
 ///
-/// `GEN p=40 g=8 k=3 kind=blank call=… ff=… eval=… breed=… stack=… fitness=…`: ticks of the
-/// whole `step_probed` call and of its three phases, the painted stack high-water mark of
-/// the generation (bytes below the top of RAM) and the estimate's fitness.
+/// `GEN p=40 g=8 k=3 kind=blank status=lost call=… ff=… eval=… breed=… stack=… fitness=…`:
+/// the status the generation started in, ticks of the whole `step_probed` call and of its
+/// three phases, the painted stack high-water mark of the generation (bytes below the top of
+/// RAM) and the estimate's fitness.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GenLine {
     /// Population size.
@@ -427,6 +475,8 @@ pub struct GenLine {
     pub frame: u32,
     /// Kind of frame.
     pub kind: CaseKind,
+    /// The tracker's status when the generation started.
+    pub status: Status,
     /// Ticks of the whole `step_probed` call (input checks included).
     pub call: u32,
     /// Ticks of each phase.
@@ -441,11 +491,12 @@ impl fmt::Display for GenLine {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "GEN p={} g={} k={} kind={} call={} ff={} eval={} breed={} stack={} fitness={}",
+            "GEN p={} g={} k={} kind={} status={} call={} ff={} eval={} breed={} stack={} fitness={}",
             self.population,
             self.grid,
             self.frame,
             self.kind.name(),
+            self.status.as_str(),
             self.call,
             self.phases.feedforward,
             self.phases.evaluate,
@@ -468,6 +519,7 @@ impl GenLine {
             grid: 0,
             frame: 0,
             kind: CaseKind::Tracking,
+            status: Status::Tracking,
             call: 0,
             phases: PhaseTicks::default(),
             stack: 0,
@@ -495,12 +547,17 @@ impl GenLine {
                     seen |= 1 << 9;
                     continue;
                 }
+                "status" => {
+                    g.status = Status::ALL.into_iter().find(|s| s.as_str() == value)?;
+                    seen |= 1 << 10;
+                    continue;
+                }
                 _ => continue,
             };
             *slot = value.parse().ok()?;
             seen |= 1 << bit;
         }
-        (seen == 0x3ff).then_some(g)
+        (seen == 0x7ff).then_some(g)
     }
 }
 
@@ -559,6 +616,7 @@ mod tests {
             grid: 8,
             frame: 3,
             kind: CaseKind::NoisyTarget,
+            status: Status::Lost,
             call: 123_456,
             phases: PhaseTicks { feedforward: 1, evaluate: 2, breed: 3 },
             stack: 2048,

@@ -185,6 +185,7 @@ fn protocol_on_target() -> Outcome {
             fitness: 0.75,
             generation: 10,
             capture_time_us: 0,
+            status: evorec_core::status::Status::Tracking,
         }),
     };
     let mut buf = [0u8; 64];

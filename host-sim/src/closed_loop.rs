@@ -539,7 +539,16 @@ pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Resu
             tracker_error_m: norm(&(est.psi.translation() - truth.translation())),
             steady,
         });
-        rows.push(TraceRow { t, q: joints.q, qd: joints.qd, truth, estimate: est.psi, fitness: est.fitness });
+        rows.push(TraceRow {
+            t,
+            q: joints.q,
+            qd: joints.qd,
+            truth,
+            estimate: est.psi,
+            fitness: est.fitness,
+            status: est.status,
+            hidden: occluded,
+        });
         on_frame();
     }
     let summary = Summary::of(&rows, rejected, s);
@@ -647,7 +656,13 @@ mod tests {
 
     #[test]
     fn gate_needs_good_frames_to_start_and_one_bad_to_stop() {
-        let est = |fitness| Estimate { psi: Psi::IDENTITY, fitness, generation: 1, capture_time_us: 0 };
+        let est = |fitness| Estimate {
+            psi: Psi::IDENTITY,
+            fitness,
+            generation: 1,
+            capture_time_us: 0,
+            status: evorec_core::status::Status::Tracking,
+        };
         let mut g = TrackGate::default();
         assert!(!g.update(&est(0.9)) && !g.update(&est(0.9)));
         assert!(g.update(&est(0.9)));

@@ -8,9 +8,11 @@ use anyhow::{Context, Result};
 use evorec_core::board;
 use evorec_core::config::{DEFAULT_GRID, DEFAULT_POPULATION, PA10_DOF};
 use evorec_core::ga::SearchSpace;
+use evorec_core::status::Status;
 use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
 use serde::Serialize;
 
+use crate::occlusion::Initial;
 use crate::scenario::{Method, Scenario};
 use crate::sim::{self, SimBoard, TraceRow, World};
 
@@ -92,12 +94,51 @@ impl Accuracy {
     }
 }
 
+/// How the tracker's status went over a run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct StatusCounts {
+    /// Frames reported as searching.
+    pub searching: usize,
+    /// Frames reported as tracking.
+    pub tracking: usize,
+    /// Frames reported as lost.
+    pub lost: usize,
+    /// Frames in which the block was hidden (occluded or removed).
+    pub hidden: usize,
+    /// Hidden frames reported as tracking.
+    pub tracking_while_hidden: usize,
+    /// Capture time of the first frame reported as tracking (s), if any.
+    pub first_tracking_s: Option<f64>,
+}
+
+impl StatusCounts {
+    /// Counts the statuses of a trace.
+    pub fn of(rows: &[TraceRow]) -> Self {
+        let mut c = Self::default();
+        for r in rows {
+            match r.status {
+                Status::Searching => c.searching += 1,
+                Status::Tracking => c.tracking += 1,
+                Status::Lost => c.lost += 1,
+            }
+            c.hidden += usize::from(r.hidden);
+            c.tracking_while_hidden += usize::from(r.hidden && r.status == Status::Tracking);
+            if c.first_tracking_s.is_none() && r.status == Status::Tracking {
+                c.first_tracking_s = Some(r.t);
+            }
+        }
+        c
+    }
+}
+
 /// `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
     /// The accuracy figures, flattened into the top level.
     #[serde(flatten)]
     pub accuracy: Accuracy,
+    /// Frames per tracker status.
+    pub status: StatusCounts,
     /// Frames refused by the tracker (should be 0).
     pub rejected: u32,
     /// The scenario, echoed.
@@ -109,7 +150,13 @@ pub struct Summary {
 impl Summary {
     /// The summary of a run's trace.
     pub fn of(rows: &[TraceRow], rejected: u32, scenario: &Scenario) -> Self {
-        Self { accuracy: Accuracy::of(rows), rejected, scenario: *scenario, evorec_version: env!("CARGO_PKG_VERSION") }
+        Self {
+            accuracy: Accuracy::of(rows),
+            status: StatusCounts::of(rows),
+            rejected,
+            scenario: *scenario,
+            evorec_version: env!("CARGO_PKG_VERSION"),
+        }
     }
 }
 
@@ -127,11 +174,23 @@ pub struct RunOutput {
 ///
 /// # Errors
 /// If the world or the tracker cannot be built.
-pub fn run(s: &Scenario, mut on_frame: impl FnMut()) -> Result<RunOutput> {
+pub fn run(s: &Scenario, on_frame: impl FnMut()) -> Result<RunOutput> {
+    run_with_rows::<DEFAULT_GRID>(s, on_frame)
+}
+
+/// [`run`] with rows of `G` points per sample row (the default tracker uses
+/// [`DEFAULT_GRID`]).
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -> Result<RunOutput> {
     let world = World::new(s)?;
     let truth0 = world.truth();
-    let mut tracker = SimTracker::new(tracker_config(s)?).map_err(|e| anyhow::anyhow!("tracker: {e}"))?;
-    tracker.reset_around(&truth0, &INITIAL_SPREAD).map_err(|e| anyhow::anyhow!("initial pose: {e}"))?;
+    let mut tracker = Tracker::<PA10_DOF, DEFAULT_POPULATION, G>::new(tracker_config(s)?)
+        .map_err(|e| anyhow::anyhow!("tracker: {e}"))?;
+    if s.tracker.initial == Initial::Truth {
+        tracker.reset_around(&truth0, &INITIAL_SPREAD).map_err(|e| anyhow::anyhow!("initial pose: {e}"))?;
+    }
     let mut board = ProgressBoard { inner: SimBoard::new(world), on_frame: &mut on_frame };
     let n = sim::image_bytes(s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);

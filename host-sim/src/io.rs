@@ -88,6 +88,8 @@ pub fn trace_header() -> Vec<String> {
         }
     }
     h.push("F".to_owned());
+    h.push("status".to_owned());
+    h.push("hidden".to_owned());
     h
 }
 
@@ -119,6 +121,8 @@ pub fn trace_record(r: &TraceRow) -> Vec<String> {
         rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
     }
     rec.push(format!("{:.5}", r.fitness));
+    rec.push(r.status.as_str().to_owned());
+    rec.push(u8::from(r.hidden).to_string());
     rec
 }
 

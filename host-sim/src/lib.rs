@@ -8,8 +8,10 @@
 //! ([`frame`]), the same runs with the tracker in the firmware on QEMU ([`hil`]), output
 //! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]); recorded stereo sequences
 //! (`evorec-seq/1`): the reader ([`sequence`]), tracking them ([`track`]) and writing a
-//! scenario as one ([`export`]).
+//! scenario as one ([`export`]); unknown starts and occlusions ([`occlusion`]) and the
+//! acquisition statistics ([`acquire`]).
 
+pub mod acquire;
 pub mod arm;
 pub mod closed_loop;
 pub mod experiment;
@@ -18,6 +20,7 @@ pub mod frame;
 pub mod hil;
 pub mod io;
 pub mod motion;
+pub mod occlusion;
 pub mod paper;
 pub mod plot;
 pub mod render;

@@ -133,6 +133,26 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Acquisition statistics: N random block poses (seeds FIRST_SEED..), each from an unknown
+    /// start and through a 1 s occlusion, static arm and motion A at 0.5 rad/s with FF, in
+    /// parallel; writes DIR/acquire.json, DIR/acquire.md and DIR/acquire_cdf.png.
+    Acquire {
+        /// Trials per case.
+        #[arg(long, default_value_t = 100)]
+        trials: usize,
+        /// First seed.
+        #[arg(long, default_value_t = 1)]
+        first_seed: u64,
+        /// Points per sample row of the tracker (5 or 8).
+        #[arg(long, default_value_t = evorec_sim::acquire::DEFAULT_POINTS)]
+        points: usize,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Render one frame of a scenario: left/right PNGs, the same with the projected search
     /// model at the true pose drawn over them, and frame.json with the geometry.
     Render {
@@ -316,6 +336,12 @@ fn execute(cli: Cli) -> Result<()> {
             let results = servo::run_grid(&g, &out, !quiet)?;
             println!("{}", servo::markdown(&results).split("\n\n").next().unwrap_or_default());
             println!("{} runs in {:.1} s; wrote {}", results.len(), t0.elapsed().as_secs_f64(), out.display());
+        }
+        Command::Acquire { trials, first_seed, points, out, quiet } => {
+            let t0 = Instant::now();
+            let report = evorec_sim::acquire::run(trials, first_seed, points, &out, !quiet)?;
+            println!("{}", evorec_sim::acquire::markdown(&report));
+            println!("{} trials per case in {:.1} s; wrote {}", trials, t0.elapsed().as_secs_f64(), out.display());
         }
         Command::Timing { out } => {
             io::create_out_dir(&out)?;

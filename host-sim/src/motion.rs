@@ -217,6 +217,8 @@ pub struct TargetMotion {
     pub amplitude_rad: f64,
     /// Oscillation angular frequency `ω_o` (rad/s); 0 means static.
     pub omega_rad_s: f64,
+    /// Orientation before the yaws: [`target_rest_rotation`], or the random pose's.
+    pub rest: UnitQuaternion<f64>,
 }
 
 impl TargetMotion {
@@ -230,7 +232,7 @@ impl TargetMotion {
         let yaw = self.theta(t) + self.yaw0_rad;
         Isometry3::from_parts(
             Translation3::from(self.centre.coords),
-            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * target_rest_rotation(),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * self.rest,
         )
     }
 
@@ -345,6 +347,7 @@ mod tests {
             yaw0_rad: 25f64.to_radians(),
             amplitude_rad: 15f64.to_radians(),
             omega_rad_s: 0.125,
+            rest: target_rest_rotation(),
         };
         let rest = target_rest_rotation();
         let p0 = m.target_world_pose(0.0);

@@ -43,6 +43,8 @@ pub(crate) fn ensure_font() -> anyhow::Result<()> {
 #[derive(Debug, Clone, Default)]
 struct Trace {
     columns: HashMap<&'static str, Vec<f64>>,
+    /// The optional `status` column (tracker status per frame), empty when absent.
+    status: Vec<String>,
 }
 
 /// Columns read from the trace.
@@ -67,8 +69,13 @@ impl Trace {
             index.push((name, i));
         }
         let mut columns: HashMap<&'static str, Vec<f64>> = COLUMNS.iter().map(|&n| (n, Vec::new())).collect();
+        let status_index = headers.iter().position(|h| h == "status");
+        let mut status = Vec::new();
         for (row, record) in reader.records().enumerate() {
             let record = record.with_context(|| format!("{}: bad CSV record {}", path.display(), row + 1))?;
+            if let Some(i) = status_index {
+                status.push(record.get(i).unwrap_or("").to_owned());
+            }
             for &(name, i) in &index {
                 let cell = record.get(i).unwrap_or("");
                 let value = if cell.is_empty() {
@@ -80,7 +87,7 @@ impl Trace {
                 columns.entry(name).or_default().push(value);
             }
         }
-        Ok(Self { columns })
+        Ok(Self { columns, status })
     }
 
     fn column(&self, name: &str) -> &[f64] {
@@ -271,6 +278,39 @@ pub fn plot_trace(csv_path: &Path, out_dir: &Path, title: &str) -> anyhow::Resul
         let blue = RGBColor(31, 119, 180);
         chart.draw_series(LineSeries::new(pts.iter().copied(), blue.stroke_width(1))).map_err(draw_err)?;
         chart.draw_series(pts.iter().map(|&p| Circle::new(p, 2, blue.filled()))).map_err(draw_err)?;
+        // The tracker's status as a coloured strip along the bottom.
+        let y = f0 + 0.03 * (f1 - f0);
+        for (name, colour) in [
+            ("searching", RGBColor(150, 150, 150)),
+            ("tracking", RGBColor(44, 160, 44)),
+            ("lost", RGBColor(214, 39, 40)),
+        ] {
+            let marks: Vec<(f64, f64)> = trace
+                .column("t")
+                .iter()
+                .zip(&trace.status)
+                .filter(|(_, s)| s.as_str() == name)
+                .map(|(t, _)| (*t, y))
+                .collect();
+            if marks.is_empty() {
+                continue;
+            }
+            chart
+                .draw_series(marks.iter().map(|&p| Rectangle::new([p, (p.0, p.1)], colour.stroke_width(6))))
+                .map_err(draw_err)?
+                .label(format!("status: {name}"))
+                .legend(move |(x, y)| Rectangle::new([(x, y - 4), (x + 14, y + 4)], colour.filled()));
+        }
+        if !trace.status.is_empty() {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::LowerRight)
+                .label_font((FONT, 14))
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .map_err(draw_err)?;
+        }
         Ok(())
     })?;
 

@@ -49,6 +49,8 @@
 //! max_rot_accel_rad_s2 = 3.0   # (0, 50]
 //! delay_frames = 1         # 0 ..= 10: processing delay between capture and estimate
 //! ```
+//! Acquisition keys (`[tracker] initial`, `[target] placement`, `[[occlusion]]`) are
+//! described in [`crate::occlusion`].
 //! All tables and all keys except `seed`, `duration_s` and `method` are optional; the values
 //! shown are the defaults (`robot.motion` defaults to `"static"`, no `[servo]` runs the
 //! scripted motion open loop).
@@ -59,6 +61,7 @@ use serde::Serialize;
 use toml::{Table, Value};
 
 use crate::motion::MotionKind;
+use crate::occlusion::{self, Initial, Occlusions, Placement};
 
 /// Population sizes the core is compiled for; `ga.population` must be one of them.
 pub const SUPPORTED_POPULATIONS: &[usize] = &[40];
@@ -191,6 +194,8 @@ pub struct TargetConfig {
     pub omega_rad_s: f64,
     /// Initial yaw about world z (degrees).
     pub yaw0_deg: f64,
+    /// Where the block stands: fixed (`distance_m`, `yaw0_deg`) or a random pose.
+    pub placement: Placement,
 }
 
 impl Default for TargetConfig {
@@ -202,6 +207,7 @@ impl Default for TargetConfig {
             amplitude_deg: 15.0,
             omega_rad_s: 0.125,
             yaw0_deg: 25.0,
+            placement: Placement::Fixed,
         }
     }
 }
@@ -277,6 +283,13 @@ impl ServoSection {
     }
 }
 
+/// `[tracker]`: how the tracker starts.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct TrackerStart {
+    /// Around the true pose, or unknown.
+    pub initial: Initial,
+}
+
 /// One validated experiment description. See the module documentation for the file format.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Scenario {
@@ -299,6 +312,11 @@ pub struct Scenario {
     /// The closed loop, if any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub servo: Option<ServoSection>,
+    /// How the tracker starts.
+    pub tracker: TrackerStart,
+    /// Times when the block is hidden.
+    #[serde(skip_serializing_if = "Occlusions::is_empty")]
+    pub occlusion: Occlusions,
 }
 
 impl Scenario {
@@ -314,6 +332,8 @@ impl Scenario {
             robot: RobotConfig::default(),
             ga: GaConfig::default(),
             servo: None,
+            tracker: TrackerStart::default(),
+            occlusion: Occlusions::default(),
         }
     }
 
@@ -328,13 +348,28 @@ impl Scenario {
         let top = Section::new(
             "",
             &table,
-            &["seed", "duration_s", "frame_period_s", "method", "camera", "target", "robot", "ga", "servo"],
+            &[
+                "seed",
+                "duration_s",
+                "frame_period_s",
+                "method",
+                "camera",
+                "target",
+                "robot",
+                "ga",
+                "tracker",
+                "occlusion",
+                "servo",
+            ],
         )?;
         let camera = parse_camera(&top.subtable("camera")?)?;
         let target = parse_target(&top.subtable("target")?)?;
         let robot = parse_robot(&top.subtable("robot")?)?;
         let ga = parse_ga(&top.subtable("ga")?)?;
         let servo = parse_servo(&top.subtable("servo")?)?;
+        let tracker_section = top.subtable("tracker")?;
+        tracker_section.check_keys(&["initial"])?;
+        let tracker = TrackerStart { initial: occlusion::parse_initial(tracker_section.get("initial"))? };
 
         let seed = top.int("seed", None)?;
         let seed = u64::try_from(seed).map_err(|_| invalid("seed", format!("must be ≥ 0, got {seed}")))?;
@@ -353,7 +388,8 @@ impl Scenario {
             "ff" => Method::Ff,
             other => return Err(invalid("method", format!("expected \"ga\" or \"ff\", got \"{other}\""))),
         };
-        Ok(Self { seed, duration_s, frame_period_s, method, camera, target, robot, ga, servo })
+        let occlusion = occlusion::parse_occlusions(top.get("occlusion"), duration_s)?;
+        Ok(Self { seed, duration_s, frame_period_s, method, camera, target, robot, ga, servo, tracker, occlusion })
     }
 
     /// Reads, parses and validates a scenario file.
@@ -418,7 +454,7 @@ fn parse_camera(s: &Section<'_>) -> Result<CameraConfig> {
 }
 
 fn parse_target(s: &Section<'_>) -> Result<TargetConfig> {
-    s.check_keys(&["size_m", "face_hues_deg", "distance_m", "amplitude_deg", "omega_rad_s", "yaw0_deg"])?;
+    s.check_keys(&["size_m", "face_hues_deg", "distance_m", "amplitude_deg", "omega_rad_s", "yaw0_deg", "placement"])?;
     let d = TargetConfig::default();
     let size_m: [f64; 3] = s.floats("size_m", d.size_m)?;
     for (i, x) in size_m.iter().enumerate() {
@@ -445,7 +481,8 @@ fn parse_target(s: &Section<'_>) -> Result<TargetConfig> {
     let amplitude_deg = s.float_in("amplitude_deg", d.amplitude_deg, Bound::Closed(0.0), 180.0)?;
     let omega_rad_s = s.float_in("omega_rad_s", d.omega_rad_s, Bound::Closed(0.0), 10.0)?;
     let yaw0_deg = s.float_in("yaw0_deg", d.yaw0_deg, Bound::Closed(-180.0), 180.0)?;
-    Ok(TargetConfig { size_m, face_hues_deg, distance_m, amplitude_deg, omega_rad_s, yaw0_deg })
+    let placement = occlusion::parse_placement(s.get("placement"))?;
+    Ok(TargetConfig { size_m, face_hues_deg, distance_m, amplitude_deg, omega_rad_s, yaw0_deg, placement })
 }
 
 fn parse_robot(s: &Section<'_>) -> Result<RobotConfig> {

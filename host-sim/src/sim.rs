@@ -12,6 +12,7 @@ use evorec_core::board::{CameraController, Error as BoardError, ErrorKind, Error
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
+use evorec_core::status::Status;
 use evorec_core::tracker::{Estimate, JointSample};
 use nalgebra::Isometry3;
 use rand_core::SeedableRng;
@@ -19,6 +20,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::arm::{ArmSim, CONTROL_PERIOD_S, DOF};
 use crate::motion::{self, FlangeTrajectory, TargetMotion, Twist};
+use crate::occlusion::{self, OcclusionKind, Placement};
 use crate::render::{self, AntiAlias, RenderOptions, StereoImages};
 use crate::scenario::Scenario;
 
@@ -153,12 +155,32 @@ impl World {
         Psi::from_isometry(&iso)
     }
 
-    /// Renders both cameras' RGB images at the current time.
+    /// The occlusion hiding the block now, if any (`[[occlusion]]` of the scenario).
+    pub fn occlusion(&self) -> Option<OcclusionKind> {
+        self.scenario.occlusion.at(self.arm.time())
+    }
+
+    /// Renders both cameras' RGB images at the current time, with the scenario's occlusions:
+    /// a removed block is not drawn, an occluder is painted over the block's image.
     pub fn render(&mut self) -> StereoImages {
-        // A block behind the camera renders as the background alone.
-        let pose: Isometry3<f32> =
-            if self.hidden { Isometry3::translation(0.0, 0.0, -10.0) } else { self.target_in_camera().cast() };
-        render::render_stereo(&self.rig, &pose, &self.block, &self.render, &mut self.rng)
+        let pose: Isometry3<f32> = self.target_in_camera().cast();
+        let occlusion = if self.hidden { Some(OcclusionKind::Removed) } else { self.occlusion() };
+        match occlusion {
+            None => render::render_stereo(&self.rig, &pose, &self.block, &self.render, &mut self.rng),
+            Some(OcclusionKind::Removed) => {
+                // A block behind the cameras renders as the background alone.
+                let gone = Isometry3::translation(0.0, 0.0, -10.0);
+                render::render_stereo(&self.rig, &gone, &self.block, &self.render, &mut self.rng)
+            }
+            Some(OcclusionKind::Occluder) => {
+                let mut images = render::render_stereo(&self.rig, &pose, &self.block, &self.render, &mut self.rng);
+                let right = occlusion::corners_in(&pose, &self.block);
+                let left = occlusion::corners_in(&(self.rig.left_from_right * pose), &self.block);
+                occlusion::paint_occluder(&mut images.right, &self.rig.right, &right);
+                occlusion::paint_occluder(&mut images.left, &self.rig.left, &left);
+                images
+            }
+        }
     }
 }
 
@@ -177,6 +199,10 @@ pub struct TraceRow {
     pub estimate: Psi,
     /// Its fitness.
     pub fitness: f32,
+    /// The tracker's status.
+    pub status: Status,
+    /// The block was hidden (occluded or removed) in this frame.
+    pub hidden: bool,
 }
 
 /// Why the simulated board stopped.
@@ -202,7 +228,7 @@ pub struct SimBoard {
     world: World,
     frames: u32,
     next: u32,
-    current: Option<(f64, Psi, JointSample<DOF>)>,
+    current: Option<(f64, Psi, JointSample<DOF>, bool)>,
     rows: Vec<TraceRow>,
 }
 
@@ -255,7 +281,7 @@ impl CameraController<DOF> for SimBoard {
         render::rgb565_into(&images.left, left);
         render::rgb565_into(&images.right, right);
         let joints = self.world.arm().joint_sample();
-        self.current = Some((t, self.world.truth(), joints));
+        self.current = Some((t, self.world.truth(), joints, self.world.occlusion().is_some()));
         let info = FrameInfo {
             sequence: self.next,
             capture_time_us: (t * 1e6).round() as u64,
@@ -271,7 +297,7 @@ impl CameraController<DOF> for SimBoard {
     }
 
     fn publish(&mut self, _frame: &FrameInfo, estimate: &Estimate) -> Result<(), SimError> {
-        if let Some((t, truth, joints)) = self.current.take() {
+        if let Some((t, truth, joints, hidden)) = self.current.take() {
             self.rows.push(TraceRow {
                 t,
                 q: joints.q,
@@ -279,6 +305,8 @@ impl CameraController<DOF> for SimBoard {
                 truth,
                 estimate: estimate.psi,
                 fitness: estimate.fitness,
+                status: estimate.status,
+                hidden,
             });
         }
         Ok(())
@@ -320,14 +348,97 @@ pub fn flange_trajectory(s: &Scenario) -> FlangeTrajectory {
     FlangeTrajectory::new(r.motion, r.omega_rad_s, r.amplitude_m, r.amplitude_deg.to_radians(), centre)
 }
 
-/// The target motion a scenario describes.
+/// The target motion a scenario describes (with `placement = "random"`, the pose of
+/// [`random_target_pose`] and no `yaw0`).
 pub fn target_motion(s: &Scenario) -> TargetMotion {
-    TargetMotion {
+    let fixed = TargetMotion {
         centre: motion::target_centre(s.camera.baseline_m, s.target.distance_m),
         yaw0_rad: s.target.yaw0_deg.to_radians(),
         amplitude_rad: s.target.amplitude_deg.to_radians(),
         omega_rad_s: s.target.omega_rad_s,
+        rest: motion::target_rest_rotation(),
+    };
+    match s.target.placement {
+        Placement::Fixed => fixed,
+        Placement::Random => match random_target_pose(s) {
+            Some(pose) => TargetMotion {
+                centre: nalgebra::Point3::from(pose.translation.vector),
+                yaw0_rad: 0.0,
+                rest: pose.rotation,
+                ..fixed
+            },
+            None => fixed,
+        },
     }
+}
+
+/// Tries of [`random_target_pose`] before it gives up.
+pub const RANDOM_POSE_TRIES: usize = 100_000;
+
+/// Times over the run at which a random pose is checked to be inside both images.
+pub const RANDOM_POSE_CHECKS: usize = 40;
+
+/// Margin (pixels) the block's image keeps from every image border in a random pose.
+pub const RANDOM_POSE_MARGIN_PX: f32 = 2.0;
+
+/// A random world pose `^W T_M` of the block for the scenario's seed: its centre uniform in
+/// the tracker's search space ([`crate::experiment::search_space`], in `Σ_CR` at `t = 0`), its
+/// orientation uniform (Shoemake's method), redrawn until every corner is at least
+/// [`RANDOM_POSE_MARGIN_PX`] inside both images at `t = 0` and, when the flange moves, at
+/// [`RANDOM_POSE_CHECKS`] times over the run (along the scripted flange trajectory, with the
+/// block at rest: its own yaw oscillation is not checked). `None` after
+/// [`RANDOM_POSE_TRIES`] tries.
+pub fn random_target_pose(s: &Scenario) -> Option<Isometry3<f64>> {
+    use rand_core::{Rng, SeedableRng};
+    let rig = rig(s).ok()?;
+    let space = crate::experiment::search_space();
+    let block = block(s);
+    let trajectory = flange_trajectory(s);
+    let mount = motion::flange_to_camera_f64(s.camera.baseline_m);
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(s.seed ^ 0x9A3D_0B1E_C7F0_5EED);
+    let mut unit = move || (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    let inside = |p: &Result<nalgebra::Point2<f32>, _>, cam: &evorec_core::camera::Pinhole| match p {
+        Ok(p) => {
+            let m = RANDOM_POSE_MARGIN_PX;
+            p.x >= m && p.y >= m && p.x <= f32::from(cam.width()) - m && p.y <= f32::from(cam.height()) - m
+        }
+        Err(_) => false,
+    };
+    for _ in 0..RANDOM_POSE_TRIES {
+        let t: [f64; 3] = core::array::from_fn(|i| {
+            let (lo, hi) = (f64::from(space.t_min()[i]), f64::from(space.t_max()[i]));
+            lo + (hi - lo) * unit()
+        });
+        let (u1, u2, u3) = (unit(), unit(), unit());
+        let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+        let tau = std::f64::consts::TAU;
+        let q = nalgebra::Quaternion::new(
+            b * (tau * u3).cos(),
+            a * (tau * u2).sin(),
+            a * (tau * u2).cos(),
+            b * (tau * u3).sin(),
+        );
+        let q = nalgebra::UnitQuaternion::from_quaternion(q);
+        let pose = Isometry3::from_parts(nalgebra::Translation3::new(t[0], t[1], t[2]), q);
+        let world = motion::initial_camera_pose(s.camera.baseline_m) * pose;
+        let visible_at = |t: f64| {
+            let cam = trajectory.setpoint(t).pose * mount;
+            let pose32: Isometry3<f32> = (cam.inverse() * world).cast();
+            block.corners().iter().all(|c| {
+                let (r, l) = rig.project_model_point(&pose32, c);
+                inside(&r, &rig.right) && inside(&l, &rig.left)
+            })
+        };
+        let checks = if trajectory.omega_rad_s > 0.0 && trajectory.kind != motion::MotionKind::Static {
+            RANDOM_POSE_CHECKS
+        } else {
+            0
+        };
+        if visible_at(0.0) && (1..=checks).all(|k| visible_at(s.duration_s * k as f64 / checks as f64)) {
+            return Some(world);
+        }
+    }
+    None
 }
 
 /// Renders the frame at `frame` of a scenario (advancing a fresh world to its time).

@@ -7,7 +7,9 @@
 //! looked up in the core's `RGB565_HUE` table inside the measured window), then the sweep (populations 20/40/60 × rows of
 //! 4/8/12 points, `Tracker<7, P, G>` monomorphised for each) on `timing::SWEEP_FRAMES` frames
 //! each. Every frame is made on the board before its generation, so the measured window
-//! holds only `Tracker::step_probed` (feedforward on). Before each generation the free stack
+//! holds only `Tracker::step_probed` (feedforward on). Before each generation the tracker is
+//! put in the status of its frame kind (`CaseKind::forced_status`: searching or lost for those
+//! kinds, tracking for all others), which decides the generation's work. Before each generation the free stack
 //! is painted again, and its high-water mark after the generation is printed too.
 //!
 //! `evorec timing --out DIR` (host) runs this image and writes the report. Build it with
@@ -174,6 +176,8 @@ mod firmware {
             };
             let frame = StereoFrame { left: l, right: r };
             let dt_s = if k == 0 { 0.0 } else { FRAME_PERIOD_US as f32 * 1e-6 };
+            tracker.set_status(kind.forced_status());
+            let status = tracker.status();
             cmsdk_timer::repaint_free_stack();
             let measured = C::generation(tracker, &frame, &joints, dt_s, timer);
             let stack = sys::stack_usage().used_bytes;
@@ -181,7 +185,8 @@ mod firmware {
                 hprintln!("ERROR generation {} refused", k);
                 return false;
             };
-            let line = GenLine { population: P as u32, grid: G as u32, frame: k, kind, call, phases, stack, fitness };
+            let line =
+                GenLine { population: P as u32, grid: G as u32, frame: k, kind, status, call, phases, stack, fitness };
             hprintln!("{}", line);
         }
         true

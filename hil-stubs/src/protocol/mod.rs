@@ -63,9 +63,9 @@ pub const DOF: usize = PA10_DOF;
 
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
-/// Protocol version carried in every header (2: frames carry the sensor's RGB565 pixels;
-/// version 1 carried hue bytes).
-pub const VERSION: u8 = 2;
+/// Protocol version carried in every header (3: estimates carry the tracker's status; 2:
+/// frames carry the sensor's RGB565 pixels; 1: hue frames).
+pub const VERSION: u8 = 3;
 /// The pixel format of a frame's images on the link: the camera sensor's own RGB565, so the
 /// hue is computed on the board (see [`evorec_core::image::Rgb565`]).
 pub type LinkFormat = evorec_core::image::Rgb565;
@@ -84,8 +84,8 @@ const GA_LEN: usize = 3 * 4 + 4 + 4 + 4 * (MUTATION_LEVELS - 1) + 4 * 6 * MUTATI
 pub const CONFIG_LEN: usize = 4 * 4 + 2 * 2 + 4 + 4 * 9 + 4 * 7 + 4 * 6 + 8 + 4 + 4 + GA_LEN + 4 * 12;
 /// `FRAME` payload size before the two images.
 pub const FRAME_FIXED_LEN: usize = 2 + 2 + 8 + 4 * DOF * 2;
-/// `ESTIMATE` payload size.
-pub const ESTIMATE_LEN: usize = 4 * 6 + 4 + 4;
+/// `ESTIMATE` payload size: ψ, fitness, generation, status code.
+pub const ESTIMATE_LEN: usize = 4 * 6 + 4 + 4 + 1;
 /// `ACK` payload size.
 pub const ACK_LEN: usize = 4;
 /// `DONE` payload size.

@@ -2,6 +2,7 @@
 
 use evorec_core::ga::{GaParams, MUTATION_LEVELS};
 use evorec_core::pose::Psi;
+use evorec_core::status::Status;
 use evorec_core::tracker::{Estimate, Feedforward};
 
 use super::{DecodeError, Done, FRAME_FIXED_LEN, MAX_SMALL_PAYLOAD, Message, MsgType, Setup};
@@ -30,6 +31,7 @@ pub(super) fn encode_payload<'m>(
             e.f32s(&est.psi.0);
             e.f32(est.fitness);
             e.u32(est.generation);
+            e.u8(est.status.code());
         }
         Message::End | Message::Rejected => {}
         Message::Ack(status) => e.u32(status),
@@ -166,8 +168,9 @@ pub(super) fn decode_small(kind: MsgType, payload: &[u8]) -> Result<Message<'sta
             let psi = Psi(d.f32s());
             let fitness = d.f32();
             let generation = d.u32();
+            let status = Status::from_code(d.u8()).ok_or(DecodeError::BadValue)?;
             // The capture time is not in the payload; the host fills it in from its frame.
-            Message::Estimate(Estimate { psi, fitness, generation, capture_time_us: 0 })
+            Message::Estimate(Estimate { psi, fitness, generation, capture_time_us: 0, status })
         }
         MsgType::End => Message::End,
         MsgType::Ack => Message::Ack(d.u32()),

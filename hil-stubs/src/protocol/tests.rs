@@ -50,6 +50,7 @@ fn small_messages() -> Vec<Envelope<'static>> {
                 fitness: 0.875,
                 generation: 42,
                 capture_time_us: 0,
+                status: evorec_core::status::Status::Lost,
             }),
         },
         Envelope::bare(Message::End),
@@ -80,7 +81,7 @@ fn small_messages_round_trip() {
 fn payload_sizes_match_the_constants() {
     assert_eq!(encode(&Envelope::bare(Message::Config(sample_setup()))).len(), HEADER_LEN + CONFIG_LEN + CRC_LEN);
     assert_eq!(FRAME_FIXED_LEN, 68);
-    assert_eq!(ESTIMATE_LEN, 32);
+    assert_eq!(ESTIMATE_LEN, 33);
 }
 
 #[test]
@@ -91,6 +92,7 @@ fn nan_bits_cross_unchanged() {
         fitness: f32::from_bits(0xFFA0_0001),
         generation: 1,
         capture_time_us: 0,
+        status: evorec_core::status::Status::Searching,
     }));
     let bytes = encode(&env);
     let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
@@ -161,8 +163,8 @@ fn bad_magic_version_type_and_length_are_rejected() {
     b[0] = b'X';
     assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadMagic(*b"XVRC")));
     let mut b = good.clone();
-    b[4] = 1; // version 1: hue frames
-    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadVersion(1)));
+    b[4] = VERSION + 1;
+    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadVersion(VERSION + 1)));
     let mut b = good.clone();
     b[5] = 99;
     assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::UnknownType(99)));
@@ -243,7 +245,7 @@ mod prop {
             let env = Envelope {
                 sequence,
                 capture_time_us: time,
-                message: Message::Estimate(Estimate { psi: Psi(psi), fitness, generation, capture_time_us: 0 }),
+                message: Message::Estimate(Estimate { psi: Psi(psi), fitness, generation, capture_time_us: 0, status: evorec_core::status::Status::Tracking }),
             };
             let bytes = encode(&env);
             let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();

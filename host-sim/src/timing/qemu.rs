@@ -236,7 +236,7 @@ mod tests {
     #[test]
     fn output_is_parsed() {
         let text = "EVOREC-TIMING v1\nCALIBRATION read_pair=25\nRUN name=full p=40 g=8 frames=1 points_per_camera=480 width=160 height=120\n\
-                    GEN p=40 g=8 k=0 kind=blank call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0\nEND ok\n";
+                    GEN p=40 g=8 k=0 kind=blank status=lost call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0\nEND ok\n";
         let m = parse_output(text).unwrap();
         assert_eq!(m.read_pair_ticks, 25);
         let s = m.runs[0].stats();

@@ -70,6 +70,7 @@ pub(super) fn json(r: &Results) -> Value {
             "evaluate": r.full.evaluate.json(),
             "breed": r.full.breed.json(),
         },
+        "statuses": r.full.by_status.iter().map(|(k, n, r)| (k.as_str().to_owned(), json!({"frames": n, "min": r.min.round(), "max": r.max.round()}))).collect::<serde_json::Map<_, _>>(),
         "frame_kinds": r.full.by_kind.iter().map(|(k, n, r)| (k.name().to_owned(), json!({"frames": n, "min": r.min.round(), "max": r.max.round()}))).collect::<serde_json::Map<_, _>>(),
         "instructions_per_point_eval": round2(r.full.per_point.max),
         "instructions_per_point_eval_range": { "min": round2(r.full.per_point.min), "max": round2(r.full.per_point.max) },
@@ -246,6 +247,16 @@ pub(super) fn markdown(r: &Results) -> String {
     );
     for (k, n, r) in &full.by_kind {
         let _ = writeln!(s, "| {} | {n} | {:.0} | {:.0} |", k.name(), r.min, r.max);
+    }
+    let _ = writeln!(
+        s,
+        "\n## By tracker status (whole call, instructions)\n\nThe status decides the work of a generation: \
+         while searching or lost, the acquisition runs one bounded stage and `AcquireConfig::idle_individuals` \
+         individuals are not evaluated. The budget is set by tracking when the other rows' max is lower.\n\n\
+         | status | n | min | max |\n|---|---:|---:|---:|"
+    );
+    for (st, n, r) in &full.by_status {
+        let _ = writeln!(s, "| {} | {n} | {:.0} | {:.0} |", st.as_str(), r.min, r.max);
     }
     let _ = writeln!(
         s,

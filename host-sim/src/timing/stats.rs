@@ -1,5 +1,6 @@
 //! Statistics of the measured generations.
 
+use evorec_core::status::Status;
 use evorec_firmware::timing::{CaseKind, GenLine, ticks_to_instructions};
 use serde_json::{Value, json};
 
@@ -65,6 +66,8 @@ pub struct RunStats {
     pub stack: u32,
     /// Whole call per kind of frame.
     pub by_kind: Vec<(CaseKind, usize, Range)>,
+    /// Whole call per status the generations started in.
+    pub by_status: Vec<(Status, usize, Range)>,
 }
 
 impl Run {
@@ -82,6 +85,14 @@ impl Run {
                 (!v.is_empty()).then(|| (k, v.len(), Range::of(v)))
             })
             .collect();
+        let by_status = Status::ALL
+            .into_iter()
+            .filter_map(|st| {
+                let v: Vec<f64> =
+                    g.iter().filter(|x| x.status == st).map(|x| ticks_to_instructions(u64::from(x.call))).collect();
+                (!v.is_empty()).then(|| (st, v.len(), Range::of(v)))
+            })
+            .collect();
         let evaluate = ins(|x| x.phases.evaluate);
         RunStats {
             population: self.population,
@@ -95,6 +106,7 @@ impl Run {
             per_point: Range { min: evaluate.min / evals, max: evaluate.max / evals, mean: evaluate.mean / evals },
             stack: g.iter().map(|x| x.stack).max().unwrap_or(0),
             by_kind,
+            by_status,
         }
     }
 }

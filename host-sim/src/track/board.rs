@@ -10,6 +10,7 @@ use std::thread::JoinHandle;
 use evorec_core::board::{CameraController, Error as BoardError, ErrorKind, ErrorType, FrameInfo};
 use evorec_core::camera::Pinhole;
 use evorec_core::pose::Psi;
+use evorec_core::status::Status;
 use evorec_core::tracker::{Estimate, JointSample};
 use image::RgbImage;
 use indicatif::ProgressBar;
@@ -121,6 +122,8 @@ pub struct TrackedFrame {
     pub estimate: Psi,
     /// Its fitness.
     pub fitness: f32,
+    /// The tracker's status after this frame.
+    pub status: Status,
 }
 
 /// The board over a sequence.
@@ -224,7 +227,14 @@ impl<const DOF: usize> CameraController<DOF> for SequenceBoard<'_> {
 
     fn publish(&mut self, _frame: &FrameInfo, estimate: &Estimate) -> Result<(), SeqBoardError> {
         if let Some((i, q, qd)) = self.current.take() {
-            self.tracked.push(TrackedFrame { i, q, qd, estimate: estimate.psi, fitness: estimate.fitness });
+            self.tracked.push(TrackedFrame {
+                i,
+                q,
+                qd,
+                estimate: estimate.psi,
+                fitness: estimate.fitness,
+                status: estimate.status,
+            });
         }
         Ok(())
     }

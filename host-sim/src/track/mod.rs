@@ -21,10 +21,12 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Result, anyhow, bail};
+use evorec_core::acquire::AcquireConfig;
 use evorec_core::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, DEFAULT_POPULATION};
 use evorec_core::ga::{GaParams, SearchSpace};
 use evorec_core::kinematics::Chain;
 use evorec_core::pose::Psi;
+use evorec_core::status::StatusConfig;
 use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
 use image::RgbImage;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -144,6 +146,8 @@ pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, seed: u64) -> R
         hue_tolerance: DEFAULT_HUE_TOLERANCE,
         seed,
         max_dt_s: 0.5,
+        acquire: AcquireConfig::DEFAULT,
+        status: StatusConfig::DEFAULT,
     })
 }
 
@@ -156,8 +160,8 @@ fn run_dof<const DOF: usize>(seq: &Sequence, opts: &TrackOptions, arm: Chain<DOF
             let psi = Psi::from_isometry(&pose.cast::<f32>());
             tracker.reset_around(&psi, &INITIAL_SPREAD).map_err(|e| anyhow!("target.initial_pose: {e}"))?;
         }
-        // TODO(lead): acquisition. Without an initial pose the population starts uniform over
-        // the search space (until the tracker acquires by itself).
+        // Without an initial pose the tracker starts searching: uniform population, and the
+        // colour-blob acquisition (evorec_core::acquire) seeds it until it tracks.
         None => tracker.reset_uniform(),
     }
     let end = opts.frames.map_or(seq.frames.len(), |n| n.min(seq.frames.len()));

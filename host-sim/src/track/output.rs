@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use evorec_core::camera::Pinhole;
 use evorec_core::config::DEFAULT_GRID;
 use evorec_core::model::{Block, SurfaceStrips};
+use evorec_core::status::Status;
 use evorec_core::tracker::Feedforward;
 use image::RgbImage;
 use nalgebra::{Isometry3, Point3};
@@ -40,6 +41,10 @@ pub struct TrackSummary {
     pub within_from_frame: Option<u64>,
     /// Its capture time (s).
     pub within_from_t_s: Option<f64>,
+    /// `frames.csv` index of the first frame reported as tracking (null if none).
+    pub first_tracking_frame: Option<u64>,
+    /// Fraction of the frames reported as tracking.
+    pub tracking_fraction: f64,
     /// Errors over the frames from `within_from_frame` on.
     pub after_within: Option<Rms>,
     /// The half turns errors are taken modulo (the block's colour symmetry).
@@ -88,6 +93,8 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
         all: Rms::of(&errors),
         within_from_frame: settled_frame.map(|f| f.index),
         within_from_t_s: settled_frame.map(|f| f.t_s),
+        first_tracking_frame: out.tracked.iter().find(|t| t.status == Status::Tracking).map(|t| seq.frames[t.i].index),
+        tracking_fraction: out.tracked.iter().filter(|t| t.status == Status::Tracking).count() as f64 / n,
         after_within: settled.and_then(|k| Rms::of(&errors[k..])),
         symmetries: syms.iter().map(|(n, _)| *n).collect(),
         frames_per_s: out.tracked.len() as f64 / out.seconds.max(1e-9),
@@ -107,6 +114,9 @@ pub fn trace_header(dof: usize) -> Vec<String> {
         }
     }
     h.push("F".to_owned());
+    h.push("status".to_owned());
+    // A recording does not say when the block was hidden: the column stays empty.
+    h.push("hidden".to_owned());
     h
 }
 
@@ -127,6 +137,8 @@ fn write_trace(path: &Path, seq: &Sequence, out: &TrackOutput, ev: &Evaluation) 
         }
         rec.extend(psi_cells(&t.estimate.0.map(f64::from)));
         rec.push(format!("{:.5}", t.fitness));
+        rec.push(t.status.as_str().to_owned());
+        rec.push(String::new());
         w.write_record(&rec)?;
     }
     w.flush()?;

@@ -1,0 +1,161 @@
+//! The acquisition as a pipeline of bounded stages, one per generation.
+
+use nalgebra::Vector3;
+
+use super::refine::Measured;
+use super::{AcquireConfig, HueBlobs, REFINE_ITERATIONS, Refinement, Seed, grid_size, scan_part, seed_pose_from};
+use crate::camera::StereoRig;
+use crate::hue::HueLut;
+use crate::image::{Image, PixelFormat};
+use crate::pose::Psi;
+use crate::quat;
+
+/// What the next generation of an [`Acquisition`] does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Scans the grid pixels from this index on (both images).
+    Scan(u32),
+    /// Solves for the seeds of the finished scan.
+    Solve,
+    /// Gauss–Newton iteration this many of both solutions.
+    Refine(u8),
+}
+
+/// The acquisition's state between generations (see the [module docs](super)): the scan's
+/// blobs so far, the two solutions being refined, and the latest seed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Acquisition {
+    stage: Stage,
+    left: HueBlobs,
+    right: HueBlobs,
+    candidates: [Option<Refinement>; 2],
+    /// The camera's motion since the scan ended: the identity pose moved by every
+    /// feedforward shift since then (`^{CR now} T_{CR scan}` to first order).
+    motion: Psi,
+    seed: Option<Seed>,
+}
+
+impl Default for Acquisition {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Acquisition {
+    /// Nothing scanned, no seed.
+    pub const fn new() -> Self {
+        Self {
+            stage: Stage::Scan(0),
+            left: HueBlobs { count: [0; 3], sum_u: [0; 3], sum_v: [0; 3] },
+            right: HueBlobs { count: [0; 3], sum_u: [0; 3], sum_v: [0; 3] },
+            candidates: [None, None],
+            motion: Psi::IDENTITY,
+            seed: None,
+        }
+    }
+
+    /// Back to the start: the next stage scans from the first pixel, and the seed is dropped.
+    pub fn reset(&mut self) {
+        *self = Self::new();
+    }
+
+    /// The next stage.
+    pub fn stage(&self) -> Stage {
+        self.stage
+    }
+
+    /// The latest seed, in the camera frame of the last frame stepped on.
+    pub fn seed(&self) -> Option<&Seed> {
+        self.seed.as_ref()
+    }
+
+    /// Moves the seed and the camera-motion record by the feedforward shift `shift` of the
+    /// population (the same closure), so that they follow the camera to the next frame.
+    pub fn shift(&mut self, mut shift: impl FnMut(&mut Psi)) {
+        shift(&mut self.motion);
+        self.motion.project_to_ball();
+        if let Some(s) = self.seed.as_mut()
+            && let Some(mut psi) = s.psi()
+        {
+            shift(&mut psi);
+            psi.project_to_ball();
+            s.centre = psi.translation();
+            s.rotation = psi.rotation_unchecked();
+        }
+    }
+
+    /// Runs the next stage on a frame pair (bounded work, see the module docs).
+    #[allow(clippy::too_many_arguments)]
+    pub fn step<B: AsRef<[u8]>, F: PixelFormat>(
+        &mut self,
+        left: &Image<B, F>,
+        right: &Image<B, F>,
+        lut: &HueLut,
+        rig: &StereoRig,
+        half: &[f32; 3],
+        config: &AcquireConfig,
+    ) {
+        let m = Measured {
+            rig,
+            half,
+            left: &self.left,
+            right: &self.right,
+            stride: config.scan_stride,
+            min_hits: config.min_face_hits,
+        };
+        match self.stage {
+            Stage::Scan(start) => {
+                let (stride, chunk) = (config.scan_stride, config.scan_chunk);
+                let next = scan_part(left, lut, stride, start, chunk, &mut self.left);
+                scan_part(right, lut, stride, start, chunk, &mut self.right);
+                let (gw, gh) = grid_size(right.width(), right.height(), stride);
+                self.stage = if next >= gw * gh { Stage::Solve } else { Stage::Scan(next) };
+                self.motion = Psi::IDENTITY;
+            }
+            Stage::Solve => {
+                let solve = |faces| seed_pose_from(rig, half, m.left, m.right, config.min_face_hits, faces);
+                let candidates = [solve(3), solve(2)].map(|s| s.map(|s| Refinement::start(&m, &s)));
+                self.candidates = candidates;
+                self.stage = if candidates.iter().any(Option::is_some) { Stage::Refine(0) } else { self.restart() };
+            }
+            Stage::Refine(i) => {
+                let mut candidates = self.candidates;
+                for c in candidates.iter_mut().flatten() {
+                    c.iterate(&m);
+                }
+                self.candidates = candidates;
+                self.stage = if usize::from(i) + 1 < REFINE_ITERATIONS {
+                    Stage::Refine(i + 1)
+                } else {
+                    self.finish();
+                    self.restart()
+                };
+            }
+        }
+    }
+
+    /// The best refined solution becomes the seed, moved from the scan's camera frame to the
+    /// current one.
+    fn finish(&mut self) {
+        let best =
+            self.candidates.iter().flatten().map(Refinement::result).fold(None, |best: Option<(Seed, f32)>, c| {
+                if best.is_none_or(|(_, b)| c.1 < b) { Some(c) } else { best }
+            });
+        let Some((seed, _)) = best else { return };
+        let Ok(motion) = self.motion.try_to_isometry() else { return };
+        let centre = motion * nalgebra::Point3::from(seed.centre);
+        let rotation = quat::to_rotation_matrix(&motion.rotation) * seed.rotation;
+        let centre: Vector3<f32> = centre.coords;
+        if centre.iter().chain(rotation.iter()).all(|v| v.is_finite()) {
+            self.seed = Some(Seed { centre, rotation, ..seed });
+        }
+    }
+
+    /// Clears the scan for the next round; returns its first stage.
+    fn restart(&mut self) -> Stage {
+        self.left = HueBlobs::default();
+        self.right = HueBlobs::default();
+        self.candidates = [None, None];
+        Stage::Scan(0)
+    }
+}

@@ -1,0 +1,195 @@
+//! Unit tests of the acquisition.
+
+use super::seed::half_turn;
+use super::*;
+use crate::camera::Pinhole;
+use crate::camera::StereoRig;
+use crate::config::{DEFAULT_HUE_TOLERANCE, NO_HUE};
+use crate::ga::unit_f32;
+use crate::hue::HueImage;
+use crate::model::{Block, SurfaceStrips};
+use crate::pose::Psi;
+use crate::synth;
+use nalgebra::{Matrix3, Vector3};
+use rand_core::Rng;
+use rand_core::SeedableRng;
+use rand_xoshiro::Xoshiro128PlusPlus;
+use std::vec;
+
+const W: u16 = 640;
+const H: u16 = 480;
+
+fn rig() -> StereoRig {
+    StereoRig::parallel(Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, W, H).unwrap(), 0.1).unwrap()
+}
+
+fn lut() -> HueLut {
+    let model = SurfaceStrips::<4>::new(&Block::PAPER).unwrap();
+    HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE)
+}
+
+fn scene(psi: &Psi) -> (std::vec::Vec<u8>, std::vec::Vec<u8>) {
+    let rig = rig();
+    let iso = psi.try_to_isometry().unwrap();
+    let mut right = vec![NO_HUE; usize::from(W) * usize::from(H)];
+    let mut left = right.clone();
+    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut right).unwrap();
+    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut left).unwrap();
+    (left, right)
+}
+
+/// Smallest rotation angle between `r` and `truth` over the colour symmetry's half turns.
+fn angle_mod_symmetry(r: &Matrix3<f32>, truth: &Matrix3<f32>) -> f32 {
+    (0..4)
+        .map(|k| {
+            let d = half_turn(r, k).transpose() * truth;
+            let c = ((d.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
+            c.acos()
+        })
+        .fold(f32::MAX, f32::min)
+}
+
+#[test]
+fn scan_reads_a_fixed_grid_and_counts_hues_per_axis() {
+    let (w, h) = (40u16, 30u16);
+    let mut px = vec![NO_HUE; usize::from(w) * usize::from(h)];
+    // One red pixel on the grid (stride 8, offset 4) and one off it.
+    px[4 * 40 + 12] = 0;
+    px[5 * 40 + 12] = 0;
+    px[12 * 40 + 20] = 60; // green
+    let img = HueImage::new_checked(&px[..], w, h).unwrap();
+    let b = scan(&img, &lut(), 8);
+    assert_eq!(b.count, [1, 1, 0]);
+    assert_eq!((b.sum_u[0], b.sum_v[0]), (12, 4));
+    assert_eq!(b.centroid(1), Some(Point2::new(20.5, 12.5)));
+    assert_eq!(b.centroid(2), None);
+    assert_eq!(scan(&img, &lut(), 0).total(), 0);
+}
+
+#[test]
+fn triangulation_inverts_the_projection() {
+    let rig = rig();
+    let p = Vector3::new(0.05, -0.03, 0.8);
+    let (r, l) = rig.project_model_point(&nalgebra::Isometry3::translation(p.x, p.y, p.z), &nalgebra::Point3::origin());
+    let q = triangulate(&rig, &r.unwrap(), &l.unwrap()).unwrap();
+    assert!((q - p).norm() < 1e-5, "{q}");
+    // Rays that diverge (negative disparity) meet behind the cameras.
+    assert_eq!(triangulate(&rig, &Point2::new(400.0, 240.0), &Point2::new(300.0, 240.0)), None);
+}
+
+#[test]
+fn seed_is_close_to_the_truth_for_random_poses() {
+    let rig = rig();
+    let half = Block::PAPER.size_m.map(|s| 0.5 * s);
+    let mut rng = Xoshiro128PlusPlus::seed_from_u64(5);
+    let (mut worst_t, mut worst_r, mut n) = (0.0f32, 0.0f32, 0);
+    for _ in 0..40 {
+        let u: [f32; 6] = core::array::from_fn(|_| unit_f32(&mut rng));
+        let eps = Vector3::new(2.0 * u[3] - 1.0, 2.0 * u[4] - 1.0, 2.0 * u[5] - 1.0);
+        if eps.norm() > 1.0 {
+            continue;
+        }
+        let truth = Psi::new([0.1 * u[0] - 0.05, 0.1 * u[1] - 0.05, 0.6 + 0.3 * u[2]], eps.into());
+        let (l, r) = scene(&truth);
+        let (l, r) = (HueImage::new_checked(&l[..], W, H).unwrap(), HueImage::new_checked(&r[..], W, H).unwrap());
+        let (bl, br) = (scan(&l, &lut(), 8), scan(&r, &lut(), 8));
+        let seed = seed_pose(&rig, &half, &bl, &br, 6).unwrap();
+        let dt = (seed.centre - truth.translation()).norm();
+        worst_t = worst_t.max(dt);
+        if seed.free_axis.is_none() {
+            worst_r = worst_r.max(angle_mod_symmetry(&seed.rotation, &truth.rotation_unchecked()));
+        }
+        n += 1;
+        let psi = seed.psi().unwrap();
+        assert!(psi.validate().is_ok());
+    }
+    assert!(n > 15);
+    assert!(worst_t < 0.03, "worst centre error {worst_t} m");
+    assert!(worst_r < 0.35, "worst rotation error {worst_r} rad");
+}
+
+#[test]
+fn nothing_seen_gives_no_seed_and_immigrants_draw_a_fixed_count() {
+    let rig = rig();
+    let none = HueBlobs::default();
+    assert_eq!(seed_pose(&rig, &[0.05, 0.075, 0.1], &none, &none, 6), None);
+    let seed =
+        Seed { centre: Vector3::new(0.0, 0.0, 0.7), rotation: Matrix3::identity(), faces: 1, free_axis: Some(2) };
+    let mut r1 = Xoshiro128PlusPlus::seed_from_u64(3);
+    let mut r2 = Xoshiro128PlusPlus::seed_from_u64(3);
+    let p0 = seed_immigrant(&seed, 0, &AcquireConfig::DEFAULT, &mut r1).unwrap();
+    assert!((p0.translation() - seed.centre).norm() < 1e-7);
+    for _ in 0..9 {
+        r2.next_u32();
+    }
+    assert_eq!(r1.next_u32(), r2.next_u32());
+    for i in 1..20 {
+        let p = seed_immigrant(&seed, i, &AcquireConfig::DEFAULT, &mut r1).unwrap();
+        assert!(p.validate().is_ok());
+        assert!((p.translation() - seed.centre).norm() < 0.025 * 1.8);
+    }
+}
+
+#[test]
+fn config_validation() {
+    assert!(AcquireConfig::DEFAULT.validate(40).is_ok());
+    assert_eq!(AcquireConfig { scan_stride: 0, ..AcquireConfig::DEFAULT }.validate(40), Err(AcquireError::ZeroStride));
+    assert_eq!(AcquireConfig::DEFAULT.validate(9), Err(AcquireError::TooManySeeds));
+    let bad = AcquireConfig { spread_m: [f32::NAN, 0.0, 0.0], ..AcquireConfig::DEFAULT };
+    assert_eq!(bad.validate(40), Err(AcquireError::BadSpread));
+}
+
+#[test]
+fn scan_in_chunks_is_the_whole_scan() {
+    let truth = Psi::new([0.02, -0.01, 0.7], [0.2, 0.3, 0.1]);
+    let (l, _) = scene(&truth);
+    let img = HueImage::new_checked(&l[..], W, H).unwrap();
+    let whole = scan(&img, &lut(), 8);
+    assert!(whole.total() > 100);
+    let (gw, gh) = grid_size(W, H, 8);
+    assert_eq!((gw, gh), (80, 60));
+    for chunk in [1, 7, 80, 1200, 5000] {
+        let (mut blobs, mut at, mut calls) = (HueBlobs::default(), 0, 0);
+        while at < gw * gh {
+            let next = scan_part(&img, &lut(), 8, at, chunk, &mut blobs);
+            assert_eq!(next, (at + chunk).min(gw * gh));
+            at = next;
+            calls += 1;
+        }
+        assert_eq!(blobs, whole, "chunk {chunk}");
+        assert_eq!(calls, (gw * gh).div_ceil(chunk));
+    }
+    // Past the end nothing is read.
+    let mut b = HueBlobs::default();
+    assert_eq!(scan_part(&img, &lut(), 8, gw * gh + 5, 10, &mut b), gw * gh);
+    assert_eq!(b.total(), 0);
+}
+
+#[test]
+fn pipeline_gives_the_one_go_seed_after_its_stages() {
+    let rig = rig();
+    let half = Block::PAPER.size_m.map(|s| 0.5 * s);
+    let truth = Psi::new([0.02, -0.01, 0.7], [0.2, 0.3, 0.1]);
+    let (l, r) = scene(&truth);
+    let (l, r) = (HueImage::new_checked(&l[..], W, H).unwrap(), HueImage::new_checked(&r[..], W, H).unwrap());
+    let cfg = AcquireConfig::DEFAULT;
+    let direct = best_seed(&rig, &half, &scan(&l, &lut(), 8), &scan(&r, &lut(), 8), 8, cfg.min_face_hits).unwrap();
+    let mut acq = Acquisition::new();
+    let scans = (80u32 * 60).div_ceil(cfg.scan_chunk) as usize;
+    let stages = scans + 1 + REFINE_ITERATIONS;
+    for k in 0..stages {
+        assert!(acq.seed().is_none(), "seed after {k} stages");
+        acq.step(&l, &r, &lut(), &rig, &half, &cfg);
+    }
+    assert_eq!(acq.stage(), Stage::Scan(0));
+    let seed = acq.seed().unwrap();
+    // No camera motion: the same seed as in one go (identity motion, up to rounding).
+    assert!((seed.centre - direct.centre).norm() < 1e-5, "{} vs {}", seed.centre, direct.centre);
+    assert!((seed.rotation - direct.rotation).norm() < 1e-5);
+    assert!((seed.centre - truth.translation()).norm() < 0.01);
+    // A camera moving 5 cm along x: the seed follows (the block moves −5 cm in Σ_CR).
+    acq.shift(|p| p.0[0] -= 0.05);
+    assert!((acq.seed().unwrap().centre - direct.centre - Vector3::new(-0.05, 0.0, 0.0)).norm() < 1e-5);
+    acq.reset();
+    assert_eq!((acq.stage(), acq.seed()), (Stage::Scan(0), None));
+}

@@ -1,0 +1,98 @@
+//! Acquisition without an initial pose, the status, loss and recovery on synthetic frames
+//! (`Tracker<7, 40, 8>`, the firmware's planned configuration).
+
+use evorec_core::camera::{Pinhole, StereoRig};
+use evorec_core::config::NO_HUE;
+use evorec_core::ga::SearchSpace;
+use evorec_core::hue::HueImage;
+use evorec_core::model::Block;
+use evorec_core::pose::Psi;
+use evorec_core::status::Status;
+use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
+use evorec_core::{quat, synth};
+use nalgebra::{Isometry3, Vector3};
+
+const W: u16 = 320;
+const H: u16 = 240;
+
+fn rig() -> StereoRig {
+    StereoRig::parallel(Pinhole::new_checked(400.0, 400.0, 160.0, 120.0, W, H).unwrap(), 0.1).unwrap()
+}
+
+fn render(rig: &StereoRig, truth: &Psi) -> (Vec<u8>, Vec<u8>) {
+    let n = usize::from(W) * usize::from(H);
+    let iso = truth.try_to_isometry().unwrap();
+    let (mut l, mut r) = (vec![NO_HUE; n], vec![NO_HUE; n]);
+    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
+    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
+    (l, r)
+}
+
+fn frame<'a>(l: &'a [u8], r: &'a [u8]) -> StereoFrame<'a> {
+    StereoFrame { left: HueImage::new_checked(l, W, H).unwrap(), right: HueImage::new_checked(r, W, H).unwrap() }
+}
+
+fn tracker(seed: u64) -> Tracker<7, 40, 8> {
+    let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
+    Tracker::new(TrackerConfig::pa10(rig(), Block::PAPER, Isometry3::identity(), space).with_seed(seed)).unwrap()
+}
+
+const STILL: JointSample<7> = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
+
+#[test]
+fn finds_the_block_says_so_loses_it_on_blank_frames_and_recovers() {
+    let rig = rig();
+    let q = quat::from_angle_axis(2.2, &Vector3::new(0.4, -1.0, 0.3)).unwrap();
+    let truth = Psi::from_parts(&Vector3::new(-0.04, 0.03, 0.8), &q);
+    let (l, r) = render(&rig, &truth);
+    let blank = vec![NO_HUE; usize::from(W) * usize::from(H)];
+    for seed in [1, 2, 3] {
+        let mut t = tracker(seed);
+        assert_eq!(t.status(), Status::Searching);
+        let mut first_tracking = None;
+        let mut last = None;
+        for i in 0..20 {
+            let e = t.step(&frame(&l, &r), &STILL, 0.033, Feedforward::Off).unwrap();
+            if e.status == Status::Tracking && first_tracking.is_none() {
+                first_tracking = Some(i);
+            }
+            last = Some(e);
+        }
+        let e = last.unwrap();
+        let err = (e.psi.translation() - truth.translation()).norm();
+        assert!(first_tracking.is_some_and(|i| i <= 10), "seed {seed}: first tracking {first_tracking:?}");
+        assert_eq!(e.status, Status::Tracking);
+        assert!(err < 0.01, "seed {seed}: {err} m");
+        // The block disappears: lost at once, never tracking while it is gone.
+        for _ in 0..10 {
+            let e = t.step(&frame(&blank, &blank), &STILL, 0.033, Feedforward::Off).unwrap();
+            assert_eq!(e.status, Status::Lost);
+            assert_eq!(e.fitness, 0.0);
+        }
+        // It comes back: tracking again after the confirmation generations.
+        let mut back = None;
+        for i in 0..10 {
+            let e = t.step(&frame(&l, &r), &STILL, 0.033, Feedforward::Off).unwrap();
+            if e.status == Status::Tracking && back.is_none() {
+                back = Some(i);
+            }
+        }
+        assert!(back.is_some_and(|i| i <= 5), "seed {seed}: back {back:?}");
+    }
+}
+
+#[test]
+fn a_known_start_is_tracking_and_set_status_forces_a_status() {
+    let rig = rig();
+    let truth = Psi::new([0.0, 0.0, 0.7], [0.1, 0.2, 0.0]);
+    let (l, r) = render(&rig, &truth);
+    let mut t = tracker(4);
+    t.reset_around(&truth, &[0.002; 6]).unwrap();
+    assert_eq!(t.status(), Status::Tracking);
+    let e = t.step(&frame(&l, &r), &STILL, 0.0, Feedforward::Off).unwrap();
+    assert_eq!(e.status, Status::Tracking);
+    t.set_status(Status::Lost);
+    assert_eq!(t.status(), Status::Lost);
+    t.reset_uniform();
+    assert_eq!(t.status(), Status::Searching);
+}

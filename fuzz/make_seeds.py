@@ -9,7 +9,7 @@ import struct
 import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-VERSION = 2
+VERSION = 3
 
 
 def msg(kind, payload=b"", seq=0, time_us=0):
@@ -66,7 +66,7 @@ def main():
     write("firmware_serve", "conversation", config + frames + end)
     write("firmware_serve", "wrong-size-frame", config + msg(2, frame(4, 3, 1, 0), seq=1) + end)
     replies = msg(5, struct.pack("<I", 0))
-    replies += msg(3, f32s(0.01, -0.02, 0.7, 0.05, 0.1, -0.03, 0.9) + struct.pack("<I", 1), seq=1, time_us=33_333)
+    replies += msg(3, f32s(0.01, -0.02, 0.7, 0.05, 0.1, -0.03, 0.9) + struct.pack("<IB", 1, 1), seq=1, time_us=33_333)
     replies += msg(6, seq=2, time_us=66_666)
     replies += msg(7, struct.pack("<5I", 2, 1, 1, 13_892, 90_000))
     write("host_replies", "conversation", replies)

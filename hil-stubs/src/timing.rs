@@ -377,6 +377,7 @@ impl CaseGen {
     ) -> Result<JointSample<7>, FrameError> {
         let n = self.width * self.height;
         let (left, right) = (left.get_mut(..2 * n).ok_or(FrameError)?, right.get_mut(..2 * n).ok_or(FrameError)?);
+        let kind = image_kind(k, kind);
         self.draw_hues(k, kind, left, right)?;
         expand_hue_to_rgb565(left, n).map_err(|_| FrameError)?;
         expand_hue_to_rgb565(right, n).map_err(|_| FrameError)?;
@@ -406,24 +407,8 @@ impl CaseGen {
         left.fill(NO_HUE);
         right.fill(NO_HUE);
         match kind {
-            CaseKind::Searching => {
-                let as_kind = [CaseKind::RandomPose, CaseKind::UniformHue, CaseKind::NoisyTarget];
-                return self.frame(
-                    k,
-                    as_kind.get((k % 3) as usize).copied().unwrap_or(CaseKind::RandomPose),
-                    left,
-                    right,
-                );
-            }
-            CaseKind::Lost => {
-                let as_kind = [CaseKind::Tracking, CaseKind::Filling, CaseKind::Noise];
-                return self.frame(
-                    k,
-                    as_kind.get((k % 3) as usize).copied().unwrap_or(CaseKind::Tracking),
-                    left,
-                    right,
-                );
-            }
+            // The image kind of a forced-status frame is never itself a forced-status kind.
+            CaseKind::Searching | CaseKind::Lost => {}
             CaseKind::Tracking | CaseKind::FastArm => {
                 let p = self.truth(k, kind == CaseKind::FastArm);
                 self.render(&p, left, right)?;
@@ -456,6 +441,19 @@ impl CaseGen {
             }
         }
         Ok(())
+    }
+}
+
+/// The image drawn for frame `k` of `kind`: the forced-status kinds show, in turn, the target at
+/// a random pose, every pixel one face's hue and the target under noise (searching), or the
+/// target on its path, the target filling the image and pure noise (lost); every other kind
+/// is its own image.
+fn image_kind(k: u32, kind: CaseKind) -> CaseKind {
+    let turn = |kinds: [CaseKind; 3]| kinds.get((k % 3) as usize).copied().unwrap_or(CaseKind::Tracking);
+    match kind {
+        CaseKind::Searching => turn([CaseKind::RandomPose, CaseKind::UniformHue, CaseKind::NoisyTarget]),
+        CaseKind::Lost => turn([CaseKind::Tracking, CaseKind::Filling, CaseKind::Noise]),
+        other => other,
     }
 }
 

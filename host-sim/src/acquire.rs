@@ -101,7 +101,7 @@ pub fn scenario(seed: u64, case: Case, recovery: bool) -> Scenario {
         }
     }
     if recovery {
-        let kind = if seed % 2 == 0 { OcclusionKind::Occluder } else { OcclusionKind::Removed };
+        let kind = if seed.is_multiple_of(2) { OcclusionKind::Occluder } else { OcclusionKind::Removed };
         s.occlusion =
             Occlusions::from_slice(&[Occlusion { start_s: OCCLUSION_START_S, duration_s: OCCLUSION_S, kind }]);
     } else {

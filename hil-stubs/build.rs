@@ -1,6 +1,7 @@
 //! Build script of the firmware crate:
-//! 1. puts the workspace's `memory.x` (the one source of truth for the memory map) on the
-//!    linker search path, via a copy in `OUT_DIR`, for cortex-m-rt's `link.x`;
+//! 1. puts the workspace's `memory-m4.x` (the one source of truth for the memory map; with the
+//!    `m7` feature `memory-m7.x`, the Cortex-M7 profile's) on the linker search path, via a copy
+//!    named `memory.x` in `OUT_DIR`, for cortex-m-rt's `link.x`;
 //! 2. runs the self-test scenario (`src/selftest.rs`) on the host and writes the estimate
 //!    bits to `$OUT_DIR/selftest_expected.rs`, which the on-target test compares against.
 
@@ -16,7 +17,12 @@ mod selftest;
 
 fn main() -> Result<(), Box<dyn Error>> {
     let out = PathBuf::from(env::var_os("OUT_DIR").ok_or("OUT_DIR not set")?);
-    let memory_x = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").ok_or("no manifest dir")?).join("../memory.x");
+    // The Cortex-M7 profile (feature `m7`) has its own memory map.
+    // Neither map is called `memory.x`: the linker looks for `memory.x` in its working
+    // directory (the workspace root) before the search path, so a file of that name there
+    // would shadow the copy below.
+    let map = if env::var_os("CARGO_FEATURE_M7").is_some() { "../memory-m7.x" } else { "../memory-m4.x" };
+    let memory_x = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").ok_or("no manifest dir")?).join(map);
     fs::copy(&memory_x, out.join("memory.x"))?;
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed={}", memory_x.display());

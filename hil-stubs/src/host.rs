@@ -42,6 +42,7 @@ use std::vec::Vec;
 use evorec_core::Tracker;
 use evorec_core::tracker::Estimate;
 
+use crate::BoardProfile;
 use crate::protocol::{
     ByteSink, ByteSource, DecodeError, Done, Envelope, ErrorCode, Frame, Message, MsgType, ReadError, Setup,
     WriteError, read_message, write_message,
@@ -81,6 +82,9 @@ pub fn default_firmware_path() -> PathBuf {
 pub struct HilOptions {
     /// The QEMU executable (default `qemu-system-arm`, found through `PATH`).
     pub qemu: PathBuf,
+    /// The board the firmware was built for: QEMU's `-cpu` and `-machine` (default
+    /// [`BoardProfile::M4`]; [`BoardProfile::M7`] for an image built with the `m7` feature).
+    pub profile: BoardProfile,
     /// Longest wait for QEMU to open the link (default 30 s).
     pub start_timeout: Duration,
     /// Longest wait for any one reply, and for QEMU to exit after `DONE` (default 60 s).
@@ -91,6 +95,7 @@ impl Default for HilOptions {
     fn default() -> Self {
         Self {
             qemu: PathBuf::from("qemu-system-arm"),
+            profile: BoardProfile::M4,
             start_timeout: Duration::from_secs(30),
             reply_timeout: Duration::from_secs(60),
         }
@@ -313,7 +318,7 @@ impl HilSession {
         let log = File::create(&log_path).map_err(io_error(format!("create {}", log_path.display())))?;
         let log_err = log.try_clone().map_err(io_error("duplicate the log handle"))?;
         let qemu = Command::new(&options.qemu)
-            .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic"])
+            .args(["-cpu", options.profile.qemu_cpu, "-machine", options.profile.qemu_machine, "-nographic"])
             .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
             .arg(&firmware)
             .current_dir(workdir)

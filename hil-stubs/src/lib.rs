@@ -27,7 +27,7 @@
 //! [`DEFAULT_POPULATION`](evorec_core::config::DEFAULT_POPULATION) individuals,
 //! [`DEFAULT_GRID`](evorec_core::config::DEFAULT_GRID) samples per row) lives in a static too
 //! and is built in place (`Tracker::new_in`: model, hue-match table and population are
-//! written where they live, so no tracker-sized temporary is on the stack). `memory.x` at the
+//! written where they live, so no tracker-sized temporary is on the stack). `memory-m4.x` at the
 //! workspace root budgets an STM32F4-class part (1 MiB flash, 128 KiB SRAM); the firmware's
 //! own budget is flash ≤ 256 KiB plus the hue table, and statics + stack ≤ 128 KiB with a
 //! stack ≤ 6 KiB. The stack is painted by cortex-m-rt before `main` and its high-water mark
@@ -96,10 +96,38 @@ pub mod sys;
 #[allow(unsafe_code)]
 pub mod cmsdk_timer;
 
+/// A board the firmware is built for: its QEMU machine and its frame size.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BoardProfile {
+    /// Short name ("m4", "m7").
+    pub name: &'static str,
+    /// QEMU `-cpu`.
+    pub qemu_cpu: &'static str,
+    /// QEMU `-machine`.
+    pub qemu_machine: &'static str,
+    /// Frame width (pixels).
+    pub frame_width: u16,
+    /// Frame height (pixels).
+    pub frame_height: u16,
+}
+
+impl BoardProfile {
+    /// The Cortex-M4F camera controller (STM32F4-class, 128 KiB RAM, `memory-m4.x`), 160×120.
+    pub const M4: Self =
+        Self { name: "m4", qemu_cpu: "cortex-m4", qemu_machine: "mps2-an386", frame_width: 160, frame_height: 120 };
+    /// The Cortex-M7 camera controller (STM32H7-class, 512 KiB RAM, `memory-m7.x`; feature
+    /// `m7`), 320×240.
+    pub const M7: Self =
+        Self { name: "m7", qemu_cpu: "cortex-m7", qemu_machine: "mps2-an500", frame_width: 320, frame_height: 240 };
+}
+
+/// The profile this crate is built for (feature `m7` selects [`BoardProfile::M7`]).
+pub const PROFILE: BoardProfile = if cfg!(feature = "m7") { BoardProfile::M7 } else { BoardProfile::M4 };
+
 /// Width of the on-board frames (pixels).
-pub const FRAME_WIDTH: u16 = 160;
+pub const FRAME_WIDTH: u16 = PROFILE.frame_width;
 /// Height of the on-board frames (pixels).
-pub const FRAME_HEIGHT: u16 = 120;
+pub const FRAME_HEIGHT: u16 = PROFILE.frame_height;
 /// Bytes of one on-board RGB565 image (`FRAME_WIDTH · FRAME_HEIGHT ·`
 /// [`protocol::BYTES_PER_PIXEL`]).
 pub const IMAGE_BYTES: usize = FRAME_WIDTH as usize * FRAME_HEIGHT as usize * protocol::BYTES_PER_PIXEL;

@@ -1,7 +1,7 @@
 //! Host tracker vs. firmware on QEMU: the same frames and setup give bit-identical estimates.
 //!
-//! 120 RGB565 frames (160×120, 30 frames/s, 2 bytes per pixel as the cameras deliver them) of
-//! the paper's block, rendered with `evorec_core::synth::render_block`, expanded to RGB565 and
+//! 120 RGB565 frames (160×120 on the M4 profile, 320×240 on the M7; 30 frames/s, 2 bytes per
+//! pixel as the cameras deliver them) of the paper's block, rendered with `evorec_core::synth::render_block`, expanded to RGB565 and
 //! given sensor noise (the lowest bit of every colour field flipped at random, and one pixel
 //! in 16 replaced by a random RGB565 value, so the board's RGB565→hue table is read all over):
 //! the block moves in the world while the PA-10 carries
@@ -28,14 +28,12 @@ use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::tracker::{Estimate, Feedforward, JointSample, Tracker, TrackerConfig};
 use evorec_core::{quat, synth};
-use evorec_firmware::IMAGE_BYTES;
-use evorec_firmware::host::{HilSession, Reply, default_firmware_path};
+use evorec_firmware::BoardProfile;
+use evorec_firmware::host::{HilOptions, HilSession, Reply, default_firmware_path};
 use evorec_firmware::protocol::{Frame, Setup};
 use evorec_tests::{Failure, fail};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
-const WIDTH: u16 = 160;
-const HEIGHT: u16 = 120;
 const FRAMES: u32 = 120;
 const PERIOD_US: u64 = 33_333;
 /// This frame is never captured (the next one comes two periods later).
@@ -85,14 +83,18 @@ fn sensor_noise(img: &mut [u8], state: &mut u32) {
     for px in img.chunks_exact_mut(2) {
         let r = next(state);
         let v = u16::from_le_bytes([px[0], px[1]]);
-        let v = if r % 16 == 0 { (r >> 16) as u16 } else { v ^ (r as u16 & 0x0821) };
+        let v = if r.is_multiple_of(16) { (r >> 16) as u16 } else { v ^ (r as u16 & 0x0821) };
         px.copy_from_slice(&v.to_le_bytes());
     }
 }
 
 /// The tracker configuration, the setup sent to the firmware and the recorded frames.
-fn scenario() -> Result<(TrackerConfig<7>, Setup, Vec<Recorded>), Failure> {
-    let cam = Pinhole::new_checked(200.0, 200.0, 80.0, 60.0, WIDTH, HEIGHT)?;
+/// At `width × height` (160×120 on the M4 profile, 320×240 on the M7), the focal length
+/// scaled with the width so that the view is the same.
+fn scenario(width: u16, height: u16) -> Result<(TrackerConfig<7>, Setup, Vec<Recorded>), Failure> {
+    let f = 200.0 * f32::from(width) / 160.0;
+    let (cx, cy) = (f32::from(width) / 2.0, f32::from(height) / 2.0);
+    let cam = Pinhole::new_checked(f, f, cx, cy, width, height)?;
     let rig = StereoRig::parallel(cam, 0.1)?;
     let space = SearchSpace::new_checked([-0.25, -0.25, 0.3], [0.25, 0.25, 1.1])?;
     let ft_rot = quat::from_angle_axis(0.08, &Vector3::new(1.0, 0.2, 0.0))?;
@@ -106,7 +108,7 @@ fn scenario() -> Result<(TrackerConfig<7>, Setup, Vec<Recorded>), Failure> {
     let world_from_cam = |q: &[f32; 7]| PA10.forward(q) * flange_to_camera;
     let world_from_block0 = world_from_cam(&joints_at(0.0).q) * block_in_cam0;
 
-    let n = usize::from(WIDTH) * usize::from(HEIGHT);
+    let n = usize::from(width) * usize::from(height);
     let mut noise = 0x2545_F491u32;
     let mut frames = Vec::new();
     for k in 0..FRAMES {
@@ -121,7 +123,7 @@ fn scenario() -> Result<(TrackerConfig<7>, Setup, Vec<Recorded>), Failure> {
             UnitQuaternion::from_scaled_axis(Vector3::new(0.0, 0.0, 0.15 * t)),
         );
         let block_in_cam = world_from_cam(&joints.q).inverse() * world_from_block0 * drift;
-        let (w, h) = if k == WRONG_SIZE { (80, 60) } else { (WIDTH, HEIGHT) };
+        let (w, h) = if k == WRONG_SIZE { (80, 60) } else { (width, height) };
         let (mut left, mut right) = (vec![NO_HUE; 2 * n], vec![NO_HUE; 2 * n]);
         if k != WRONG_SIZE {
             synth::render_block(&Block::PAPER, &rig.right, &block_in_cam, &mut right)?;
@@ -185,7 +187,40 @@ fn firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
         println!("hil_equivalence skipped: EVOREC_SKIP_HIL=1");
         return Ok(());
     }
-    let (config, setup, frames) = scenario()?;
+    equivalence(&default_firmware_path(), BoardProfile::M4)
+}
+
+/// The Cortex-M7 profile (QEMU `mps2-an500`, 320×240): needs its image, built with
+/// `cd hil-stubs && CARGO_TARGET_DIR=../target/m7 cargo build --release --features m7`
+/// (or `EVOREC_M7_FIRMWARE_ELF`); skipped with that message while it is missing, because the
+/// workspace's scripts do not build it yet.
+#[test]
+fn m7_firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
+    if std::env::var_os("EVOREC_SKIP_HIL").is_some_and(|v| v == "1") {
+        println!("hil_equivalence (M7) skipped: EVOREC_SKIP_HIL=1");
+        return Ok(());
+    }
+    let elf = match std::env::var_os("EVOREC_M7_FIRMWARE_ELF") {
+        Some(p) => std::path::PathBuf::from(p),
+        None => {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/m7/thumbv7em-none-eabihf/release/evorec-firmware")
+        }
+    };
+    if !elf.is_file() {
+        println!(
+            "hil_equivalence (M7) skipped: {} missing; build it with \
+             `cd hil-stubs && CARGO_TARGET_DIR=../target/m7 cargo build --release --features m7`",
+            elf.display()
+        );
+        return Ok(());
+    }
+    equivalence(&elf, BoardProfile::M7)
+}
+
+/// Host loop against the firmware `elf` of `profile` on the recorded frames at the profile's
+/// frame size.
+fn equivalence(elf: &Path, profile: BoardProfile) -> Result<(), Failure> {
+    let (config, setup, frames) = scenario(profile.frame_width, profile.frame_height)?;
     if setup.tracker_config()? != config {
         return Err(fail("Setup does not reproduce the tracker configuration"));
     }
@@ -193,7 +228,8 @@ fn firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
     // Host reference: the core's loop over the recorded frames.
     let t_host = Instant::now();
     let mut host: Tracker = setup.build_tracker()?;
-    let (mut lb, mut rb) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
+    let image_bytes = 2 * usize::from(profile.frame_width) * usize::from(profile.frame_height);
+    let (mut lb, mut rb) = (vec![0u8; image_bytes], vec![0u8; image_bytes]);
     let mut replay = ReplayBoard { frames: frames.iter(), current: None, published: Vec::new() };
     let stats = board::run(&mut replay, &mut host, setup.feedforward, &mut lb, &mut rb, u32::MAX)
         .map_err(|e| fail(format!("host loop: {e:?}")))?;
@@ -203,10 +239,10 @@ fn firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
     }
 
     // The firmware under QEMU.
-    let elf = default_firmware_path();
-    let workdir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hil_equivalence");
+    let workdir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("hil_equivalence_{}", profile.name));
     let t_hil = Instant::now();
-    let mut hil = HilSession::start(&elf, &workdir, &setup)?;
+    let options = HilOptions { profile, ..HilOptions::default() };
+    let mut hil = HilSession::start_with(elf, &workdir, &setup, &options)?;
     let mut fw: Vec<(u32, Estimate)> = Vec::new();
     let mut fw_rejected = Vec::new();
     for f in &frames {
@@ -221,7 +257,10 @@ fn firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
     let hil_time = t_hil.elapsed();
 
     println!(
-        "hil_equivalence: {} frames; host loop {:.3} s, firmware on QEMU {:.3} s ({:.1} ms/frame incl. link)",
+        "hil_equivalence ({}, {}x{}): {} frames; host loop {:.3} s, firmware on QEMU {:.3} s ({:.1} ms/frame incl. link)",
+        profile.name,
+        profile.frame_width,
+        profile.frame_height,
         frames.len(),
         host_time.as_secs_f64(),
         hil_time.as_secs_f64(),

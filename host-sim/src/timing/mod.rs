@@ -72,7 +72,7 @@ pub const GENERATION_BUDGET: f64 = 1.0e6;
 pub const POINT_TARGET: f64 = 25.0;
 /// Target for max/min instructions over the frames.
 pub const RATIO_TARGET: f64 = 1.05;
-/// RAM of the budgeted part (memory.x).
+/// RAM of the budgeted part (memory-m4.x).
 pub const RAM_BYTES: u64 = 128 * 1024;
 /// Clock of the cycle estimate.
 pub const ESTIMATE_CLOCK_HZ: f64 = 168.0e6;
@@ -80,7 +80,7 @@ pub const ESTIMATE_CLOCK_HZ: f64 = 168.0e6;
 pub const QEMU_TIMEOUT: Duration = Duration::from_secs(600);
 /// The target triple of the firmware.
 const TARGET: &str = "thumbv7em-none-eabihf";
-/// Start of RAM on mps2-an386 / STM32F4 (`memory.x`).
+/// Start of RAM on mps2-an386 / STM32F4 (`memory-m4.x`).
 const RAM_ORIGIN: u64 = 0x2000_0000;
 
 /// Everything one `evorec timing` run measured and derived; the report writers' input.

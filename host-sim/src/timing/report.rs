@@ -345,7 +345,7 @@ pub(super) fn markdown(r: &Results) -> String {
     );
     if let Some((u, _)) = demo_stack {
         let total = fw.static_ram_bytes + u64::from(u);
-        let _ = writeln!(s, "| firmware static RAM + painted stack | {total} | of {RAM_BYTES} (memory.x) |");
+        let _ = writeln!(s, "| firmware static RAM + painted stack | {total} | of {RAM_BYTES} (memory-m4.x) |");
     }
     let _ = writeln!(
         s,

@@ -11,9 +11,10 @@
 //! same loop under QEMU, fed through `evorec_firmware::host::HilSession`. Every estimate must
 //! match in the bits of ψ and F and in the generation number.
 //!
-//! The firmware is not built here: build it first (`cd hil-stubs && cargo build --release`),
-//! or point `EVOREC_FIRMWARE_ELF` at it. A missing ELF or QEMU fails the test with the
-//! command that fixes it; `EVOREC_SKIP_HIL=1` skips the test instead.
+//! The test builds the firmware of the checked-out source first (`cd hil-stubs && cargo build
+//! --release`, a no-op when up to date), unless `EVOREC_FIRMWARE_ELF` names an image. A failed
+//! build or a missing QEMU fails the test with the message that fixes it; `EVOREC_SKIP_HIL=1`
+//! skips the test instead.
 
 use std::path::Path;
 use std::time::Instant;
@@ -29,7 +30,7 @@ use evorec_core::pose::Psi;
 use evorec_core::tracker::{Estimate, Feedforward, JointSample, Tracker, TrackerConfig};
 use evorec_core::{quat, synth};
 use evorec_firmware::BoardProfile;
-use evorec_firmware::host::{HilOptions, HilSession, Reply, default_firmware_path};
+use evorec_firmware::host::{HilOptions, HilSession, Reply, build_firmware};
 use evorec_firmware::protocol::{Frame, Setup};
 use evorec_tests::{Failure, fail};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -187,13 +188,12 @@ fn firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
         println!("hil_equivalence skipped: EVOREC_SKIP_HIL=1");
         return Ok(());
     }
-    equivalence(&default_firmware_path(), BoardProfile::M4)
+    equivalence(&build_firmware(BoardProfile::M4)?, BoardProfile::M4)
 }
 
-/// The Cortex-M7 profile (QEMU `mps2-an500`, 320×240): needs its image, built with
+/// The Cortex-M7 profile (QEMU `mps2-an500`, 320×240): its image is built here with
 /// `cd hil-stubs && CARGO_TARGET_DIR=../target/m7 cargo build --release --features m7`
-/// (or `EVOREC_M7_FIRMWARE_ELF`); skipped with that message while it is missing, because the
-/// workspace's scripts do not build it yet.
+/// (a no-op when up to date), or taken from `EVOREC_M7_FIRMWARE_ELF`.
 #[test]
 fn m7_firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
     if std::env::var_os("EVOREC_SKIP_HIL").is_some_and(|v| v == "1") {
@@ -202,18 +202,8 @@ fn m7_firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> 
     }
     let elf = match std::env::var_os("EVOREC_M7_FIRMWARE_ELF") {
         Some(p) => std::path::PathBuf::from(p),
-        None => {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/m7/thumbv7em-none-eabihf/release/evorec-firmware")
-        }
+        None => build_firmware(BoardProfile::M7)?,
     };
-    if !elf.is_file() {
-        println!(
-            "hil_equivalence (M7) skipped: {} missing; build it with \
-             `cd hil-stubs && CARGO_TARGET_DIR=../target/m7 cargo build --release --features m7`",
-            elf.display()
-        );
-        return Ok(());
-    }
     equivalence(&elf, BoardProfile::M7)
 }
 

@@ -3,12 +3,13 @@
 //! Both get the simulated board's RGB565 frames (the cameras' own format); each computes the
 //! hue of the pixels it samples.
 //!
-//! Needs the firmware built (`cd hil-stubs && cargo build --release`) and qemu-system-arm;
-//! `EVOREC_SKIP_HIL=1` skips the test.
+//! Builds the firmware first (`cd hil-stubs && cargo build --release`, a no-op when up to
+//! date) and needs qemu-system-arm.
 
 use evorec_core::board::CameraController;
 use evorec_core::image::{PixelFormat, Rgb565};
-use evorec_firmware::host::default_firmware_path;
+use evorec_firmware::BoardProfile;
+use evorec_firmware::host::build_firmware;
 use evorec_sim::{experiment, hil, scenario::Scenario};
 
 #[test]
@@ -24,7 +25,7 @@ fn hil_trace_equals_host_trace() {
     let text = std::fs::read_to_string(path).expect("scenario");
     let mut s = Scenario::from_toml_str(&text).expect("valid scenario");
     s.duration_s = 6.0;
-    let firmware = default_firmware_path();
+    let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));
     let work = std::env::temp_dir().join(format!("evorec-hil-matches-run-{}", std::process::id()));
     let on_board = hil::run(&s, &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
     let on_host = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));

@@ -12,9 +12,10 @@
 //! [`RATIO_TARGET`] (bounded, data-independent work; adversarial one-hue and noise frames may
 //! only cost less, see the test).
 //!
-//! The firmware is not built here: build it first (`cd hil-stubs && cargo build --release`),
-//! or point `EVOREC_TIMING_ELF` at it. A missing ELF or QEMU fails the test with the command
-//! that fixes it; `EVOREC_SKIP_HIL=1` skips the test instead.
+//! The test builds the firmware images of the checked-out source first (`cd hil-stubs && cargo
+//! build --release`, a no-op when up to date); `EVOREC_TIMING_ELF` names another image. A
+//! failed build or a missing QEMU fails the test with the message that fixes it;
+//! `EVOREC_SKIP_HIL=1` skips the test instead.
 
 use std::path::Path;
 
@@ -29,6 +30,8 @@ fn default_generation_stays_within_the_instruction_budget() -> Result<(), Failur
         println!("timing_budget skipped: EVOREC_SKIP_HIL=1");
         return Ok(());
     }
+    // Builds the firmware images of the checked-out source (a no-op when up to date).
+    evorec_firmware::host::build_firmware(evorec_firmware::BoardProfile::M4)?;
     let elf = timing::find_image(timing::TIMING_IMAGE)?;
     let qemu = timing::find_qemu()?;
     let workdir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("timing_budget");

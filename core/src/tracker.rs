@@ -9,7 +9,7 @@ use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
 use crate::camera::{Pinhole, StereoRig};
-use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, DEFAULT_POPULATION, HUE_UNITS, PA10_DOF};
+use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, HUE_UNITS, PA10_DOF, POPULATION_CAPACITY};
 use crate::feedforward;
 use crate::fitness::{Evaluator, Fitness};
 use crate::ga::{Best, Ga, GaError, GaParams, SearchSpace};
@@ -239,9 +239,10 @@ impl<const DOF: usize> TrackerConfig<DOF> {
     }
 }
 
-/// The pose tracker: `DOF` arm joints, population `P`, `G × G` samples per face.
+/// The pose tracker: `DOF` arm joints, population capacity `P` (the population in use is
+/// [`GaParams::population`] of the configuration, up to `P`), `G × G` samples per face.
 #[derive(Debug, Clone)]
-pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = DEFAULT_POPULATION, const G: usize = DEFAULT_GRID> {
+pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = POPULATION_CAPACITY, const G: usize = DEFAULT_GRID> {
     config: TrackerConfig<DOF>,
     model: SurfaceStrips<G>,
     lut: HueLut,
@@ -260,6 +261,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let (model, lut) = Self::checked_parts(&config)?;
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
         let mut ga = Ga::new(Psi::IDENTITY);
+        ga.set_len(config.ga.population)?;
         ga.reset_uniform(&config.search, &mut rng);
         Ok(Self { config, model, lut, ga, rng, generation: 0, target: TargetFilter::with_defaults() })
     }
@@ -287,6 +289,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             }
             None => Self::fresh_in(slot, config, model, lut, rng),
         };
+        // Checked by `checked_parts` (2 ≤ population ≤ P), so this cannot fail.
+        t.ga.set_len(t.config.ga.population)?;
         t.ga.reset_uniform(&t.config.search, &mut t.rng);
         Ok(t)
     }
@@ -342,8 +346,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         &self.model
     }
 
-    /// The population (index 0 holds the elite after a step).
-    pub fn population(&self) -> &[Psi; P] {
+    /// The population in use (index 0 holds the elite after a step).
+    pub fn population(&self) -> &[Psi] {
         self.ga.individuals()
     }
 

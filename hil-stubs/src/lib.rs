@@ -21,7 +21,8 @@
 //! ## On-board frame size and memory
 //! Frames are 2 × 160×120 hue bytes ([`FRAME_WIDTH`] × [`FRAME_HEIGHT`], 37.5 KiB), received
 //! straight into two static buffers (no second copy). The tracker (the core's defaults: 7 DOF,
-//! [`DEFAULT_POPULATION`](evorec_core::config::DEFAULT_POPULATION) individuals,
+//! storage for [`POPULATION_CAPACITY`](evorec_core::config::POPULATION_CAPACITY) individuals of
+//! which `CONFIG` chooses how many are used, [`DEFAULT_POPULATION`](evorec_core::config::DEFAULT_POPULATION) by default,
 //! [`DEFAULT_GRID`](evorec_core::config::DEFAULT_GRID) samples per row) lives in a static too. `memory.x` at the workspace root budgets an STM32F4-class
 //! part (1 MiB flash, 128 KiB SRAM); the firmware's own budget is flash ≤ 256 KiB and
 //! statics + stack ≤ 128 KiB. The stack is painted by cortex-m-rt before `main` and its

@@ -2,10 +2,12 @@
 //! counts the instructions of every phase of one GA generation with TIMER0 (see
 //! `evorec_firmware::timing`) and prints one `GEN` line per generation through semihosting.
 //!
-//! Runs, in order: the default configuration (population 40, 5 points per row) on
-//! `timing::FULL_FRAMES` frames of every kind, then the sweep (populations 20/40/60 × rows of
-//! 4/8/12 points, `Tracker<7, P, G>` monomorphised for each) on `timing::SWEEP_FRAMES` frames
-//! each. Every frame is made on the board before its generation, so the measured window
+//! Runs, in order: the firmware's configuration (its tracker type, population capacity
+//! `POPULATION_CAPACITY` = 64, 5 points per row, with the default population 40 chosen at run
+//! time) on `timing::FULL_FRAMES` frames of every kind, then the sweep (populations 20/40/60 ×
+//! rows of 4/8/12 points, `Tracker<7, P, G>` monomorphised for each and run at its capacity)
+//! on `timing::SWEEP_FRAMES` frames each. `RUN` lines give the population in use (`p=`) and
+//! the capacity (`cap=`). Every frame is made on the board before its generation, so the measured window
 //! holds only `Tracker::step_probed` (feedforward on). Before each generation the free stack
 //! is painted again, and its high-water mark after the generation is printed too.
 //!
@@ -79,6 +81,7 @@ mod firmware {
     }
 
     configs!(
+        P64G5 / P64_G5: 64 x 5,
         P20G4 / P20_G4: 20 x 4, P20G8 / P20_G8: 20 x 8, P20G12 / P20_G12: 20 x 12,
         P40G4 / P40_G4: 40 x 4, P40G5 / P40_G5: 40 x 5, P40G8 / P40_G8: 40 x 8, P40G12 / P40_G12: 40 x 12,
         P60G4 / P60_G4: 60 x 4, P60G8 / P60_G8: 60 x 8, P60G12 / P60_G12: 60 x 12,
@@ -106,6 +109,7 @@ mod firmware {
     /// any failure (printed).
     fn run_config<C: Timed<P, G>, const P: usize, const G: usize>(
         name: &str,
+        population: usize,
         slot: &mut Option<Tracker<7, P, G>>,
         frames: u32,
         timer: &Timer0,
@@ -115,16 +119,19 @@ mod firmware {
         let Ok(config) = selftest::tracker_config() else { return false };
         let Ok(mut cases) = CaseGen::new(config.rig, config.flange_to_camera, FRAME_SEED) else { return false };
         let start = cases.truth(0, false);
-        let Ok(setup) = Setup::from_tracker_config(&config, Feedforward::On, &start, &selftest::SPREAD) else {
+        let Ok(mut setup) = Setup::from_tracker_config(&config, Feedforward::On, &start, &selftest::SPREAD) else {
             return false;
         };
+        // The population is chosen at run time up to the capacity `P`.
+        setup.ga.population = population;
         let Ok(tracker) = setup.build_tracker_in(slot) else {
             hprintln!("ERROR tracker {}x{} refused", P, G);
             return false;
         };
         hprintln!(
-            "RUN name={} p={} g={} frames={} points_per_camera={} width={} height={}",
+            "RUN name={} p={} cap={} g={} frames={} points_per_camera={} width={} height={}",
             name,
+            population,
             P,
             G,
             frames,
@@ -153,7 +160,8 @@ mod firmware {
                 hprintln!("ERROR generation {} refused", k);
                 return false;
             };
-            let line = GenLine { population: P as u32, grid: G as u32, frame: k, kind, call, phases, stack, fitness };
+            let line =
+                GenLine { population: population as u32, grid: G as u32, frame: k, kind, call, phases, stack, fitness };
             hprintln!("{}", line);
         }
         true
@@ -168,22 +176,22 @@ mod firmware {
         let (a, b) = (timer.read(), timer.read());
         hprintln!("CALIBRATION read_pair={}", a.wrapping_sub(b));
 
-        // The "full" run is the core's default configuration; fail to build if it moves.
-        const {
-            assert!(evorec_core::config::DEFAULT_POPULATION == 40 && evorec_core::config::DEFAULT_GRID == 5);
-        };
-        let default = P40_G5.take();
-        let ok = run_config::<P40G5, 40, 5>("full", default, FULL_FRAMES, &timer, left, right)
-            && run_config::<P20G4, 20, 4>("sweep", P20_G4.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P20G8, 20, 8>("sweep", P20_G8.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P20G12, 20, 12>("sweep", P20_G12.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G4, 40, 4>("sweep", P40_G4.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G5, 40, 5>("sweep", default, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G8, 40, 8>("sweep", P40_G8.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G12, 40, 12>("sweep", P40_G12.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P60G4, 60, 4>("sweep", P60_G4.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P60G8, 60, 8>("sweep", P60_G8.take(), SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P60G12, 60, 12>("sweep", P60_G12.take(), SWEEP_FRAMES, &timer, left, right);
+        // The "full" run is the firmware's tracker (`FirmwareTracker`) at the core's default
+        // population; fail to build if they move.
+        use evorec_core::config::{DEFAULT_GRID, DEFAULT_POPULATION, POPULATION_CAPACITY};
+        const { assert!(POPULATION_CAPACITY == 64 && DEFAULT_GRID == 5) };
+        let full = P64_G5.take();
+        let ok = run_config::<P64G5, 64, 5>("full", DEFAULT_POPULATION, full, FULL_FRAMES, &timer, left, right)
+            && run_config::<P20G4, 20, 4>("sweep", 20, P20_G4.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P20G8, 20, 8>("sweep", 20, P20_G8.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P20G12, 20, 12>("sweep", 20, P20_G12.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G4, 40, 4>("sweep", 40, P40_G4.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G5, 40, 5>("sweep", 40, P40_G5.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G8, 40, 8>("sweep", 40, P40_G8.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G12, 40, 12>("sweep", 40, P40_G12.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P60G4, 60, 4>("sweep", 60, P60_G4.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P60G8, 60, 8>("sweep", 60, P60_G8.take(), SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P60G12, 60, 12>("sweep", 60, P60_G12.take(), SWEEP_FRAMES, &timer, left, right);
         hprintln!("END {}", if ok { "ok" } else { "failed" });
         rt::exit(ok)
     }

@@ -63,14 +63,14 @@ pub const DOF: usize = PA10_DOF;
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
 /// Protocol version carried in every header.
-pub const VERSION: u8 = 1;
+pub const VERSION: u8 = 2;
 /// Header size in bytes.
 pub const HEADER_LEN: usize = 24;
 /// CRC trailer size in bytes.
 pub const CRC_LEN: usize = 4;
-/// Size of the GA parameters inside `CONFIG`: three probabilities, immigrants, tournament
-/// size, the mutation-level CDF and the mutation scales.
-const GA_LEN: usize = 3 * 4 + 4 + 4 + 4 * (MUTATION_LEVELS - 1) + 4 * 6 * MUTATION_LEVELS;
+/// Size of the GA parameters inside `CONFIG`: population (u32), three probabilities,
+/// immigrants, tournament size, the mutation-level CDF and the mutation scales.
+const GA_LEN: usize = 4 + 3 * 4 + 4 + 4 + 4 * (MUTATION_LEVELS - 1) + 4 * 6 * MUTATION_LEVELS;
 /// `CONFIG` payload size: intrinsics and image size, baseline, block, flange-to-camera,
 /// search box, seed, hue tolerance, feedforward flag (+2 reserved), `max_dt_s`, GA
 /// parameters, initial pose and spread.

@@ -119,7 +119,7 @@ pub(super) fn analyse_mix(objdump: &Path, elf: &Path) -> Result<MixAnalysis> {
     let image = FlashImage::new(fs::read(elf).with_context(|| format!("reading {}", elf.display()))?)?;
     let g = Graph { funcs: &funcs, calls: call_graph(&funcs), frame: Vec::new() };
     let root =
-        g.find(is_default_generation).ok_or_else(|| anyhow!("no P40G5 generation function in {}", elf.display()))?;
+        g.find(is_default_generation).ok_or_else(|| anyhow!("no P64G5 generation function in {}", elf.display()))?;
     let reach = g.reachable(root);
     let kernel = reach
         .iter()

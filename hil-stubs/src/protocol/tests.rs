@@ -162,8 +162,8 @@ fn bad_magic_version_type_and_length_are_rejected() {
     b[0] = b'X';
     assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadMagic(*b"XVRC")));
     let mut b = good.clone();
-    b[4] = 2;
-    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadVersion(2)));
+    b[4] = VERSION + 1;
+    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadVersion(VERSION + 1)));
     let mut b = good.clone();
     b[5] = 99;
     assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::UnknownType(99)));

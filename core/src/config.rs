@@ -6,8 +6,16 @@
 /// Joint count of the PA-10 arm the default tracker is built for.
 pub const PA10_DOF: usize = 7;
 
-/// Default GA population size (individuals evaluated per generation).
+/// Default GA population size (individuals evaluated per generation), chosen at run time
+/// through [`crate::ga::GaParams::population`] up to the capacity.
 pub const DEFAULT_POPULATION: usize = 40;
+
+/// Population capacity of the default [`crate::Tracker`] (its storage; the firmware's): any
+/// population from 2 up to this is accepted at run time, and the worst-case work of a
+/// generation is that of this many individuals. Equal to [`DEFAULT_POPULATION`], so the
+/// firmware's measured worst case is the default configuration's (the host simulator compiles
+/// a larger capacity).
+pub const POPULATION_CAPACITY: usize = 40;
 
 /// Default number of sample points on each row of the surface-strips model.
 pub const DEFAULT_GRID: usize = 5;

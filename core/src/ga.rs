@@ -18,6 +18,7 @@
 
 use rand_core::Rng;
 
+use crate::config::DEFAULT_POPULATION;
 use crate::math;
 use crate::pose::Psi;
 
@@ -33,6 +34,13 @@ pub enum GaError {
     BadParameter,
     /// Too many immigrants for the population (at least the elite and one child must remain).
     TooManyImmigrants,
+    /// The population size is below 2 or above the capacity the GA was compiled with.
+    PopulationSize {
+        /// The size asked for.
+        got: usize,
+        /// The compiled capacity (the largest size accepted).
+        capacity: usize,
+    },
 }
 
 impl core::fmt::Display for GaError {
@@ -42,6 +50,9 @@ impl core::fmt::Display for GaError {
             Self::EmptySearchSpace => f.write_str("search space is empty"),
             Self::BadParameter => f.write_str("GA probability or scale out of range"),
             Self::TooManyImmigrants => f.write_str("too many immigrants for the population"),
+            Self::PopulationSize { got, capacity } => {
+                write!(f, "population {got} is out of range (2..={capacity}, the compiled capacity)")
+            }
         }
     }
 }
@@ -110,6 +121,9 @@ pub const MUTATION_LEVELS: usize = 3;
 /// GA settings; [`GaParams::DEFAULT`] states the defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GaParams {
+    /// Individuals evaluated and bred per generation, chosen at run time: at least 2 and at
+    /// most the capacity `P` of the [`Ga`] (storage is sized for `P`, the work follows this).
+    pub population: usize,
     /// Probability that a child is a blend of its two parents (else a copy of the first).
     pub crossover_prob: f32,
     /// Probability that a child is mutated.
@@ -131,11 +145,13 @@ pub struct GaParams {
 }
 
 impl GaParams {
-    /// Defaults for a target about 0.5–1 m away at 30 frames/s: tournaments of 3, crossover
+    /// Defaults for a target about 0.5–1 m away at 30 frames/s: population
+    /// [`DEFAULT_POPULATION`], tournaments of 3, crossover
     /// 0.2, mutation 0.9 with each gene perturbed with probability 0.35, one immigrant,
     /// mutation scales 20 mm / 0.04, 4 mm / 0.008, 1 mm / 0.002 picked with probabilities
     /// 0.25, 0.35, 0.4.
     pub const DEFAULT: GaParams = GaParams {
+        population: DEFAULT_POPULATION,
         crossover_prob: 0.2,
         mutation_prob: 0.9,
         gene_mutation_prob: 0.35,
@@ -148,6 +164,13 @@ impl GaParams {
             [0.001, 0.001, 0.001, 0.002, 0.002, 0.002],
         ],
     };
+
+    /// Builder: population size (checked against the capacity by [`GaParams::validate`]).
+    #[must_use]
+    pub fn with_population(mut self, n: usize) -> Self {
+        self.population = n;
+        self
+    }
 
     /// Builder: crossover probability.
     #[must_use]
@@ -184,11 +207,16 @@ impl GaParams {
         self
     }
 
-    /// Checks the parameters for a population of `population` individuals.
+    /// Checks the parameters for a GA of capacity `capacity` (its `P`).
     ///
     /// # Errors
-    /// [`GaError::NonFinite`], [`GaError::BadParameter`] or [`GaError::TooManyImmigrants`].
-    pub fn validate(&self, population: usize) -> Result<(), GaError> {
+    /// [`GaError::PopulationSize`] unless `2 ≤ population ≤ capacity`; [`GaError::NonFinite`],
+    /// [`GaError::BadParameter`] or [`GaError::TooManyImmigrants`].
+    pub fn validate(&self, capacity: usize) -> Result<(), GaError> {
+        let population = self.population;
+        if population < 2 || population > capacity {
+            return Err(GaError::PopulationSize { got: population, capacity });
+        }
         let scales = self.mutation_scale.iter().flatten();
         let probs = [self.crossover_prob, self.mutation_prob, self.gene_mutation_prob];
         if !probs.iter().all(|p| p.is_finite()) || !scales.clone().all(|s| s.is_finite()) {
@@ -241,11 +269,16 @@ fn mutate(c: &mut Psi, scale: &[f32; 6], noise: &[f32; 6]) {
     }
 }
 
-/// Population of `P` poses and their last fitness values.
+/// A population of up to `P` poses and their last fitness values.
+///
+/// `P` is the capacity (the storage, fixed at compile time); the number of individuals in
+/// use, [`Ga::len`], is chosen at run time up to it (the `heapless` way). Every loop runs over
+/// the individuals in use only, so the work of a generation is bounded by that of `P`.
 #[derive(Debug, Clone)]
 pub struct Ga<const P: usize> {
     pop: [Psi; P],
     fitness: [f32; P],
+    len: usize,
 }
 
 /// The outcome of one generation.
@@ -258,26 +291,62 @@ pub struct Best {
 }
 
 impl<const P: usize> Ga<P> {
-    /// A population with every individual at `psi`.
+    /// A full population (`P` individuals) with every individual at `psi`.
     pub fn new(psi: Psi) -> Self {
         const { assert!(P >= 2, "a population needs at least two members") };
-        Self { pop: [psi; P], fitness: [0.0; P] }
+        Self { pop: [psi; P], fitness: [0.0; P], len: P }
     }
 
-    /// The individuals (index 0 is the elite after a generation).
-    pub fn individuals(&self) -> &[Psi; P] {
-        &self.pop
+    /// The capacity `P`.
+    pub const CAPACITY: usize = P;
+
+    /// Individuals in use.
+    pub fn len(&self) -> usize {
+        self.len
     }
 
-    /// Fitness of each individual at the last evaluation.
-    pub fn fitness(&self) -> &[f32; P] {
-        &self.fitness
+    /// Never true: a population has at least two members.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Uses `n` individuals from now on. New members (when growing) are copies of the first
+    /// one; re-seed with [`Ga::reset_around`] or [`Ga::reset_uniform`] afterwards.
+    ///
+    /// # Errors
+    /// [`GaError::PopulationSize`] unless `2 ≤ n ≤ P` (the population is then unchanged).
+    pub fn set_len(&mut self, n: usize) -> Result<(), GaError> {
+        if !(2..=P).contains(&n) {
+            return Err(GaError::PopulationSize { got: n, capacity: P });
+        }
+        let first = self.pop.first().copied().unwrap_or(Psi::IDENTITY);
+        for ind in self.pop.iter_mut().skip(self.len).take(n.saturating_sub(self.len)) {
+            *ind = first;
+        }
+        self.len = n;
+        Ok(())
+    }
+
+    /// The individuals in use (index 0 is the elite after a generation).
+    pub fn individuals(&self) -> &[Psi] {
+        self.pop.get(..self.len).unwrap_or(&self.pop)
+    }
+
+    /// Fitness of each individual in use at the last evaluation.
+    pub fn fitness(&self) -> &[f32] {
+        self.fitness.get(..self.len).unwrap_or(&self.fitness)
+    }
+
+    /// The individuals in use, mutable.
+    fn active_mut(&mut self) -> impl Iterator<Item = &mut Psi> {
+        let len = self.len;
+        self.pop.iter_mut().take(len)
     }
 
     /// Re-seeds the population around `center`: index 0 exactly at it, the others uniformly
     /// within `±spread` per gene, clamped into `space`.
     pub fn reset_around<R: Rng + ?Sized>(&mut self, center: &Psi, spread: &[f32; 6], space: &SearchSpace, rng: &mut R) {
-        for (i, ind) in self.pop.iter_mut().enumerate() {
+        for (i, ind) in self.active_mut().enumerate() {
             let mut p = *center;
             for (x, s) in p.0.iter_mut().zip(spread.iter()) {
                 let u = 2.0 * unit_f32(rng) - 1.0;
@@ -293,7 +362,7 @@ impl<const P: usize> Ga<P> {
 
     /// Re-seeds the whole population uniformly over `space`.
     pub fn reset_uniform<R: Rng + ?Sized>(&mut self, space: &SearchSpace, rng: &mut R) {
-        for ind in self.pop.iter_mut() {
+        for ind in self.active_mut() {
             *ind = space.sample(rng);
         }
         self.fitness = [0.0; P];
@@ -313,7 +382,7 @@ impl<const P: usize> Ga<P> {
     /// Applies `f` to every individual, then clamps it into `space` (used for the
     /// feedforward shift, eq. 36).
     pub fn shift_all(&mut self, space: &SearchSpace, mut f: impl FnMut(&mut Psi)) {
-        for ind in self.pop.iter_mut() {
+        for ind in self.active_mut() {
             f(ind);
             space.clamp(ind);
         }
@@ -321,14 +390,14 @@ impl<const P: usize> Ga<P> {
 
     /// Step 1–2: evaluates every individual with `fitness` and returns the best.
     pub fn evaluate(&mut self, fitness: impl FnMut(&Psi) -> f32) -> Best {
-        self.evaluate_first(P, fitness)
+        self.evaluate_first(self.len, fitness)
     }
 
     /// Step 1–2 on the first `count` individuals only (at least the elite, at most all): the
     /// others keep their pose, get fitness 0 and are never the best.
     pub fn evaluate_first(&mut self, count: usize, mut fitness: impl FnMut(&Psi) -> f32) -> Best {
         let mut best = Best { psi: Psi::IDENTITY, fitness: f32::NEG_INFINITY };
-        let n = count.clamp(1, P);
+        let n = count.clamp(1, self.len);
         if let Some(idle) = self.fitness.get_mut(n..) {
             idle.fill(0.0);
         }
@@ -348,19 +417,20 @@ impl<const P: usize> Ga<P> {
     pub fn breed<R: Rng + ?Sized>(&mut self, best: &Best, params: &GaParams, space: &SearchSpace, rng: &mut R) {
         let parents = self.pop;
         let fit = self.fitness;
+        let n = self.len.max(1);
         let rounds = params.tournament.max(1);
         let pick = |rng: &mut R| -> Psi {
-            let mut winner = (rng.next_u32() as usize) % P;
+            let mut winner = (rng.next_u32() as usize) % n;
             for _ in 1..rounds {
-                let c = (rng.next_u32() as usize) % P;
+                let c = (rng.next_u32() as usize) % n;
                 if fit.get(c).copied().unwrap_or(0.0) > fit.get(winner).copied().unwrap_or(0.0) {
                     winner = c;
                 }
             }
             parents.get(winner).copied().unwrap_or(best.psi)
         };
-        let first_immigrant = P - params.immigrants.min(P - 1);
-        for (i, child) in self.pop.iter_mut().enumerate() {
+        let first_immigrant = n - params.immigrants.min(n - 1);
+        for (i, child) in self.active_mut().enumerate() {
             if i == 0 {
                 *child = best.psi;
                 continue;
@@ -487,11 +557,60 @@ mod tests {
     }
 
     #[test]
+    fn population_size_is_chosen_at_run_time_up_to_the_capacity() {
+        let s = space();
+        let mut ga = Ga::<16>::new(Psi::IDENTITY);
+        assert_eq!(ga.len(), 16);
+        assert_eq!(ga.set_len(0), Err(GaError::PopulationSize { got: 0, capacity: 16 }));
+        assert_eq!(ga.set_len(17), Err(GaError::PopulationSize { got: 17, capacity: 16 }));
+        assert_eq!(ga.len(), 16, "a refused size leaves the population as it was");
+        ga.set_len(6).unwrap();
+        let mut rng = Xoshiro128PlusPlus::seed_from_u64(5);
+        ga.reset_uniform(&s, &mut rng);
+        let mut calls = 0;
+        let best = ga.evaluate(|p| {
+            calls += 1;
+            p.0[0]
+        });
+        assert_eq!((calls, ga.individuals().len(), ga.fitness().len()), (6, 6, 6));
+        ga.breed(&best, &GaParams::DEFAULT.with_immigrants(1), &s, &mut rng);
+        assert_eq!(ga.individuals()[0], best.psi);
+    }
+
+    #[test]
+    fn a_smaller_population_in_a_larger_capacity_evolves_exactly_as_that_capacity() {
+        // Ga<10> with 10 in use and Ga<32> with 10 in use: same draws, same populations.
+        let s = space();
+        let target = Psi::new([0.05, 0.0, 0.8], [0.1, 0.0, 0.0]);
+        let f = bowl(&target);
+        let (mut r1, mut r2) = (Xoshiro128PlusPlus::seed_from_u64(3), Xoshiro128PlusPlus::seed_from_u64(3));
+        let mut small = Ga::<10>::new(Psi::IDENTITY);
+        let mut large = Ga::<32>::new(Psi::IDENTITY);
+        large.set_len(10).unwrap();
+        small.reset_uniform(&s, &mut r1);
+        large.reset_uniform(&s, &mut r2);
+        for _ in 0..40 {
+            let (b1, b2) = (small.evaluate(&f), large.evaluate(&f));
+            assert_eq!(b1, b2);
+            small.breed(&b1, &GaParams::DEFAULT, &s, &mut r1);
+            large.breed(&b2, &GaParams::DEFAULT, &s, &mut r2);
+            assert_eq!(small.individuals(), large.individuals());
+        }
+    }
+
+    #[test]
     fn parameter_validation() {
+        let p = GaParams::DEFAULT;
+        assert_eq!(p.with_population(0).validate(64), Err(GaError::PopulationSize { got: 0, capacity: 64 }));
+        assert_eq!(p.with_population(1).validate(64), Err(GaError::PopulationSize { got: 1, capacity: 64 }));
+        assert_eq!(p.with_population(65).validate(64), Err(GaError::PopulationSize { got: 65, capacity: 64 }));
+        assert!(p.with_population(64).validate(64).is_ok());
+        assert!(p.with_population(2).with_immigrants(0).validate(64).is_ok());
         assert_eq!(SearchSpace::new_checked([0.0; 3], [0.0; 3]), Err(GaError::EmptySearchSpace));
         assert_eq!(SearchSpace::new_checked([f32::NAN; 3], [1.0; 3]), Err(GaError::NonFinite));
-        assert_eq!(GaParams::DEFAULT.with_crossover_prob(1.5).validate(10), Err(GaError::BadParameter));
-        assert_eq!(GaParams::DEFAULT.with_immigrants(9).validate(10), Err(GaError::TooManyImmigrants));
-        assert!(GaParams::DEFAULT.validate(10).is_ok());
+        let p10 = p.with_population(10);
+        assert_eq!(p10.with_crossover_prob(1.5).validate(10), Err(GaError::BadParameter));
+        assert_eq!(p10.with_immigrants(9).validate(10), Err(GaError::TooManyImmigrants));
+        assert!(p10.validate(10).is_ok());
     }
 }

@@ -10,7 +10,7 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 
 use crate::acquire::{self, AcquireConfig, AcquireError, Acquisition, HueBlobs};
 use crate::camera::{Pinhole, StereoRig};
-use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, DEFAULT_POPULATION, HUE_UNITS, PA10_DOF};
+use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, HUE_UNITS, PA10_DOF, POPULATION_CAPACITY};
 use crate::feedforward;
 use crate::fitness::{Evaluator, Fitness};
 use crate::ga::{Best, Ga, GaError, GaParams, SearchSpace};
@@ -255,9 +255,10 @@ impl<const DOF: usize> TrackerConfig<DOF> {
     }
 }
 
-/// The pose tracker: `DOF` arm joints, population `P`, `G × G` samples per face.
+/// The pose tracker: `DOF` arm joints, population capacity `P` (the population in use is
+/// [`GaParams::population`] of the configuration, up to `P`), `G × G` samples per face.
 #[derive(Debug, Clone)]
-pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = DEFAULT_POPULATION, const G: usize = DEFAULT_GRID> {
+pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = POPULATION_CAPACITY, const G: usize = DEFAULT_GRID> {
     config: TrackerConfig<DOF>,
     model: SurfaceStrips<G>,
     lut: HueLut,
@@ -278,6 +279,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let (model, lut) = Self::checked_parts(&config)?;
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
         let mut ga = Ga::new(Psi::IDENTITY);
+        ga.set_len(config.ga.population)?;
         ga.reset_uniform(&config.search, &mut rng);
         Ok(Self {
             config,
@@ -318,6 +320,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         t.monitor = StatusMonitor::new(Status::Searching);
         t.acquisition.reset();
         t.target = TargetFilter::with_defaults();
+        // Checked by `check_config` (2 ≤ population ≤ P), so this cannot fail.
+        t.ga.set_len(t.config.ga.population)?;
         t.ga.reset_uniform(&t.config.search, &mut t.rng);
         Ok(t)
     }
@@ -359,7 +363,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         if !config.max_dt_s.is_finite() || config.max_dt_s <= 0.0 {
             return Err(ConfigError::MaxDt);
         }
-        config.acquire.validate(P).map_err(ConfigError::Acquire)?;
+        config.acquire.validate(config.ga.population).map_err(ConfigError::Acquire)?;
         config.status.validate().map_err(ConfigError::Status)?;
         let ft = &config.flange_to_camera;
         if !ft.translation.vector.iter().chain(ft.rotation.coords.iter()).all(|v| v.is_finite()) {
@@ -378,8 +382,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         &self.model
     }
 
-    /// The population (index 0 holds the elite after a step).
-    pub fn population(&self) -> &[Psi; P] {
+    /// The population in use (index 0 holds the elite after a step).
+    pub fn population(&self) -> &[Psi] {
         self.ga.individuals()
     }
 
@@ -552,7 +556,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let idle = if acquiring { self.config.acquire.idle_individuals } else { 0 };
         let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
         let best: Best =
-            self.ga.evaluate_first(P - idle, |psi| eval.evaluate_psi(psi, &frame.left, &frame.right).total);
+            self.ga.evaluate_first(self.ga.len().saturating_sub(idle), |psi| eval.evaluate_psi(psi, &frame.left, &frame.right).total);
         let status = self.monitor.update(best.fitness, &self.config.status);
 
         probe.mark(Phase::Breed);
@@ -591,7 +595,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let half = [half.x, half.y, half.z];
         self.acquisition.step(&frame.left, &frame.right, &self.lut, &self.config.rig, &half, cfg);
         let Some(seed) = self.acquisition.seed().copied() else { return };
-        let end = P - cfg.idle_individuals.min(P - 1);
+        let used = self.ga.len();
+        let end = used - cfg.idle_individuals.min(used - 1);
         let n = cfg.seed_immigrants.min(end - 1);
         for k in 0..n {
             if let Some(psi) = acquire::seed_immigrant(&seed, k, cfg, &mut self.rng) {

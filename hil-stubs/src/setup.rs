@@ -252,6 +252,15 @@ mod tests {
     }
 
     #[test]
+    fn the_population_is_chosen_at_run_time_by_the_config() {
+        let mut setup = sample_setup();
+        setup.ga.population = 23;
+        let t: Tracker = setup.build_tracker().unwrap();
+        assert_eq!(t.population().len(), 23);
+        assert_eq!(setup.tracker_config().unwrap().ga.population, 23);
+    }
+
+    #[test]
     fn bad_setups_are_refused_with_codes() {
         let mut s = sample_setup();
         s.fx = 0.0;
@@ -266,6 +275,14 @@ mod tests {
         s.hue_tolerance = 90;
         let r: Result<Tracker, _> = s.build_tracker();
         assert_eq!(r.unwrap_err().code(), 4);
+        for bad in [0, evorec_core::config::POPULATION_CAPACITY + 1] {
+            let mut s = sample_setup();
+            s.ga.population = bad;
+            let r: Result<Tracker, _> = s.build_tracker();
+            let capacity = evorec_core::config::POPULATION_CAPACITY;
+            let want = SetupError::Tracker(ConfigError::Ga(GaError::PopulationSize { got: bad, capacity }));
+            assert_eq!(r.unwrap_err(), want);
+        }
         let mut s = sample_setup();
         s.initial_psi = Psi::new([0.0; 3], [1.0, 1.0, 0.0]);
         let r: Result<Tracker, _> = s.build_tracker();

@@ -6,18 +6,19 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use evorec_core::board;
-use evorec_core::config::{DEFAULT_GRID, DEFAULT_POPULATION, PA10_DOF};
-use evorec_core::ga::SearchSpace;
+use evorec_core::config::{DEFAULT_GRID, PA10_DOF};
+use evorec_core::ga::{GaParams, SearchSpace};
 use evorec_core::status::Status;
 use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
 use serde::Serialize;
 
 use crate::occlusion::Initial;
-use crate::scenario::{Method, Scenario};
+use crate::scenario::{HOST_POPULATION_CAPACITY, Method, Scenario};
 use crate::sim::{self, SimBoard, TraceRow, World};
 
-/// The tracker the simulator runs: PA-10, default population and sample rows.
-pub type SimTracker = Tracker<PA10_DOF, DEFAULT_POPULATION, DEFAULT_GRID>;
+/// The tracker the simulator runs: PA-10, the default population capacity (the size in use is
+/// the scenario's `[ga] population`) and sample rows.
+pub type SimTracker = Tracker<PA10_DOF, HOST_POPULATION_CAPACITY, DEFAULT_GRID>;
 
 /// Half-widths of the initial population around the known true pose at `t = 0` (the paper
 /// starts "with known initial target's pose"): 2 mm and 0.004 in ε.
@@ -34,7 +35,9 @@ pub fn search_space() -> SearchSpace {
 /// # Errors
 /// Invalid camera settings.
 pub fn tracker_config(s: &Scenario) -> Result<TrackerConfig<PA10_DOF>> {
-    Ok(TrackerConfig::pa10(sim::rig(s)?, sim::block(s), sim::flange_to_camera(s), search_space()).with_seed(s.seed))
+    Ok(TrackerConfig::pa10(sim::rig(s)?, sim::block(s), sim::flange_to_camera(s), search_space())
+        .with_seed(s.seed)
+        .with_ga(GaParams::DEFAULT.with_population(s.ga.population)))
 }
 
 /// The feedforward switch of a method.
@@ -71,16 +74,9 @@ impl Accuracy {
     /// Computes the summary of a trace.
     pub fn of(rows: &[TraceRow]) -> Self {
         let n = rows.len().max(1) as f64;
-        let mut sq = [0.0f64; 6];
-        let mut f = 0.0;
-        for r in rows {
-            f += f64::from(r.fitness);
-            for (acc, (e, t)) in sq.iter_mut().zip(r.estimate.0.iter().zip(r.truth.0.iter())) {
-                let d = f64::from(*e) - f64::from(*t);
-                *acc += d * d;
-            }
-        }
-        let rms = sq.map(|s| (s / n).sqrt());
+        let f = rows.iter().map(|r| f64::from(r.fitness)).sum::<f64>();
+        let diffs = rows.iter().map(|r| std::array::from_fn(|k| f64::from(r.estimate.0[k]) - f64::from(r.truth.0[k])));
+        let rms = rms_columns::<6>(diffs).unwrap_or([0.0; 6]);
         Self {
             f_mean: f / n,
             rms_x_mm: rms[0] * 1e3,
@@ -129,6 +125,19 @@ impl StatusCounts {
         }
         c
     }
+
+/// Root mean square of each column of `rows` (`None` for no rows): the one RMS of the
+/// simulator's and the sequence tracker's summaries.
+pub fn rms_columns<const N: usize>(rows: impl IntoIterator<Item = [f64; N]>) -> Option<[f64; N]> {
+    let mut sq = [0.0f64; N];
+    let mut n = 0usize;
+    for row in rows {
+        for (acc, d) in sq.iter_mut().zip(row) {
+            *acc += d * d;
+        }
+        n += 1;
+    }
+    (n > 0).then(|| sq.map(|s| (s / n as f64).sqrt()))
 }
 
 /// `summary.json`.

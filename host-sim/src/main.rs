@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
 use evorec_core::tracker::Feedforward;
 use evorec_sim::scenario::{Method, Scenario};
 use evorec_sim::sequence::Sequence;
@@ -17,6 +17,28 @@ use evorec_sim::{closed_loop, experiment, export, frame, hil, io, paper, servo, 
 struct Cli {
     #[command(subcommand)]
     command: Command,
+}
+
+/// `evorec track --method`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum TrackMethod {
+    /// Plain 1-step GA.
+    Ga,
+    /// GA + the arm's motion fed forward.
+    Ff,
+    /// GA + the arm's and the target's motion fed forward.
+    #[value(name = "ff+target")]
+    FfTarget,
+}
+
+impl TrackMethod {
+    fn feedforward(self) -> Feedforward {
+        match self {
+            Self::Ga => Feedforward::Off,
+            Self::Ff => Feedforward::On,
+            Self::FfTarget => Feedforward::OnWithTarget,
+        }
+    }
 }
 
 #[derive(Subcommand, Debug)]
@@ -98,13 +120,17 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
-        /// Plain 1-step GA (no motion feedforward).
-        #[arg(long)]
+        /// Plain 1-step GA (no motion feedforward; the same as `--method ga`).
+        #[arg(long, conflicts_with = "method")]
         no_ff: bool,
+        /// `ga` (plain 1-step GA), `ff` (+ the arm's motion fed forward) or `ff+target` (+ the
+        /// target's own motion, estimated from past estimates, fed forward too).
+        #[arg(long, value_enum, default_value_t = TrackMethod::Ff)]
+        method: TrackMethod,
         /// Seed of the GA.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// GA population size.
+        /// GA population size (3 up to the compiled capacity, 64).
         #[arg(long)]
         population: Option<usize>,
         /// Sample points per row of the surface-strips model.
@@ -302,9 +328,9 @@ fn execute(cli: Cli) -> Result<()> {
             report(&output.summary.accuracy, t0);
             println!("wrote {}", out.display());
         }
-        Command::Track { seq, out, no_ff, seed, population, points_per_row, frames, overlay, quiet } => {
+        Command::Track { seq, out, no_ff, method, seed, population, points_per_row, frames, overlay, quiet } => {
             let opts = track::TrackOptions {
-                feedforward: if no_ff { Feedforward::Off } else { Feedforward::On },
+                feedforward: if no_ff { Feedforward::Off } else { method.feedforward() },
                 seed,
                 population,
                 points_per_row,

@@ -37,7 +37,7 @@
 //! amplitude_deg = 15.0     # [0, 45]: motion B orbit amplitude
 //!
 //! [ga]
-//! population = 40          # one of SUPPORTED_POPULATIONS
+//! population = 40          # 3..=HOST_POPULATION_CAPACITY (the host's compiled capacity, 64)
 //!
 //! [servo]                  # optional: closes the loop (position-based visual servoing)
 //! desired_t_m = [-0.05, 0.0, 0.6]  # required in [servo]: block centre in Σ_CR (m)
@@ -63,8 +63,11 @@ use toml::{Table, Value};
 use crate::motion::MotionKind;
 use crate::occlusion::{self, Initial, Occlusions, Placement};
 
-/// Population sizes the core is compiled for; `ga.population` must be one of them.
-pub const SUPPORTED_POPULATIONS: &[usize] = &[40];
+/// Population capacity of the host's trackers (simulator and `evorec track`): any population
+/// from 3 up to this is accepted at run time. Larger than the firmware's
+/// [`evorec_core::config::POPULATION_CAPACITY`], whose worst case sets the M4 budget; the same
+/// population gives bit-identical estimates in either capacity (`core/tests/population.rs`).
+pub const HOST_POPULATION_CAPACITY: usize = 64;
 
 /// Largest `width·height·supersample²` accepted (samples per rendered image).
 pub const MAX_SAMPLES_PER_IMAGE: u64 = 1 << 26;
@@ -234,13 +237,14 @@ impl Default for RobotConfig {
 /// `[ga]`: genetic algorithm settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct GaConfig {
-    /// Population size (one of [`SUPPORTED_POPULATIONS`]).
+    /// Population size, chosen at run time up to the core's compiled capacity
+    /// ([`HOST_POPULATION_CAPACITY`]); checked against the GA's other settings.
     pub population: usize,
 }
 
 impl Default for GaConfig {
     fn default() -> Self {
-        Self { population: 40 }
+        Self { population: evorec_core::config::DEFAULT_POPULATION }
     }
 }
 
@@ -505,11 +509,19 @@ fn parse_robot(s: &Section<'_>) -> Result<RobotConfig> {
 fn parse_ga(s: &Section<'_>) -> Result<GaConfig> {
     s.check_keys(&["population"])?;
     let population = s.int("population", Some(GaConfig::default().population as i64))?;
-    match usize::try_from(population) {
-        Ok(p) if SUPPORTED_POPULATIONS.contains(&p) => Ok(GaConfig { population: p }),
-        _ => Err(invalid(
+    let capacity = HOST_POPULATION_CAPACITY;
+    let ga = evorec_core::ga::GaParams::DEFAULT;
+    let checked = usize::try_from(population).ok().filter(|&p| ga.with_population(p).validate(capacity).is_ok());
+    match checked {
+        Some(p) => Ok(GaConfig { population: p }),
+        None => Err(invalid(
             s.path("population"),
-            format!("the core is compiled for population sizes {SUPPORTED_POPULATIONS:?} only, got {population}"),
+            format!(
+                "must be in [{}, {capacity}] (at least the elite, one child and {} immigrant(s); at most the \
+                 core's compiled capacity), got {population}",
+                ga.immigrants + 2,
+                ga.immigrants
+            ),
         )),
     }
 }
@@ -779,9 +791,13 @@ mod tests {
             "target.face_hues_deg[2]: must be in [0, 360), got 360"
         );
         assert_eq!(
-            err(&with("[ga]\npopulation = 30\n")),
-            "ga.population: the core is compiled for population sizes [40] only, got 30"
+            err(&with("[ga]\npopulation = 0\n")),
+            "ga.population: must be in [3, 64] (at least the elite, one child and 1 immigrant(s); at most the \
+             core's compiled capacity), got 0"
         );
+        assert!(err(&with("[ga]\npopulation = 65\n")).ends_with("got 65"));
+        assert!(err(&with("[ga]\npopulation = -1\n")).starts_with("ga.population: must be in [3, 64]"));
+        assert_eq!(Scenario::from_toml_str(&with("[ga]\npopulation = 64\n")).map(|s| s.ga.population).ok(), Some(64));
         assert!(err("seed = 1\nduration_s = \n").starts_with("TOML syntax error"));
     }
 

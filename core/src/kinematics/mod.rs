@@ -345,6 +345,35 @@ impl<const DOF: usize> Chain<DOF> {
         (j, r_tool, p_tool)
     }
 
+    /// Largest absolute difference between [`Chain::jacobian_at`] and central differences of
+    /// the tool pose with joint step `h` (linear rows: `Δp / 2h`; angular rows: the axial vector
+    /// of `ΔR Rᵀ / 2h`). A check of the analytic Jacobian against the forward kinematics, shared
+    /// by the core's and the host's tests; NaN when a pose is not finite.
+    pub fn jacobian_finite_difference_error(&self, q: &[f32; DOF], flange_to_tool: &Isometry3<f32>, h: f32) -> f32 {
+        let (j, r0, _) = self.jacobian_at(q, flange_to_tool);
+        let mut worst = 0.0f32;
+        for (i, col) in j.column_iter().enumerate() {
+            let (mut qp, mut qm) = (*q, *q);
+            if let (Some(a), Some(b)) = (qp.get_mut(i), qm.get_mut(i)) {
+                *a += h;
+                *b -= h;
+            }
+            let (_, rp, pp) = self.jacobian_at(&qp, flange_to_tool);
+            let (_, rm, pm) = self.jacobian_at(&qm, flange_to_tool);
+            let v = (pp - pm) / (2.0 * h);
+            let s = (rp - rm) / (2.0 * h) * r0.transpose();
+            let fd = [v.x, v.y, v.z, s.m32, s.m13, s.m21];
+            for (a, b) in col.iter().zip(fd.iter()) {
+                let d = (a - b).abs();
+                if d.is_nan() {
+                    return f32::NAN;
+                }
+                worst = worst.max(d);
+            }
+        }
+        worst
+    }
+
     /// Geometric Jacobian of the flange itself.
     pub fn jacobian(&self, q: &[f32; DOF]) -> SMatrix<f32, 6, DOF> {
         self.jacobian_at(q, &Isometry3::identity()).0

@@ -38,25 +38,8 @@ fn jacobian_matches_finite_differences_at_a_tool_point() {
         quat::from_angle_axis(0.4, &Vector3::new(1.0, 2.0, 0.5)).unwrap(),
     );
     for c in &CASES {
-        let (j, r0, p0) = PA10.jacobian_at(&c.q, &tool);
-        let h = 1e-3f32;
-        for i in 0..7 {
-            let mut qp = c.q;
-            let mut qm = c.q;
-            qp[i] += h;
-            qm[i] -= h;
-            let (_, rp, pp) = PA10.jacobian_at(&qp, &tool);
-            let (_, rm, pm) = PA10.jacobian_at(&qm, &tool);
-            let v = (pp - pm) / (2.0 * h);
-            // S(ω) ≈ Ṙ Rᵀ
-            let s = (rp - rm) / (2.0 * h) * r0.transpose();
-            let w = Vector3::new(s[(2, 1)], s[(0, 2)], s[(1, 0)]);
-            let _ = p0;
-            for k in 0..3 {
-                assert!((j[(k, i)] - v[k]).abs() < 2e-3, "Jp[{k},{i}] {} vs {}", j[(k, i)], v[k]);
-                assert!((j[(k + 3, i)] - w[k]).abs() < 2e-3, "Jo[{k},{i}] {} vs {}", j[(k + 3, i)], w[k]);
-            }
-        }
+        let e = PA10.jacobian_finite_difference_error(&c.q, &tool, 1e-3);
+        assert!(e < 2e-3, "{:?}: {e}", c.q);
     }
 }
 
@@ -130,22 +113,8 @@ fn six_dof_dh_chain_matches_the_dh_definition_and_finite_differences() {
 
 /// Central differences of the tool pose against the analytic Jacobian.
 fn check_jacobian_by_finite_differences<const DOF: usize>(chain: &Chain<DOF>, q: &[f32; DOF], tool: &Isometry3<f32>) {
-    let (j, r0, _) = chain.jacobian_at(q, tool);
-    let h = 1e-3f32;
-    for i in 0..DOF {
-        let (mut qp, mut qm) = (*q, *q);
-        qp[i] += h;
-        qm[i] -= h;
-        let (_, rp, pp) = chain.jacobian_at(&qp, tool);
-        let (_, rm, pm) = chain.jacobian_at(&qm, tool);
-        let v = (pp - pm) / (2.0 * h);
-        let s = (rp - rm) / (2.0 * h) * r0.transpose();
-        let w = Vector3::new(s[(2, 1)], s[(0, 2)], s[(1, 0)]);
-        for k in 0..3 {
-            assert!((j[(k, i)] - v[k]).abs() < 2e-3, "Jp[{k},{i}] {} vs {}", j[(k, i)], v[k]);
-            assert!((j[(k + 3, i)] - w[k]).abs() < 2e-3, "Jo[{k},{i}] {} vs {}", j[(k + 3, i)], w[k]);
-        }
-    }
+    let e = chain.jacobian_finite_difference_error(q, tool, 1e-3);
+    assert!(e < 2e-3, "{q:?}: {e}");
 }
 
 fn spec(origin: Frame, axis: [f32; 3], kind: JointKind) -> JointSpec {

@@ -73,6 +73,7 @@ fn encode_setup(e: &mut Enc<'_>, s: &Setup) {
     e.f32(s.max_dt_s);
     // Destructured so that a new GA parameter in the core fails to compile here.
     let GaParams {
+        population,
         crossover_prob,
         mutation_prob,
         gene_mutation_prob,
@@ -81,6 +82,7 @@ fn encode_setup(e: &mut Enc<'_>, s: &Setup) {
         level_cdf,
         mutation_scale,
     } = s.ga;
+    e.u32(u32::try_from(population).unwrap_or(u32::MAX));
     e.f32(crossover_prob);
     e.f32(mutation_prob);
     e.f32(gene_mutation_prob);
@@ -115,6 +117,7 @@ fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {
     };
     let _reserved = d.u16();
     let max_dt_s = d.f32();
+    let population = usize::try_from(d.u32()).map_err(|_| DecodeError::BadValue)?;
     let crossover_prob = d.f32();
     let mutation_prob = d.f32();
     let gene_mutation_prob = d.f32();
@@ -146,6 +149,7 @@ fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {
         feedforward,
         max_dt_s,
         ga: GaParams {
+            population,
             crossover_prob,
             mutation_prob,
             gene_mutation_prob,

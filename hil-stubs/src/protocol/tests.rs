@@ -78,6 +78,15 @@ fn small_messages_round_trip() {
 }
 
 #[test]
+fn the_population_crosses_the_link() {
+    let mut setup = sample_setup();
+    setup.ga.population = 23;
+    let bytes = encode(&Envelope::bare(Message::Config(setup)));
+    let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
+    assert_eq!(back.message, Message::Config(setup));
+}
+
+#[test]
 fn payload_sizes_match_the_constants() {
     assert_eq!(encode(&Envelope::bare(Message::Config(sample_setup()))).len(), HEADER_LEN + CONFIG_LEN + CRC_LEN);
     assert_eq!(FRAME_FIXED_LEN, 68);

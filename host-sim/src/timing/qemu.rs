@@ -146,8 +146,10 @@ pub fn run_qemu(qemu: &Path, elf: &Path, workdir: &Path, log_name: &str, icount:
 pub struct Run {
     /// `full` (the default configuration's long run) or `sweep`.
     pub name: String,
-    /// Population size.
+    /// Population size in use.
     pub population: u32,
+    /// Population capacity of the tracker type (`cap=`; the population when absent).
+    pub capacity: u32,
     /// Points per row.
     pub grid: u32,
     /// Sample points per camera and pose (`SurfaceStrips::POINTS_PER_CAMERA`).
@@ -189,6 +191,7 @@ pub fn parse_output(text: &str) -> Result<Measurement> {
             m.runs.push(Run {
                 name: field("name").unwrap_or("?").to_owned(),
                 population: num("p")?,
+                capacity: num("cap").or_else(|_| num("p"))?,
                 grid: num("g")?,
                 points_per_camera: num("points_per_camera")?,
                 generations: Vec::new(),
@@ -242,6 +245,9 @@ mod tests {
         let s = m.runs[0].stats();
         assert_eq!(s.call.max, 80.0);
         assert_eq!(s.points_per_individual, 960);
+        assert_eq!((s.population, s.capacity), (40, 40), "no cap= means the population is the capacity");
+        let with_cap = text.replace("RUN name=full p=40", "RUN name=full p=40 cap=64");
+        assert_eq!(parse_output(&with_cap).unwrap().runs[0].stats().capacity, 64);
         assert!(parse_output("EVOREC-TIMING v1\nEND failed\n").is_err());
         assert!(parse_output("hello\n").is_err());
         assert_eq!(painted_stack("[INFO ] stack high-water mark: 13892 of 90000 bytes"), Some((13892, 90000)));

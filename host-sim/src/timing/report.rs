@@ -55,6 +55,7 @@ pub(super) fn json(r: &Results) -> Value {
     let read_ins = read_instructions(r);
     json!({
         "population": r.full.population,
+        "population_capacity": r.full.capacity,
         "points_per_individual": r.full.points_per_individual,
         "points_per_row": r.full.grid,
         "frames": r.full.generations,
@@ -199,11 +200,11 @@ pub(super) fn markdown(r: &Results) -> String {
     let _ = writeln!(s, "# Worst-case timing and memory of one GA generation (Cortex-M4, QEMU `-icount shift=10`)\n");
     let _ = writeln!(
         s,
-        "Default configuration: population {}, {} points per row ({} sample points per individual, both cameras), \
+        "Firmware configuration: population {} (run-time; capacity {}), {} points per row ({} sample points per individual, both cameras), \
          160×120 frames, feedforward on. {} generations on frames made on the board: every kind below, one tracker \
          running through all of them. Instructions are counted with TIMER0 on QEMU's instruction clock \
          (`ticks · 40 / 1024`, deterministic); a generation is the whole `Tracker::step_probed` call.\n",
-        full.population, full.grid, full.points_per_individual, full.generations
+        full.population, full.capacity, full.grid, full.points_per_individual, full.generations
     );
     let _ = writeln!(s, "| quantity | min | max | mean | target |\n|---|---:|---:|---:|---|");
     let row = |s: &mut String, name: &str, r: &Range, target: &str| {

@@ -44,8 +44,10 @@ impl Range {
 /// Instruction counts of one run.
 #[derive(Debug, Clone)]
 pub struct RunStats {
-    /// Population size.
+    /// Population size in use.
     pub population: u32,
+    /// Population capacity of the tracker type (its worst case is that many individuals).
+    pub capacity: u32,
     /// Points per row.
     pub grid: u32,
     /// Sample points per individual (both cameras).
@@ -96,6 +98,7 @@ impl Run {
         let evaluate = ins(|x| x.phases.evaluate);
         RunStats {
             population: self.population,
+            capacity: self.capacity,
             grid: self.grid,
             points_per_individual: points,
             generations: g.len(),

@@ -125,19 +125,16 @@ pub struct Rms {
 impl Rms {
     /// The RMS of `errors` (`None` when empty).
     pub fn of(errors: &[FrameError]) -> Option<Self> {
-        if errors.is_empty() {
-            return None;
-        }
-        let n = errors.len() as f64;
-        let ms = |f: &dyn Fn(&FrameError) -> f64| (errors.iter().map(|e| f(e).powi(2)).sum::<f64>() / n).sqrt();
+        let columns = errors.iter().map(|e| [e.d[0], e.d[1], e.d[2], e.d[3], e.d[4], e.d[5], e.rot_deg]);
+        let [x, y, z, e1, e2, e3, rot] = crate::experiment::rms_columns::<7>(columns)?;
         Some(Self {
-            rms_x_mm: ms(&|e| e.d[0]) * 1e3,
-            rms_y_mm: ms(&|e| e.d[1]) * 1e3,
-            rms_z_mm: ms(&|e| e.d[2]) * 1e3,
-            rms_e1: ms(&|e| e.d[3]),
-            rms_e2: ms(&|e| e.d[4]),
-            rms_e3: ms(&|e| e.d[5]),
-            rms_rot_deg: ms(&|e| e.rot_deg),
+            rms_x_mm: x * 1e3,
+            rms_y_mm: y * 1e3,
+            rms_z_mm: z * 1e3,
+            rms_e1: e1,
+            rms_e2: e2,
+            rms_e3: e3,
+            rms_rot_deg: rot,
             max_rot_deg: errors.iter().map(|e| e.rot_deg).fold(0.0, f64::max),
             frames: errors.len(),
         })
@@ -159,6 +156,18 @@ pub fn settled_from(errors: &[FrameError]) -> Option<usize> {
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rms_is_the_shared_column_rms() {
+        let e = |x: f64, rot: f64| FrameError { d: [x, 0.0, 0.0, 0.0, 0.0, 0.0], rot_deg: rot };
+        let r = Rms::of(&[e(0.003, 1.0), e(-0.004, 7.0)]).unwrap();
+        assert!((r.rms_x_mm - 12.5f64.sqrt()).abs() < 1e-12);
+        assert!((r.rms_rot_deg - 25.0f64.sqrt()).abs() < 1e-12);
+        assert_eq!((r.max_rot_deg, r.frames), (7.0, 2));
+        assert_eq!(Rms::of(&[]), None);
+        assert_eq!(crate::experiment::rms_columns([[3.0, -4.0], [-3.0, 4.0]]), Some([3.0, 4.0]));
+        assert_eq!(crate::experiment::rms_columns::<2>([]), None);
+    }
 
     #[test]
     fn symmetries_follow_the_face_hues() {

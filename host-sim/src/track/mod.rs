@@ -22,7 +22,9 @@ use std::time::Instant;
 
 use anyhow::{Result, anyhow, bail};
 use evorec_core::acquire::AcquireConfig;
-use evorec_core::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, DEFAULT_POPULATION};
+use evorec_core::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE};
+
+use crate::scenario::HOST_POPULATION_CAPACITY;
 use evorec_core::ga::{GaParams, SearchSpace};
 use evorec_core::kinematics::Chain;
 use evorec_core::pose::Psi;
@@ -43,7 +45,8 @@ pub struct TrackOptions {
     pub feedforward: Feedforward,
     /// Seed of the GA.
     pub seed: u64,
-    /// GA population (default: the compiled one).
+    /// GA population (default: [`GaParams::DEFAULT`]'s), up to the compiled capacity
+    /// [`HOST_POPULATION_CAPACITY`].
     pub population: Option<usize>,
     /// Sample points per model row (default: the compiled one).
     pub points_per_row: Option<usize>,
@@ -84,15 +87,33 @@ pub struct TrackOutput {
     pub options: TrackOptions,
 }
 
-/// TODO(lead): runtime sizes. The one place where `--population` / `--points-per-row` are
-/// checked: the core is compiled for one population and one row size, so only those are
-/// accepted until the sizes can be chosen at run time (then pass them to the config here).
-fn check_sizes(opts: &TrackOptions) -> Result<()> {
-    if let Some(p) = opts.population
-        && p != DEFAULT_POPULATION
-    {
-        bail!("--population {p}: only {DEFAULT_POPULATION} is supported yet (the size is compiled into the core)");
+/// The name of a feedforward mode as `evorec track --method` spells it.
+pub fn method_name(f: Feedforward) -> &'static str {
+    match f {
+        Feedforward::Off => "ga",
+        Feedforward::On => "ff",
+        Feedforward::OnWithTarget => "ff+target",
     }
+}
+
+/// The GA settings of the options: `--population` (checked against the compiled capacity).
+///
+/// # Errors
+/// A population the GA refuses, naming `--population` and the accepted range.
+pub fn ga_params(opts: &TrackOptions) -> Result<GaParams> {
+    let ga = GaParams::DEFAULT;
+    let Some(p) = opts.population else { return Ok(ga) };
+    let ga = ga.with_population(p);
+    ga.validate(HOST_POPULATION_CAPACITY).map_err(|e| {
+        anyhow!("--population {p}: must be in [{}, {HOST_POPULATION_CAPACITY}] ({e})", GaParams::DEFAULT.immigrants + 2)
+    })?;
+    Ok(ga)
+}
+
+/// TODO(lead): runtime row size. `--points-per-row` is checked here: the core is compiled for
+/// one row size, so only that one is accepted until it can be chosen at run time.
+fn check_sizes(opts: &TrackOptions) -> Result<()> {
+    ga_params(opts)?;
     if let Some(g) = opts.points_per_row
         && g != DEFAULT_GRID
     {
@@ -134,17 +155,17 @@ pub fn run(seq: &Sequence, opts: &TrackOptions) -> Result<TrackOutput> {
 /// The tracker configuration of a sequence.
 ///
 /// # Errors
-/// Invalid search box.
-pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, seed: u64) -> Result<TrackerConfig<DOF>> {
+/// Invalid search box or `--population`.
+pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, opts: &TrackOptions) -> Result<TrackerConfig<DOF>> {
     Ok(TrackerConfig {
         rig: seq.rig,
         block: seq.block,
         arm,
         flange_to_camera: seq.manifest.flange_to_right.cast(),
         search: search_of(seq)?,
-        ga: GaParams::DEFAULT,
+        ga: ga_params(opts)?,
         hue_tolerance: DEFAULT_HUE_TOLERANCE,
-        seed,
+        seed: opts.seed,
         max_dt_s: 0.5,
         acquire: AcquireConfig::DEFAULT,
         status: StatusConfig::DEFAULT,
@@ -153,8 +174,8 @@ pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, seed: u64) -> R
 
 /// The tracker over `seq` with `DOF` joints.
 fn run_dof<const DOF: usize>(seq: &Sequence, opts: &TrackOptions, arm: Chain<DOF>) -> Result<TrackOutput> {
-    let mut tracker: Tracker<DOF, DEFAULT_POPULATION, DEFAULT_GRID> =
-        Tracker::new(config(seq, arm, opts.seed)?).map_err(|e| anyhow!("tracker: {e}"))?;
+    let mut tracker: Tracker<DOF, HOST_POPULATION_CAPACITY, DEFAULT_GRID> =
+        Tracker::new(config(seq, arm, opts)?).map_err(|e| anyhow!("tracker: {e}"))?;
     match &seq.manifest.initial_pose {
         Some(pose) => {
             let psi = Psi::from_isometry(&pose.cast::<f32>());

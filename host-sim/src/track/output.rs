@@ -23,8 +23,12 @@ use crate::sequence::{Sequence, tum};
 pub struct TrackSummary {
     /// The sequence's name.
     pub sequence: String,
-    /// Feedforward on.
+    /// Feedforward on (of the arm, and with `method = "ff+target"` of the target too).
     pub feedforward: bool,
+    /// `ga`, `ff` or `ff+target` (`evorec track --method`).
+    pub method: &'static str,
+    /// GA population used.
+    pub population: usize,
     /// GA seed.
     pub seed: u64,
     /// Frames tracked.
@@ -85,7 +89,9 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
     let settled_frame = settled.map(|k| &seq.frames[out.tracked[k].i]);
     let summary = TrackSummary {
         sequence: seq.name(),
-        feedforward: out.options.feedforward == Feedforward::On,
+        feedforward: out.options.feedforward != Feedforward::Off,
+        method: super::method_name(out.options.feedforward),
+        population: super::ga_params(&out.options).map_or(0, |g| g.population),
         seed: out.options.seed,
         frames: out.tracked.len(),
         rejected: out.rejected,
@@ -205,7 +211,7 @@ pub fn write_all(seq: &Sequence, out: &TrackOutput, ev: &Evaluation, dir: &Path)
             written.push(path);
         }
     }
-    let title = format!("{} ({})", seq.name(), if ev.summary.feedforward { "ff" } else { "ga" });
+    let title = format!("{} ({})", seq.name(), ev.summary.method);
     written.extend(crate::plot::plot_trace(&trace, dir, &title)?);
     let summary = dir.join("summary.json");
     crate::io::write_json(&summary, &ev.summary)?;

@@ -555,8 +555,9 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         probe.mark(Phase::Evaluate);
         let idle = if acquiring { self.config.acquire.idle_individuals } else { 0 };
         let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
-        let best: Best =
-            self.ga.evaluate_first(self.ga.len().saturating_sub(idle), |psi| eval.evaluate_psi(psi, &frame.left, &frame.right).total);
+        let best: Best = self.ga.evaluate_first(self.ga.len().saturating_sub(idle), |psi| {
+            eval.evaluate_psi(psi, &frame.left, &frame.right).total
+        });
         let status = self.monitor.update(best.fitness, &self.config.status);
 
         probe.mark(Phase::Breed);

@@ -217,8 +217,8 @@ fn in_place_construction_equals_new() {
     // A refused configuration leaves the slot as it was.
     let mut bad = config;
     bad.block.size_m[0] = f32::NAN;
-    let before = reused.as_ref().unwrap().population().map(|p| p.0.map(f32::to_bits));
+    let before = reused.as_ref().unwrap().population().iter().map(|p| p.0.map(f32::to_bits)).collect::<Vec<_>>();
     assert!(Tracker::new_in(&mut reused, bad).is_err());
-    assert_eq!(reused.as_ref().unwrap().population().map(|p| p.0.map(f32::to_bits)), before);
+    assert_eq!(reused.as_ref().unwrap().population().iter().map(|p| p.0.map(f32::to_bits)).collect::<Vec<_>>(), before);
     assert_eq!(reused.as_ref().unwrap().config(), &config);
 }

@@ -66,14 +66,17 @@ fn sizes_outside_two_to_the_capacity_are_refused_with_the_capacity_named() {
 #[test]
 fn a_run_time_size_tracks_exactly_like_a_tracker_compiled_for_that_size() {
     let compiled = track::<DEFAULT_POPULATION>(DEFAULT_POPULATION, 15);
+    // In a larger capacity (the host's 64) and in the default one.
+    let chosen = track::<64>(DEFAULT_POPULATION, 15);
+    assert_eq!(compiled, chosen);
     let chosen = track::<POPULATION_CAPACITY>(DEFAULT_POPULATION, 15);
     assert_eq!(compiled, chosen);
 }
 
 #[test]
 fn smaller_and_larger_populations_both_track() {
-    for p in [12, POPULATION_CAPACITY] {
-        let last = *track::<POPULATION_CAPACITY>(p, 30).last().unwrap();
+    for p in [12, POPULATION_CAPACITY, 64] {
+        let last = *track::<64>(p, 30).last().unwrap();
         let d = (last.psi.translation() - truth().translation()).norm();
         assert!(last.fitness > 0.9 && d < 0.01, "population {p}: F = {}, {d} m off", last.fitness);
     }
@@ -81,7 +84,7 @@ fn smaller_and_larger_populations_both_track() {
 
 #[test]
 fn new_in_resizes_a_tracker_already_in_the_slot() {
-    let mut slot: Option<Tracker<7>> = None;
+    let mut slot: Option<Tracker<7, 64>> = None;
     assert_eq!(Tracker::new_in(&mut slot, config(40)).unwrap().population().len(), 40);
     assert_eq!(Tracker::new_in(&mut slot, config(17)).unwrap().population().len(), 17);
     assert_eq!(Tracker::new_in(&mut slot, config(64)).unwrap().population().len(), 64);

@@ -125,6 +125,7 @@ impl StatusCounts {
         }
         c
     }
+}
 
 /// Root mean square of each column of `rows` (`None` for no rows): the one RMS of the
 /// simulator's and the sequence tracker's summaries.
@@ -195,7 +196,7 @@ pub fn run(s: &Scenario, on_frame: impl FnMut()) -> Result<RunOutput> {
 pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -> Result<RunOutput> {
     let world = World::new(s)?;
     let truth0 = world.truth();
-    let mut tracker = Tracker::<PA10_DOF, DEFAULT_POPULATION, G>::new(tracker_config(s)?)
+    let mut tracker = Tracker::<PA10_DOF, HOST_POPULATION_CAPACITY, G>::new(tracker_config(s)?)
         .map_err(|e| anyhow::anyhow!("tracker: {e}"))?;
     if s.tracker.initial == Initial::Truth {
         tracker.reset_around(&truth0, &INITIAL_SPREAD).map_err(|e| anyhow::anyhow!("initial pose: {e}"))?;

@@ -4,7 +4,7 @@
 
 use evorec_core::kinematics::{Chain, PA10};
 use evorec_sim::robot::{ArmModel, PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF, RobotError};
-use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, SMatrix, Vector3};
+use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Vector3};
 
 const IIWA_URDF: &str = include_str!("data/iiwa.urdf");
 const IIWA_BASE: &str = "lbr_iiwa_link_0";

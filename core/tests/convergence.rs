@@ -38,8 +38,10 @@ fn run_with(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: 
     let rig = StereoRig::parallel(cam, 0.1).unwrap();
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
     let mut config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_ga(ga);
-    // The plain GA: no colour-blob seeding even if the status drops out of tracking.
+    // The plain GA: no colour-blob seeding and every individual evaluated even if the status
+    // drops out of tracking.
     config.acquire.seed_immigrants = 0;
+    config.acquire.idle_individuals = 0;
     let mut tracker: Acquiring = Tracker::new(config).unwrap();
     let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
     let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
@@ -71,12 +73,15 @@ fn run_with(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: 
 
 #[test]
 fn converges_from_a_perturbed_start_at_640x480() {
-    // Acquisition from this far is a GA run that stalls on a plateau for some seeds (about a
-    // quarter over 40 seeds, with either pinhole kernel: `seed_sweep`), so which seeds stall
-    // changes with any change of the fitness's arithmetic. Asserted: most of 8 seeds converge.
+    // Acquisition from this far (with the plain GA: no acquisition seeding here) is a GA run
+    // that stalls on a plateau for some seeds — about a quarter over 40 seeds (9–10 of 40 with
+    // either pinhole kernel, `seed_sweep`) — so which seeds stall changes with any change of the
+    // fitness's arithmetic (the RGB565 and population merges moved seeds 5 and 7). Asserted on
+    // 16 seeds: at least 10 converge (62.5 %, against the ~75 % measured over 40).
+    const SEEDS: u64 = 16;
     let mut converged = 0;
     let mut report = Vec::new();
-    for seed in 1..=8 {
+    for seed in 1..=SEEDS {
         let (truth, est, f) = run(640, 480, 800.0, seed, 300, false);
         let dt = (est.translation() - truth.translation()).norm();
         let de = (est.eps() - truth.eps()).norm();
@@ -86,8 +91,8 @@ fn converges_from_a_perturbed_start_at_640x480() {
         }
         report.push(format!("seed {seed}: F = {f}, position error {dt} m, eps error {de}"));
     }
-    println!("{converged} of 8 seeds converged");
-    assert!(converged >= 6, "{converged} of 8 converged: {report:#?}");
+    println!("{converged} of {SEEDS} seeds converged");
+    assert!(converged >= 10, "{converged} of {SEEDS} converged: {report:#?}");
 }
 
 #[test]

@@ -17,9 +17,16 @@ fn config(population: usize) -> TrackerConfig<7> {
     let cam = Pinhole::new_checked(200.0, 200.0, 80.0, 60.0, W, H).unwrap();
     let rig = StereoRig::parallel(cam, 0.1).unwrap();
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
-    TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space)
+    let mut c = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space)
         .with_seed(11)
-        .with_ga(GaParams::DEFAULT.with_population(population))
+        .with_ga(GaParams::DEFAULT.with_population(population));
+    // The acquisition's seeded and idle individuals need a population of at least
+    // `seed_immigrants + idle_individuals + 2`; below that these tests switch it off.
+    if population < c.acquire.seed_immigrants + c.acquire.idle_individuals + 2 {
+        c.acquire.seed_immigrants = 0;
+        c.acquire.idle_individuals = 0;
+    }
+    c
 }
 
 fn truth() -> Psi {

@@ -130,7 +130,7 @@ enum Command {
         /// Seed of the GA.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// GA population size (3 up to the compiled capacity, 64).
+        /// GA population size (16 up to the compiled capacity, 64: room for the acquisition's seeded and idle individuals).
         #[arg(long)]
         population: Option<usize>,
         /// Sample points per row of the surface-strips model.

@@ -469,6 +469,13 @@ pub fn hue_image(img: &RgbImage) -> Vec<u8> {
     out
 }
 
+/// `img` as RGB565 bytes ([`rgb565_into`] into a new buffer of `2·width·height` bytes).
+pub fn rgb565_image(img: &RgbImage) -> Vec<u8> {
+    let mut out = vec![0u8; 2 * (img.width() * img.height()) as usize];
+    rgb565_into(img, &mut out);
+    out
+}
+
 /// [`hue_image`] into a caller's buffer (the first `width·height` bytes; a shorter buffer gets
 /// as many pixels as it holds).
 pub fn hue_into(img: &RgbImage, out: &mut [u8]) {

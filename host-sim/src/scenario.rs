@@ -37,7 +37,7 @@
 //! amplitude_deg = 15.0     # [0, 45]: motion B orbit amplitude
 //!
 //! [ga]
-//! population = 40          # 3..=HOST_POPULATION_CAPACITY (the host's compiled capacity, 64)
+//! population = 40          # min_population()..=HOST_POPULATION_CAPACITY (the host's compiled capacity, 64)
 //!
 //! [servo]                  # optional: closes the loop (position-based visual servoing)
 //! desired_t_m = [-0.05, 0.0, 0.6]  # required in [servo]: block centre in Σ_CR (m)
@@ -511,19 +511,26 @@ fn parse_ga(s: &Section<'_>) -> Result<GaConfig> {
     let population = s.int("population", Some(GaConfig::default().population as i64))?;
     let capacity = HOST_POPULATION_CAPACITY;
     let ga = evorec_core::ga::GaParams::DEFAULT;
-    let checked = usize::try_from(population).ok().filter(|&p| ga.with_population(p).validate(capacity).is_ok());
+    let acquire = evorec_core::acquire::AcquireConfig::DEFAULT;
+    let fits = |p: usize| ga.with_population(p).validate(capacity).is_ok() && acquire.validate(p).is_ok();
+    let checked = usize::try_from(population).ok().filter(|&p| fits(p));
     match checked {
         Some(p) => Ok(GaConfig { population: p }),
         None => Err(invalid(
             s.path("population"),
             format!(
-                "must be in [{}, {capacity}] (at least the elite, one child and {} immigrant(s); at most the \
-                 core's compiled capacity), got {population}",
-                ga.immigrants + 2,
-                ga.immigrants
+                "must be in [{}, {capacity}] (room for the elite, one child, the immigrants and the \
+                 acquisition's seeded and idle individuals; at most the host's compiled capacity), got {population}",
+                min_population(),
             ),
         )),
     }
+}
+
+/// The smallest population the default GA and acquisition settings accept.
+pub fn min_population() -> usize {
+    let (ga, acquire) = (evorec_core::ga::GaParams::DEFAULT, evorec_core::acquire::AcquireConfig::DEFAULT);
+    (ga.immigrants + 2).max(acquire.seed_immigrants + acquire.idle_individuals + 2)
 }
 
 fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
@@ -792,11 +799,13 @@ mod tests {
         );
         assert_eq!(
             err(&with("[ga]\npopulation = 0\n")),
-            "ga.population: must be in [3, 64] (at least the elite, one child and 1 immigrant(s); at most the \
-             core's compiled capacity), got 0"
+            "ga.population: must be in [16, 64] (room for the elite, one child, the immigrants and the \
+             acquisition's seeded and idle individuals; at most the host's compiled capacity), got 0"
         );
         assert!(err(&with("[ga]\npopulation = 65\n")).ends_with("got 65"));
-        assert!(err(&with("[ga]\npopulation = -1\n")).starts_with("ga.population: must be in [3, 64]"));
+        assert!(err(&with("[ga]\npopulation = 15\n")).ends_with("got 15"));
+        assert_eq!(Scenario::from_toml_str(&with("[ga]\npopulation = 16\n")).map(|s| s.ga.population).ok(), Some(16));
+        assert!(err(&with("[ga]\npopulation = -1\n")).starts_with("ga.population: must be in [16, 64]"));
         assert_eq!(Scenario::from_toml_str(&with("[ga]\npopulation = 64\n")).map(|s| s.ga.population).ok(), Some(64));
         assert!(err("seed = 1\nduration_s = \n").starts_with("TOML syntax error"));
     }

@@ -144,9 +144,11 @@ mod firmware {
         let Ok(config) = selftest::tracker_config() else { return false };
         let Ok(mut cases) = CaseGen::new(config.rig, config.flange_to_camera, FRAME_SEED) else { return false };
         let start = cases.truth(0, false);
-        let Ok(setup) = Setup::from_tracker_config(&config, Feedforward::On, &start, &selftest::SPREAD) else {
+        let Ok(mut setup) = Setup::from_tracker_config(&config, Feedforward::On, &start, &selftest::SPREAD) else {
             return false;
         };
+        // Every configuration runs at its full capacity (the worst case of that storage).
+        setup.ga.population = P;
         let Some(slot) = C::slot(slot) else { return false };
         let Ok(tracker) = setup.build_tracker_in(slot) else {
             hprintln!("ERROR tracker {}x{} refused", P, G);

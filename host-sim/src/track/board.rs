@@ -1,5 +1,5 @@
 //! The sequence as a camera-controller board: a reader thread decodes the PNGs ahead of the
-//! tracker (bounded channel) and converts them to hue, as a board's camera interface would;
+//! tracker (bounded channel) and converts them to RGB565, as a camera sensor delivers them (the tracker looks up the hue of the pixels it samples);
 //! [`SequenceBoard`] hands them to the core's loop with the joint state interpolated at each
 //! capture time, and records every published estimate.
 
@@ -25,15 +25,16 @@ pub const READ_AHEAD: usize = 8;
 pub struct Decoded {
     /// Position in `frames.csv` (0-based).
     pub i: usize,
-    /// Left hue image.
+    /// Left image, RGB565 (what a camera sensor delivers; the tracker computes the hue of the
+    /// pixels it samples, as on the board and in the simulator).
     pub left: Vec<u8>,
-    /// Right hue image.
+    /// Right image, RGB565.
     pub right: Vec<u8>,
     /// The RGB images, kept for frames that get an overlay.
     pub rgb: Option<(RgbImage, RgbImage)>,
 }
 
-/// Decodes frame `i` (both PNGs in parallel) into hue images.
+/// Decodes frame `i` (both PNGs in parallel) into RGB565 images.
 ///
 /// # Errors
 /// As [`sequence::decode_pair`].
@@ -50,7 +51,7 @@ pub fn decode(
         || sequence::images::decode(&f.right, w(cams.1), h(cams.1)),
     );
     let (l, r) = (l?, r?);
-    let (left, right) = (render::hue_image(&l), render::hue_image(&r));
+    let (left, right) = (render::rgb565_image(&l), render::rgb565_image(&r));
     Ok(Decoded { i, left, right, rgb: keep_rgb.then_some((l, r)) })
 }
 
@@ -179,7 +180,7 @@ impl ErrorType for SequenceBoard<'_> {
 }
 
 impl<const DOF: usize> CameraController<DOF> for SequenceBoard<'_> {
-    type Format = evorec_core::image::Hue;
+    type Format = evorec_core::image::Rgb565;
 
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SeqBoardError> {
         if self.next >= self.end {
@@ -189,7 +190,7 @@ impl<const DOF: usize> CameraController<DOF> for SequenceBoard<'_> {
             Some(d) => d,
             None => self.rx.recv().map_err(|_| SeqBoardError::ReaderGone)?.map_err(SeqBoardError::Decode)?,
         };
-        let n = usize::from(self.size.0) * usize::from(self.size.1);
+        let n = 2 * usize::from(self.size.0) * usize::from(self.size.1);
         if left.len() < n || right.len() < n || d.left.len() != n || d.right.len() != n {
             return Err(SeqBoardError::BufferTooSmall);
         }

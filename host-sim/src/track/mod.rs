@@ -104,9 +104,9 @@ pub fn ga_params(opts: &TrackOptions) -> Result<GaParams> {
     let ga = GaParams::DEFAULT;
     let Some(p) = opts.population else { return Ok(ga) };
     let ga = ga.with_population(p);
-    ga.validate(HOST_POPULATION_CAPACITY).map_err(|e| {
-        anyhow!("--population {p}: must be in [{}, {HOST_POPULATION_CAPACITY}] ({e})", GaParams::DEFAULT.immigrants + 2)
-    })?;
+    let range = || format!("must be in [{}, {HOST_POPULATION_CAPACITY}]", crate::scenario::min_population());
+    ga.validate(HOST_POPULATION_CAPACITY).map_err(|e| anyhow!("--population {p}: {} ({e})", range()))?;
+    AcquireConfig::DEFAULT.validate(p).map_err(|e| anyhow!("--population {p}: {} ({e})", range()))?;
     Ok(ga)
 }
 
@@ -198,7 +198,8 @@ fn run_dof<const DOF: usize>(seq: &Sequence, opts: &TrackOptions, arm: Chain<DOF
     let (rx, reader) = board::spawn_reader(Arc::new(seq.frames.clone()), cams, 1..end, keep);
     let progress = opts.progress.then(|| progress_bar(end as u64));
     let mut b = SequenceBoard::new(seq, first, rx, end, progress.clone());
-    let n = usize::from(seq.rig.right.width()) * usize::from(seq.rig.right.height());
+    // RGB565, 2 bytes per pixel.
+    let n = 2 * usize::from(seq.rig.right.width()) * usize::from(seq.rig.right.height());
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let t0 = Instant::now();
     let stats = evorec_core::board::run(&mut b, &mut tracker, opts.feedforward, &mut left, &mut right, u32::MAX);

@@ -220,6 +220,11 @@ fn plain_names(robot: &urdf_rs::Robot, file: &str) -> Result<(), RobotError> {
         let joint = j.name.escape_debug().to_string();
         return Err(RobotError::Joint { file: file.into(), joint, problem: "name holds a control character".into() });
     }
+    if let Some(j) = robot.joints.iter().find(|j| bad(&j.parent.link) || bad(&j.child.link)) {
+        let joint = j.name.clone();
+        let problem = "parent or child link name holds a control character".into();
+        return Err(RobotError::Joint { file: file.into(), joint, problem });
+    }
     Ok(())
 }
 

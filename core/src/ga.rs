@@ -9,7 +9,8 @@
 //!    target); every other child from two binary-tournament parents, blend crossover
 //!    (BLX-0.25 per gene) with probability `crossover_prob`, then with probability
 //!    `mutation_prob` a triangular perturbation at one of three scales picked at random
-//!    (lateral position, depth along the viewing ray, and ε; see [`GaParams::mutation_scale`]).
+//!    (lateral position, depth along the viewing ray, and a small turn about the camera's axes
+//!    in place of ε's genes; see [`GaParams::mutation_scale`]).
 //!    Children are clamped into the search space and `|ε| ≤ 1`.
 //!
 //! Every child draws the same number of random numbers whatever happens to it, so the work
@@ -140,7 +141,8 @@ pub struct GaParams {
     pub level_cdf: [f32; MUTATION_LEVELS - 1],
     /// Half-widths of the triangular mutation per gene, one row per scale; a mutated child
     /// uses one row picked uniformly. Columns: lateral `x`, `y` (m), depth along the viewing
-    /// ray (m of `t_z`), then `ε₁, ε₂, ε₃`.
+    /// ray (m of `t_z`), then the turn about the camera's `x`, `y`, `z` axes as the vector part
+    /// of its quaternion (`½·angle` in rad; at `η = 1` the change of `ε₁, ε₂, ε₃`).
     pub mutation_scale: [[f32; 6]; MUTATION_LEVELS],
 }
 
@@ -255,7 +257,8 @@ fn triangular<R: Rng + ?Sized>(rng: &mut R) -> f32 {
 /// moves the pose **along its viewing ray** (all of `t` scaled so that `t_z` changes by
 /// `scale[2]·noise[2]`) rather than along `z`: depth is the poorly observed direction of a
 /// camera, and a move along the ray keeps the target's image position, so the GA can refine
-/// depth without undoing the lateral fit.
+/// depth without undoing the lateral fit. The three ε genes **turn** the pose about the
+/// camera's axes ([`turn`]) instead of being added to ε.
 fn mutate(c: &mut Psi, scale: &[f32; 6], noise: &[f32; 6]) {
     let z = c.0[2];
     let k = if z > 1e-3 { scale[2] * noise[2] / z } else { 0.0 };
@@ -264,9 +267,38 @@ fn mutate(c: &mut Psi, scale: &[f32; 6], noise: &[f32; 6]) {
     }
     c.0[0] += scale[0] * noise[0];
     c.0[1] += scale[1] * noise[1];
-    for ((x, s), n) in c.0.iter_mut().zip(scale.iter()).zip(noise.iter()).skip(3) {
-        *x += s * n;
+    let [.., s3, s4, s5] = *scale;
+    let [.., n3, n4, n5] = *noise;
+    turn(c, [s3 * n3, s4 * n4, s5 * n5]);
+}
+
+/// Turns the orientation of `c` by the small rotation whose quaternion has vector part `h`
+/// (`h ≈ ½·angle·axis`, axis in the camera frame): `Q ← normalise(1, h) ⊗ Q`, the
+/// representative with `η ≥ 0` kept.
+///
+/// Why not add `h` to ε: the turn that `Δε` makes depends on the pose. With `η = √(1−|ε|²)`
+/// a step along ε also changes η by `−ε·Δε/η`, so near a half turn (small η) a step of
+/// ε's size turns the block several times further than the same step at `η ≈ 1`, and the
+/// mutation scales lose their meaning; a turn composed on the left is the same turn at every
+/// orientation, and at `η = 1` it changes ε by `h` (to first order), as the paper's operator.
+fn turn(c: &mut Psi, h: [f32; 3]) {
+    let e = c.eps();
+    let eta = c.eta();
+    let [hx, hy, hz] = h;
+    // (1, h) ⊗ (η, ε) = (η − h·ε, ε + η h + h × ε); normalised below.
+    let w = eta - (hx * e.x + hy * e.y + hz * e.z);
+    let x = e.x + eta * hx + (hy * e.z - hz * e.y);
+    let y = e.y + eta * hy + (hz * e.x - hx * e.z);
+    let z = e.z + eta * hz + (hx * e.y - hy * e.x);
+    let n2 = w * w + x * x + y * y + z * z;
+    if !(n2 > 0.0) || !n2.is_finite() {
+        return;
     }
+    let s = (if w < 0.0 { -1.0 } else { 1.0 }) / math::sqrt(n2);
+    let [.., a, b, d] = &mut c.0;
+    *a = x * s;
+    *b = y * s;
+    *d = z * s;
 }
 
 /// A population of up to `P` poses and their last fitness values.
@@ -596,6 +628,42 @@ mod tests {
             large.breed(&b2, &GaParams::DEFAULT, &s, &mut r2);
             assert_eq!(small.individuals(), large.individuals());
         }
+    }
+
+    /// The angle (rad) between the orientations of two poses.
+    fn angle_between(a: &Psi, b: &Psi) -> f32 {
+        let (qa, qb) = (a.quaternion_unchecked(), b.quaternion_unchecked());
+        qa.angle_to(&qb)
+    }
+
+    #[test]
+    fn a_turn_has_the_same_angle_at_every_orientation() {
+        // Identity, a general orientation, and one near a half turn (η ≈ 0.21, the iiwa
+        // sample's start), each turned by h = (0.004, −0.002, 0.003) ⇒ 2·atan(|h|).
+        let h = [0.004f32, -0.002, 0.003];
+        let want = 2.0 * libm::atanf(libm::sqrtf(h.iter().map(|v| v * v).sum()));
+        for eps in [[0.0f32, 0.0, 0.0], [0.3, -0.2, 0.5], [0.453_153_87, -0.784_885_6, 0.365_998_14]] {
+            let before = Psi::new([0.0, 0.0, 0.7], eps);
+            let mut after = before;
+            turn(&mut after, h);
+            let got = angle_between(&before, &after);
+            assert!((got - want).abs() < 2e-4, "ε {eps:?}: turned {got} rad, want {want}");
+            assert!(after.eta() >= 0.0 && after.eps().norm() <= 1.0 + 1e-6);
+        }
+        // At the identity the turn changes ε by h (to first order), as adding h to ε would.
+        let mut id = Psi::new([0.0, 0.0, 0.7], [0.0; 3]);
+        turn(&mut id, h);
+        for (e, hk) in id.eps().iter().zip(h) {
+            assert!((e - hk).abs() < 1e-6, "{e} vs {hk}");
+        }
+        // Adding h to ε near the half turn would turn the block several times further.
+        let near = Psi::new([0.0, 0.0, 0.7], [0.453_153_87, -0.784_885_6, 0.365_998_14]);
+        let mut added = near;
+        for (x, hk) in added.0.iter_mut().skip(3).zip(h) {
+            *x += hk;
+        }
+        added.project_to_ball();
+        assert!(angle_between(&near, &added) > 2.0 * want, "the additive step is the anisotropic one");
     }
 
     #[test]

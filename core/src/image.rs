@@ -80,6 +80,28 @@ impl PixelFormat for Rgb565 {
     }
 }
 
+/// 8-bit RGB pixels, 3 bytes `r, g, b` (what a host decodes from a PNG of a recorded sequence):
+/// the hue of a sampled pixel is computed where it is read, by [`rgb_to_hue`], so a host tracker
+/// keeps the full 8-bit colour of its recordings without converting whole frames.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Rgb888;
+
+impl PixelFormat for Rgb888 {
+    const BYTES_PER_PIXEL: usize = 3;
+    const NAME: &'static str = "RGB888";
+    type Pixel = [u8; 3];
+
+    #[inline(always)]
+    fn split(bytes: &[u8]) -> &[[u8; 3]] {
+        bytes.as_chunks::<3>().0
+    }
+
+    #[inline(always)]
+    fn hue(px: [u8; 3]) -> u8 {
+        rgb_to_hue(px[0], px[1], px[2])
+    }
+}
+
 /// Packs 8-bit RGB into RGB565 by truncation (the top 5/6/5 bits), as a sensor's output stage
 /// does.
 ///
@@ -282,6 +304,9 @@ pub type HueImage<B> = Image<B, Hue>;
 /// An image of raw RGB565 sensor pixels.
 pub type Rgb565Image<B> = Image<B, Rgb565>;
 
+/// An image of 8-bit RGB pixels (3 bytes per pixel).
+pub type Rgb888Image<B> = Image<B, Rgb888>;
+
 impl<B: AsRef<[u8]>, F: PixelFormat> Image<B, F> {
     /// Wraps `buf` as a `width × height` image (extra trailing bytes are ignored).
     ///
@@ -387,6 +412,20 @@ mod tests {
             assert_eq!(rgb565_to_hue(px), rgb_to_hue(r as u8, g as u8, b as u8), "{px:#06x}");
             assert!(rgb565_to_hue(px) < HUE_UNITS || rgb565_to_hue(px) == NO_HUE);
         }
+    }
+
+    #[test]
+    fn rgb888_pixels_give_the_hue_of_their_colour_and_widened_565_the_table_hue() {
+        // A 3 x 1 image: red, a widened RGB565 green-blue, grey.
+        let cyan = 0b00000_101101_10110u16;
+        let (r, g, b) = rgb565_to_rgb888(cyan);
+        let bytes = [200, 0, 0, r, g, b, 90, 90, 90];
+        let img = Rgb888Image::new_checked(&bytes[..], 3, 1).expect("3 x 1");
+        assert_eq!(img.hue(0, 0), Some(0));
+        assert_eq!(img.hue(1, 0), Some(rgb565_to_hue(cyan)));
+        assert_eq!(img.hue(2, 0), Some(NO_HUE));
+        assert_eq!(img.hue(3, 0), None);
+        assert!(Rgb888Image::new_checked(&bytes[..8], 3, 1).is_err(), "one byte short");
     }
 
     #[test]

@@ -3,7 +3,9 @@
 //! The simulated world runs exactly as in `evorec run` (same 1 ms control steps, same renders
 //! in the same order, so the same image noise), and is written out as a rig would record it:
 //! the PA-10's URDF ([`crate::robot::PA10_URDF`]), camera_info YAMLs (principal point shifted
-//! to the camera_info convention), the RGB renders as PNGs, the joint state at every control
+//! to the camera_info convention), the images the simulated RGB565 sensor delivered as 8-bit
+//! PNGs ([`crate::render::sensor_rgb`]: what `evorec track` reads gives the very hue the
+//! simulator's tracker looked up), the joint state at every control
 //! step (1 kHz), the true pose as `groundtruth.tum`, and `sequence.toml` with the true pose at
 //! frame 0 as `initial_pose` and the simulator's search box.
 //!
@@ -27,6 +29,7 @@ use indicatif::ProgressBar;
 use crate::arm::CONTROL_PERIOD_S;
 use crate::experiment::search_space;
 use crate::motion;
+use crate::render;
 use crate::robot::{ArmModel, PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF};
 use crate::scenario::Scenario;
 use crate::sequence::manifest::{FORMAT, to_rows};
@@ -112,8 +115,8 @@ fn write_sequence(s: &Scenario, name: &str, dir: &Path, progress: Option<Progres
         }
         let images = world.render();
         let (l, r) = (format!("left/{n:06}.png"), format!("right/{n:06}.png"));
-        images.left.save(dir.join(&l)).with_context(|| format!("writing {l}"))?;
-        images.right.save(dir.join(&r)).with_context(|| format!("writing {r}"))?;
+        render::sensor_rgb(&images.left).save(dir.join(&l)).with_context(|| format!("writing {l}"))?;
+        render::sensor_rgb(&images.right).save(dir.join(&r)).with_context(|| format!("writing {r}"))?;
         let _ = writeln!(frames, "{n},{t:.6},{l},{r}");
         truth.push((t, world.target_in_camera()));
         if let Some(p) = &progress {

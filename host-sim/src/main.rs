@@ -41,6 +41,24 @@ impl TrackMethod {
     }
 }
 
+/// `evorec track --pixels`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum TrackPixels {
+    /// The PNG's own 8-bit RGB.
+    Rgb888,
+    /// Truncated to RGB565 first (the board's sensor format).
+    Rgb565,
+}
+
+impl From<TrackPixels> for track::Pixels {
+    fn from(p: TrackPixels) -> Self {
+        match p {
+            TrackPixels::Rgb888 => Self::Rgb888,
+            TrackPixels::Rgb565 => Self::Rgb565,
+        }
+    }
+}
+
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run one scenario: writes DIR/trace.csv, DIR/summary.json and plots.
@@ -139,6 +157,10 @@ enum Command {
         /// Track only the first N frames.
         #[arg(long)]
         frames: Option<usize>,
+        /// Pixels the tracker reads: `rgb888` (the PNG's own colour) or `rgb565` (truncated
+        /// first, as a board's camera sensor delivers them: what the firmware would see).
+        #[arg(long, value_enum, default_value_t = TrackPixels::Rgb888)]
+        pixels: TrackPixels,
         /// Frame indices (frames.csv `index`) to draw the model at its estimate over, e.g. 0,90.
         #[arg(long, value_delimiter = ',')]
         overlay: Vec<u64>,
@@ -328,7 +350,19 @@ fn execute(cli: Cli) -> Result<()> {
             report(&output.summary.accuracy, t0);
             println!("wrote {}", out.display());
         }
-        Command::Track { seq, out, no_ff, method, seed, population, points_per_row, frames, overlay, quiet } => {
+        Command::Track {
+            seq,
+            out,
+            no_ff,
+            method,
+            seed,
+            population,
+            points_per_row,
+            frames,
+            pixels,
+            overlay,
+            quiet,
+        } => {
             let opts = track::TrackOptions {
                 feedforward: if no_ff { Feedforward::Off } else { method.feedforward() },
                 seed,
@@ -337,6 +371,7 @@ fn execute(cli: Cli) -> Result<()> {
                 frames,
                 overlay: overlay.into_iter().collect(),
                 progress: !quiet,
+                pixels: pixels.into(),
             };
             track_sequence(&seq, &out, &opts)?;
         }

@@ -23,7 +23,7 @@
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::MIN_DEPTH_M;
 use evorec_core::hue::rgb_to_hue;
-use evorec_core::image::rgb888_to_rgb565;
+use evorec_core::image::{rgb565_to_rgb888, rgb888_to_rgb565};
 use evorec_core::model::{Block, FACES};
 use image::{Rgb, RgbImage};
 use nalgebra::{Isometry3, Point2, Vector3};
@@ -493,6 +493,19 @@ pub fn rgb565_into(img: &RgbImage, out: &mut [u8]) {
     for (d, p) in out.chunks_exact_mut(2).zip(img.as_raw().chunks_exact(3)) {
         d.copy_from_slice(&rgb888_to_rgb565(p[0], p[1], p[2]).to_le_bytes());
     }
+}
+
+/// `img` as the simulated sensor delivered it, saved as 8-bit RGB: each pixel truncated to
+/// RGB565 ([`rgb565_into`]'s values) and widened back by bit replication
+/// ([`rgb565_to_rgb888`]). The core's RGB565 hue table is built the same way, so a tracker
+/// reading these 8-bit pixels computes exactly the hue the simulator's tracker looked up.
+pub fn sensor_rgb(img: &RgbImage) -> RgbImage {
+    let mut out = img.clone();
+    for p in out.pixels_mut() {
+        let (r, g, b) = rgb565_to_rgb888(rgb888_to_rgb565(p[0], p[1], p[2]));
+        *p = Rgb([r, g, b]);
+    }
+    out
 }
 
 /// Draws a small `+` mark (3 × 3 pixels) of `colour` at each point given in continuous pixel

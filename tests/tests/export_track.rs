@@ -2,7 +2,9 @@
 //! as `evorec-seq/1` (`evorec export`) and tracked from the files (`evorec track`) gives the
 //! very estimates `evorec run` gives on the simulator, bit for bit, with and without
 //! feedforward (the export writes capture times on control steps and joint values that read
-//! back exactly, see `evorec_sim::export`).
+//! back exactly, see `evorec_sim::export`), reading the PNGs as 8-bit RGB (the default) and
+//! as RGB565 (the board's path): the exported PNGs hold the simulated sensor's RGB565 pixels
+//! widened to 8 bits, whose hue is the RGB565 table's.
 
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -29,7 +31,7 @@ fn work_dir(tag: &str) -> PathBuf {
     d
 }
 
-fn check(method: Method, ff: Feedforward, tag: &str) {
+fn check(method: Method, ff: Feedforward, pixels: track::Pixels, tag: &str) {
     let s = scenario(method);
     let dir = work_dir(tag);
     let seq_dir = dir.join("seq");
@@ -37,7 +39,7 @@ fn check(method: Method, ff: Feedforward, tag: &str) {
     assert_eq!(stats.frames, 62);
     assert!(stats.joint_samples > 2000, "1 kHz joint samples: {}", stats.joint_samples);
     let seq = Sequence::load(&seq_dir).unwrap_or_else(|e| panic!("{e}"));
-    let opts = track::TrackOptions { feedforward: ff, seed: s.seed, ..Default::default() };
+    let opts = track::TrackOptions { feedforward: ff, seed: s.seed, pixels, ..Default::default() };
     let tracked = track::run(&seq, &opts).unwrap_or_else(|e| panic!("{e:#}"));
     let run = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
     assert_eq!(tracked.rejected, 0);
@@ -64,12 +66,12 @@ fn check(method: Method, ff: Feedforward, tag: &str) {
 
 #[test]
 fn tracking_an_exported_scenario_equals_run_with_feedforward() {
-    check(Method::Ff, Feedforward::On, "ff");
+    check(Method::Ff, Feedforward::On, track::Pixels::Rgb888, "ff");
 }
 
 #[test]
-fn tracking_an_exported_scenario_equals_run_without_feedforward() {
-    check(Method::Ga, Feedforward::Off, "ga");
+fn tracking_an_exported_scenario_equals_run_without_feedforward_read_as_rgb565() {
+    check(Method::Ga, Feedforward::Off, track::Pixels::Rgb565, "ga");
 }
 
 #[test]

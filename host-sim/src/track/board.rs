@@ -1,14 +1,18 @@
 //! The sequence as a camera-controller board: a reader thread decodes the PNGs ahead of the
-//! tracker (bounded channel) and converts them to RGB565, as a camera sensor delivers them (the tracker looks up the hue of the pixels it samples);
+//! tracker (bounded channel) and hands their pixels over in the chosen [`SensorPixels`] format
+//! (8-bit RGB as recorded, or RGB565 as a board's sensor delivers them; either way the tracker
+//! computes the hue of the pixels it samples only);
 //! [`SequenceBoard`] hands them to the core's loop with the joint state interpolated at each
 //! capture time, and records every published estimate.
 
+use std::marker::PhantomData;
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::thread::JoinHandle;
 
 use evorec_core::board::{CameraController, Error as BoardError, ErrorKind, ErrorType, FrameInfo};
 use evorec_core::camera::Pinhole;
+use evorec_core::image::{PixelFormat, Rgb565, Rgb888};
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 use evorec_core::tracker::{Estimate, JointSample};
@@ -21,24 +25,44 @@ use crate::sequence::{self, FrameRow, JointTable, SequenceError};
 /// Frames decoded ahead of the tracker at most.
 pub const READ_AHEAD: usize = 8;
 
+/// A pixel format the tracker can read a decoded PNG in.
+pub trait SensorPixels: PixelFormat {
+    /// The bytes of `img` in this format, row-major, no padding.
+    fn pixels(img: &RgbImage) -> Vec<u8>;
+}
+
+/// The PNG's own 8-bit colour: the hue of a sampled pixel is exact (the default of
+/// `evorec track`).
+impl SensorPixels for Rgb888 {
+    fn pixels(img: &RgbImage) -> Vec<u8> {
+        img.as_raw().clone()
+    }
+}
+
+/// The board's path: each channel truncated to RGB565, as a camera sensor delivers it.
+impl SensorPixels for Rgb565 {
+    fn pixels(img: &RgbImage) -> Vec<u8> {
+        render::rgb565_image(img)
+    }
+}
+
 /// A decoded frame pair.
 pub struct Decoded {
     /// Position in `frames.csv` (0-based).
     pub i: usize,
-    /// Left image, RGB565 (what a camera sensor delivers; the tracker computes the hue of the
-    /// pixels it samples, as on the board and in the simulator).
+    /// Left image in the board's [`SensorPixels`] format.
     pub left: Vec<u8>,
-    /// Right image, RGB565.
+    /// Right image, same format.
     pub right: Vec<u8>,
     /// The RGB images, kept for frames that get an overlay.
     pub rgb: Option<(RgbImage, RgbImage)>,
 }
 
-/// Decodes frame `i` (both PNGs in parallel) into RGB565 images.
+/// Decodes frame `i` (both PNGs in parallel) into images of format `F`.
 ///
 /// # Errors
 /// As [`sequence::decode_pair`].
-pub fn decode(
+pub fn decode<F: SensorPixels>(
     frames: &[FrameRow],
     i: usize,
     cams: (&Pinhole, &Pinhole),
@@ -51,14 +75,14 @@ pub fn decode(
         || sequence::images::decode(&f.right, w(cams.1), h(cams.1)),
     );
     let (l, r) = (l?, r?);
-    let (left, right) = (render::rgb565_image(&l), render::rgb565_image(&r));
+    let (left, right) = (F::pixels(&l), F::pixels(&r));
     Ok(Decoded { i, left, right, rgb: keep_rgb.then_some((l, r)) })
 }
 
 /// Starts the reader thread for frames `from..to`; `keep_rgb(i)` says which frames keep their
 /// RGB images. The thread stops at the first error (sent as the last item) or when the
 /// receiver is dropped.
-pub fn spawn_reader(
+pub fn spawn_reader<F: SensorPixels>(
     frames: Arc<Vec<FrameRow>>,
     cams: (Pinhole, Pinhole),
     range: std::ops::Range<usize>,
@@ -67,7 +91,7 @@ pub fn spawn_reader(
     let (tx, rx): (SyncSender<_>, _) = sync_channel(READ_AHEAD);
     let handle = std::thread::spawn(move || {
         for i in range {
-            let item = decode(&frames, i, (&cams.0, &cams.1), keep_rgb(i));
+            let item = decode::<F>(&frames, i, (&cams.0, &cams.1), keep_rgb(i));
             let failed = item.is_err();
             if tx.send(item).is_err() || failed {
                 break;
@@ -127,8 +151,8 @@ pub struct TrackedFrame {
     pub status: Status,
 }
 
-/// The board over a sequence.
-pub struct SequenceBoard<'a> {
+/// The board over a sequence, delivering frames in pixel format `F`.
+pub struct SequenceBoard<'a, F> {
     frames: &'a [FrameRow],
     joints: &'a JointTable,
     size: (u16, u16),
@@ -142,9 +166,10 @@ pub struct SequenceBoard<'a> {
     /// RGB images kept for overlays: (position in frames.csv, left, right).
     pub kept: Vec<(usize, RgbImage, RgbImage)>,
     progress: Option<ProgressBar>,
+    format: PhantomData<F>,
 }
 
-impl<'a> SequenceBoard<'a> {
+impl<'a, F> SequenceBoard<'a, F> {
     /// A board delivering frames `0..end`: `first` is frame 0, already decoded, and `rx` the
     /// reader thread's channel for the others.
     pub fn new(
@@ -166,6 +191,7 @@ impl<'a> SequenceBoard<'a> {
             tracked: Vec::with_capacity(end),
             kept: Vec::new(),
             progress,
+            format: PhantomData,
         }
     }
 
@@ -175,12 +201,12 @@ impl<'a> SequenceBoard<'a> {
     }
 }
 
-impl ErrorType for SequenceBoard<'_> {
+impl<F> ErrorType for SequenceBoard<'_, F> {
     type Error = SeqBoardError;
 }
 
-impl<const DOF: usize> CameraController<DOF> for SequenceBoard<'_> {
-    type Format = evorec_core::image::Rgb565;
+impl<const DOF: usize, F: SensorPixels> CameraController<DOF> for SequenceBoard<'_, F> {
+    type Format = F;
 
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SeqBoardError> {
         if self.next >= self.end {
@@ -190,7 +216,7 @@ impl<const DOF: usize> CameraController<DOF> for SequenceBoard<'_> {
             Some(d) => d,
             None => self.rx.recv().map_err(|_| SeqBoardError::ReaderGone)?.map_err(SeqBoardError::Decode)?,
         };
-        let n = 2 * usize::from(self.size.0) * usize::from(self.size.1);
+        let n = F::BYTES_PER_PIXEL * usize::from(self.size.0) * usize::from(self.size.1);
         if left.len() < n || right.len() < n || d.left.len() != n || d.right.len() != n {
             return Err(SeqBoardError::BufferTooSmall);
         }

@@ -36,7 +36,8 @@ use nalgebra::Isometry3;
 
 use crate::experiment::{INITIAL_SPREAD, search_space};
 use crate::sequence::Sequence;
-use board::{SequenceBoard, TrackedFrame};
+use board::{SensorPixels, SequenceBoard, TrackedFrame};
+use evorec_core::image::{Rgb565, Rgb888};
 
 /// What `evorec track` was asked to do.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,6 +57,29 @@ pub struct TrackOptions {
     pub overlay: BTreeSet<u64>,
     /// Show a progress bar.
     pub progress: bool,
+    /// The pixel format the tracker reads the PNGs in.
+    pub pixels: Pixels,
+}
+
+/// The pixel format `evorec track` hands the decoded PNGs to the tracker in.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Pixels {
+    /// The PNG's own 8-bit RGB (the hue of every sampled pixel exact): the host's default.
+    #[default]
+    Rgb888,
+    /// Truncated to RGB565 first, as a board's camera sensor delivers pixels: what the
+    /// firmware would see of the same scene.
+    Rgb565,
+}
+
+impl Pixels {
+    /// The name used on the command line and in `summary.json`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Rgb888 => "rgb888",
+            Self::Rgb565 => "rgb565",
+        }
+    }
 }
 
 impl Default for TrackOptions {
@@ -68,6 +92,7 @@ impl Default for TrackOptions {
             frames: None,
             overlay: BTreeSet::new(),
             progress: false,
+            pixels: Pixels::default(),
         }
     }
 }
@@ -172,8 +197,20 @@ pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, opts: &TrackOpt
     })
 }
 
-/// The tracker over `seq` with `DOF` joints.
+/// The tracker over `seq` with `DOF` joints: dispatches on the pixel format.
 fn run_dof<const DOF: usize>(seq: &Sequence, opts: &TrackOptions, arm: Chain<DOF>) -> Result<TrackOutput> {
+    match opts.pixels {
+        Pixels::Rgb888 => run_format::<DOF, Rgb888>(seq, opts, arm),
+        Pixels::Rgb565 => run_format::<DOF, Rgb565>(seq, opts, arm),
+    }
+}
+
+/// The tracker over `seq` with `DOF` joints, reading frames in pixel format `F`.
+fn run_format<const DOF: usize, F: SensorPixels>(
+    seq: &Sequence,
+    opts: &TrackOptions,
+    arm: Chain<DOF>,
+) -> Result<TrackOutput> {
     let mut tracker: Tracker<DOF, HOST_POPULATION_CAPACITY, DEFAULT_GRID> =
         Tracker::new(config(seq, arm, opts)?).map_err(|e| anyhow!("tracker: {e}"))?;
     match &seq.manifest.initial_pose {
@@ -194,12 +231,11 @@ fn run_dof<const DOF: usize>(seq: &Sequence, opts: &TrackOptions, arm: Chain<DOF
     let keep: Arc<dyn Fn(usize) -> bool + Send + Sync> = Arc::new(move |i| overlay.contains(&i));
     let cams = (seq.rig.left, seq.rig.right);
     // Frame 0 is decoded here, so a bad first image fails before anything runs.
-    let first = board::decode(&seq.frames, 0, (&cams.0, &cams.1), keep(0))?;
-    let (rx, reader) = board::spawn_reader(Arc::new(seq.frames.clone()), cams, 1..end, keep);
+    let first = board::decode::<F>(&seq.frames, 0, (&cams.0, &cams.1), keep(0))?;
+    let (rx, reader) = board::spawn_reader::<F>(Arc::new(seq.frames.clone()), cams, 1..end, keep);
     let progress = opts.progress.then(|| progress_bar(end as u64));
-    let mut b = SequenceBoard::new(seq, first, rx, end, progress.clone());
-    // RGB565, 2 bytes per pixel.
-    let n = 2 * usize::from(seq.rig.right.width()) * usize::from(seq.rig.right.height());
+    let mut b = SequenceBoard::<F>::new(seq, first, rx, end, progress.clone());
+    let n = F::BYTES_PER_PIXEL * usize::from(seq.rig.right.width()) * usize::from(seq.rig.right.height());
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let t0 = Instant::now();
     let stats = evorec_core::board::run(&mut b, &mut tracker, opts.feedforward, &mut left, &mut right, u32::MAX);

@@ -29,6 +29,8 @@ pub struct TrackSummary {
     pub method: &'static str,
     /// GA population used.
     pub population: usize,
+    /// Pixel format the tracker read the PNGs in (`rgb888` or `rgb565`, `evorec track --pixels`).
+    pub pixels: &'static str,
     /// GA seed.
     pub seed: u64,
     /// Frames tracked.
@@ -92,6 +94,7 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
         feedforward: out.options.feedforward != Feedforward::Off,
         method: super::method_name(out.options.feedforward),
         population: super::ga_params(&out.options).map_or(0, |g| g.population),
+        pixels: out.options.pixels.as_str(),
         seed: out.options.seed,
         frames: out.tracked.len(),
         rejected: out.rejected,

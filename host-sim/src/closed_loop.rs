@@ -10,11 +10,12 @@
 //!    twist is integrated into the flange setpoint that the arm's resolved-rate controller
 //!    follows (joint velocity limits, joint-limit avoidance);
 //! 2. the frame pair is rendered (or the block hidden during an occlusion) and the tracker
-//!    runs one generation on it; the estimate updates the target filter and the tracking gate
-//!    and is queued until it reaches the servo.
+//!    runs one generation on it; the estimate (with the tracker's status) updates the target
+//!    filter and is queued until it reaches the servo.
 //!
-//! The servo moves only while the gate says the tracker is tracking; otherwise it decelerates
-//! to a stop within its limits and resumes when the gate says tracking again.
+//! The servo moves only on estimates whose status is [`Status::Tracking`] (the tracker's own
+//! decision, with its confirmation generations: see `evorec_core::status`); otherwise it
+//! decelerates to a stop within its limits and resumes when the tracker says tracking again.
 
 use std::collections::VecDeque;
 
@@ -24,8 +25,9 @@ use evorec_core::hue::HueImage;
 use evorec_core::kinematics::PA10;
 use evorec_core::pose::Psi;
 use evorec_core::servo::{PoseError, Servo, ServoConfig, ServoInput, ServoLimits};
+use evorec_core::status::Status;
 use evorec_core::target_motion::{self, TargetFilter};
-use evorec_core::tracker::{Estimate, Feedforward, JointSample, StereoFrame};
+use evorec_core::tracker::{Feedforward, JointSample, StereoFrame};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
@@ -36,40 +38,6 @@ use crate::motion::flange_to_camera_f64;
 use crate::render;
 use crate::scenario::{Scenario, ServoSection};
 use crate::sim::{TraceRow, World, frame_total};
-
-/// Fitness at or above which an estimate counts towards acquiring the block.
-pub const GATE_ACQUIRE_FITNESS: f32 = 0.6;
-/// Consecutive estimates at or above [`GATE_ACQUIRE_FITNESS`] before the gate says tracking.
-pub const GATE_ACQUIRE_FRAMES: u32 = 3;
-/// Fitness below which one estimate makes the gate say lost.
-pub const GATE_LOSE_FITNESS: f32 = 0.5;
-
-/// Whether the tracker is tracking, decided from the fitness of its estimates (hysteresis:
-/// [`GATE_ACQUIRE_FRAMES`] good estimates to start, one bad one to stop).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct TrackGate {
-    good: u32,
-    tracking: bool,
-}
-
-impl TrackGate {
-    /// Takes the next estimate and says whether the servo may act on it.
-    // TODO(lead): status — replace this rule by the tracker's own status (Searching / Tracking
-    // / Lost on `Estimate`) when the acquisition branch lands: `est.status == Tracking`.
-    pub fn update(&mut self, est: &Estimate) -> bool {
-        if est.fitness >= GATE_ACQUIRE_FITNESS {
-            self.good = self.good.saturating_add(1);
-        } else {
-            self.good = 0;
-        }
-        if est.fitness < GATE_LOSE_FITNESS || !est.fitness.is_finite() {
-            self.tracking = false;
-        } else if self.good >= GATE_ACQUIRE_FRAMES {
-            self.tracking = true;
-        }
-        self.tracking
-    }
-}
 
 /// A conveyor carrying the block along world `y`: it starts at the block's scripted centre
 /// moving at `speed` towards `+y` and reverses at `±travel/2` with deceleration `accel`.
@@ -484,7 +452,6 @@ pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Resu
         speed: 0.0,
         rot_speed: 0.0,
     };
-    let mut gate = TrackGate::default();
     let ff = opts.feedforward.unwrap_or_else(|| experiment::feedforward(s.method));
     let (w, h) = (s.camera.width, s.camera.height);
     let n = usize::from(w) * usize::from(h);
@@ -523,7 +490,7 @@ pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Resu
             }
         };
         last_us = Some(joints.time_us);
-        let tracking = gate.update(&est);
+        let tracking = est.status == Status::Tracking;
         let filter = *tracker.target_filter();
         ctl.pending.push_back((t + delay, Released { psi: est.psi, q: joints.q, filter, tracking }));
         let truth = world.truth();
@@ -652,22 +619,5 @@ mod tests {
             assert!(b.v.abs() <= 0.2 + 1e-12);
         }
         assert!(max_y <= 0.2 + 1e-3 && max_y > 0.19, "{max_y}");
-    }
-
-    #[test]
-    fn gate_needs_good_frames_to_start_and_one_bad_to_stop() {
-        let est = |fitness| Estimate {
-            psi: Psi::IDENTITY,
-            fitness,
-            generation: 1,
-            capture_time_us: 0,
-            status: evorec_core::status::Status::Tracking,
-        };
-        let mut g = TrackGate::default();
-        assert!(!g.update(&est(0.9)) && !g.update(&est(0.9)));
-        assert!(g.update(&est(0.9)));
-        assert!(g.update(&est(0.55)));
-        assert!(!g.update(&est(0.4)));
-        assert!(!g.update(&est(0.9)));
     }
 }

@@ -291,7 +291,7 @@ fn turn(c: &mut Psi, h: [f32; 3]) {
     let y = e.y + eta * hy + (hz * e.x - hx * e.z);
     let z = e.z + eta * hz + (hx * e.y - hy * e.x);
     let n2 = w * w + x * x + y * y + z * z;
-    if !(n2 > 0.0) || !n2.is_finite() {
+    if !n2.is_finite() || n2 <= 0.0 {
         return;
     }
     let s = (if w < 0.0 { -1.0 } else { 1.0 }) / math::sqrt(n2);

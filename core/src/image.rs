@@ -417,7 +417,7 @@ mod tests {
     #[test]
     fn rgb888_pixels_give_the_hue_of_their_colour_and_widened_565_the_table_hue() {
         // A 3 x 1 image: red, a widened RGB565 green-blue, grey.
-        let cyan: u16 = (0 << 11) | (45 << 5) | 22;
+        let cyan = rgb888_to_rgb565(0, 180, 176); // r5 = 0, g6 = 45, b5 = 22
         let (r, g, b) = rgb565_to_rgb888(cyan);
         let bytes = [200, 0, 0, r, g, b, 90, 90, 90];
         let img = Rgb888Image::new_checked(&bytes[..], 3, 1).expect("3 x 1");

@@ -191,8 +191,9 @@ pub struct HandoverSummary {
     pub eps_ratio: f64,
     /// Fraction of the frames whose prediction used a trusted target velocity.
     pub trusted_fraction: f64,
-    /// Frames (of all, tracked or not) to which "ff+target" fed a non-zero target velocity
-    /// forward ([`Handover::feedforward`]); 0 makes the run identical to "ff".
+    /// Frames (of all, tracked or not) to which "ff+target" feeds a non-zero target velocity
+    /// forward ([`Handover::feedforward`]; in the other methods, what it would have fed). In a
+    /// "ff+target" run, 0 means the run is identical to "ff".
     pub target_feedforward_frames: usize,
     /// RMS error of the target velocity used (m/s), over the trusted frames.
     pub rms_velocity_error_m_s: f64,

@@ -32,6 +32,7 @@ use nalgebra::{Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vec
 
 use crate::kinematics::Chain;
 use crate::pose::Psi;
+use crate::status::Status;
 use crate::tracker::JointSample;
 use crate::{math, quat};
 
@@ -83,6 +84,11 @@ pub struct TargetFilterParams {
     pub deadband_m_s: f32,
     /// Feedforward dead band: an angular speed below this (rad/s) is fed forward as 0.
     pub deadband_rad_s: f32,
+    /// Feedforward significance: the linear (angular) velocity is fed forward only when its
+    /// length in standard deviations of its own estimate, `√(Σ vᵢ² / σᵢ²)`, reaches this — a
+    /// velocity inside the filter's `significance_sigma`-σ ellipsoid around zero cannot be told
+    /// from a target at rest, and feeding its noise forward drags the population along it.
+    pub significance_sigma: f32,
 }
 
 impl TargetFilterParams {
@@ -105,6 +111,7 @@ impl TargetFilterParams {
         max_gap_s: 0.5,
         deadband_m_s: 0.01,
         deadband_rad_s: 0.05,
+        significance_sigma: 2.0,
     };
 
     /// Checks that every value is finite and positive (counts at least 1).
@@ -131,6 +138,7 @@ impl TargetFilterParams {
             (self.lost_fitness, "lost_fitness"),
             (self.deadband_m_s, "deadband_m_s"),
             (self.deadband_rad_s, "deadband_rad_s"),
+            (self.significance_sigma, "significance_sigma"),
         ];
         if let Some((_, name)) = non_negative.iter().find(|(v, _)| !(v.is_finite() && *v >= 0.0)) {
             return Err(FilterParamsError(name));
@@ -339,6 +347,24 @@ impl TargetFilter {
         outcome
     }
 
+    /// As [`TargetFilter::update`] for an estimate the tracker reported with `status`
+    /// ([`crate::status`]): an estimate that is not [`Status::Tracking`] is no measurement of
+    /// the block (searching, or carried along after the block was lost), so the filter resets.
+    pub fn update_with_status(
+        &mut self,
+        measured: &Isometry3<f32>,
+        time_us: u64,
+        fitness: f32,
+        status: Status,
+    ) -> UpdateOutcome {
+        if status != Status::Tracking {
+            self.track = None;
+            self.last_outcome = Some(UpdateOutcome::Lost);
+            return UpdateOutcome::Lost;
+        }
+        self.update(measured, time_us, fitness)
+    }
+
     /// What the last [`TargetFilter::update`] did (`None` before the first).
     pub fn last_outcome(&self) -> Option<UpdateOutcome> {
         self.last_outcome
@@ -351,8 +377,8 @@ impl TargetFilter {
     }
 
     fn update_inner(&mut self, measured: &Isometry3<f32>, time_us: u64, fitness: f32) -> UpdateOutcome {
-        // TODO(lead): status — reset on the tracker's Lost status once `Estimate::status` lands;
-        // until then a fitness drop stands for a lost target.
+        // A fitness drop stands for a lost target here; `update_with_status` also resets on the
+        // tracker's status.
         let found = fitness >= self.params.lost_fitness; // false for NaN
         if !found || !finite(measured) {
             self.track = None;
@@ -453,18 +479,19 @@ impl TargetFilter {
         if self.is_trusted() { self.velocity_estimate() } else { None }
     }
 
-    /// The velocity to feed forward: the trusted velocity with speeds inside the dead bands
-    /// set to 0, or zero while not trusted.
+    /// The velocity to feed forward: the trusted velocity, its linear (angular) part set to 0
+    /// while inside the dead band or not significant against its own uncertainty
+    /// ([`TargetFilterParams::significance_sigma`]); zero while not trusted.
     pub fn feedforward_velocity(&self) -> TargetVelocity {
-        let Some(mut vel) = self.velocity() else { return TargetVelocity::ZERO };
-        let (dv, dw) = (self.params.deadband_m_s, self.params.deadband_rad_s);
-        if vel.v.dot(&vel.v) < dv * dv {
-            vel.v = Vector3::zeros();
-        }
-        if vel.w.dot(&vel.w) < dw * dw {
-            vel.w = Vector3::zeros();
-        }
-        vel
+        let Some(track) = self.track.as_ref().filter(|t| t.converged) else { return TargetVelocity::ZERO };
+        let p = &self.params;
+        let part = |axes: &[Axis; 3], deadband: f32| {
+            let v = Vector3::new(axes[0].v, axes[1].v, axes[2].v);
+            let sigmas2: f32 = axes.iter().map(|a| a.v * a.v / a.p[2].max(f32::MIN_POSITIVE)).sum();
+            let significant = sigmas2 >= p.significance_sigma * p.significance_sigma;
+            if significant && v.dot(&v) >= deadband * deadband { v } else { Vector3::zeros() }
+        };
+        TargetVelocity { v: part(&track.pos, p.deadband_m_s), w: part(&track.rot, p.deadband_rad_s) }
     }
 
     /// Hands the pose over to time `t_us`: the last accepted estimate moved by the trusted
@@ -646,6 +673,9 @@ mod tests {
         p.gate_sigma = 0.0;
         assert_eq!(TargetFilter::new(p), Err(FilterParamsError("gate_sigma")));
         p = TargetFilterParams::DEFAULT;
+        p.significance_sigma = -1.0;
+        assert_eq!(TargetFilter::new(p), Err(FilterParamsError("significance_sigma")));
+        p = TargetFilterParams::DEFAULT;
         p.converge_updates = 0;
         assert_eq!(TargetFilter::new(p), Err(FilterParamsError("converge_updates")));
     }
@@ -660,6 +690,48 @@ mod tests {
         let ff = f.feedforward_velocity();
         assert_eq!(ff.v, Vector3::zeros());
         assert!((ff.w - w).norm() < 0.02);
+    }
+
+    #[test]
+    fn noise_of_a_still_target_is_not_fed_forward_but_slow_real_motion_is() {
+        // Estimates of a target at rest with uniform noise of ±5 mm and ±0.02 rad: the
+        // filter's velocity wanders above the dead bands, but never reaches significance.
+        let mut f = TargetFilter::with_defaults();
+        let still = Vector3::zeros();
+        let mut above_deadband = 0;
+        for k in 0..600 {
+            f.update(&noisy(moving(k, still, still), k, 0.005, 0.02), k * DT_US, 0.95);
+            if let Some(vel) = f.velocity() {
+                above_deadband += usize::from(vel.v.norm() >= TargetFilterParams::DEFAULT.deadband_m_s);
+                assert_eq!(f.feedforward_velocity(), TargetVelocity::ZERO, "frame {k}: {vel:?}");
+            }
+        }
+        assert!(above_deadband > 0, "the dead band alone would have let noise through");
+        // A slow conveyor (0.05 m/s) with the same noise is fed forward once converged.
+        let mut f = TargetFilter::with_defaults();
+        let v = Vector3::new(0.0, 0.05, 0.0);
+        for k in 0..200 {
+            f.update(&noisy(moving(k, v, still), k, 0.005, 0.02), k * DT_US, 0.95);
+        }
+        assert!((f.feedforward_velocity().v - v).norm() < 0.02, "{:?}", f.feedforward_velocity());
+    }
+
+    #[test]
+    fn a_status_other_than_tracking_resets() {
+        let v = Vector3::new(0.2, 0.0, 0.0);
+        let mut f = TargetFilter::with_defaults();
+        for k in 0..60 {
+            assert_ne!(f.update_with_status(&moving(k, v, v), k * DT_US, 0.95, Status::Tracking), UpdateOutcome::Lost);
+        }
+        assert!(f.is_trusted());
+        // The tracker lost the block: its estimate (fitness still high, carried along) is no
+        // measurement.
+        for status in [Status::Lost, Status::Searching] {
+            assert_eq!(f.update_with_status(&moving(60, v, v), 60 * DT_US, 0.95, status), UpdateOutcome::Lost);
+            assert!(!f.has_track() && f.feedforward_velocity() == TargetVelocity::ZERO);
+            assert_eq!(f.last_outcome(), Some(UpdateOutcome::Lost));
+        }
+        assert_eq!(f.update_with_status(&moving(61, v, v), 61 * DT_US, 0.95, Status::Tracking), UpdateOutcome::Started);
     }
 
     #[test]

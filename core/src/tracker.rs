@@ -574,7 +574,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         if feedforward == Feedforward::OnWithTarget {
             let world =
                 target_motion::world_pose(&self.config.arm, &joints.q, &self.config.flange_to_camera, &best.psi);
-            self.target.update(&world, joints.time_us, best.fitness);
+            self.target.update_with_status(&world, joints.time_us, best.fitness, status);
         }
         probe.mark(Phase::Done);
 

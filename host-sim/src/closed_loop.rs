@@ -114,9 +114,9 @@ pub struct LoopOptions {
 
 impl LoopOptions {
     /// The options a scenario's method implies (no occlusion).
-    pub fn for_scenario(_s: &Scenario) -> Self {
-        // TODO(servo): `target_velocity: s.method == Method::FfTarget` once that method lands.
-        Self { occlusion: None, conveyor: None, feedforward: None, target_velocity: false }
+    pub fn for_scenario(s: &Scenario) -> Self {
+        let target_velocity = s.method == crate::scenario::Method::FfTarget;
+        Self { occlusion: None, conveyor: None, feedforward: None, target_velocity }
     }
 }
 
@@ -515,6 +515,7 @@ pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Resu
             fitness: est.fitness,
             status: est.status,
             hidden: occluded,
+            handover: None,
         });
         on_frame();
     }

@@ -8,13 +8,14 @@ use anyhow::{Context, Result};
 use evorec_core::board;
 use evorec_core::config::{DEFAULT_GRID, PA10_DOF};
 use evorec_core::ga::{GaParams, SearchSpace};
+use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
 use serde::Serialize;
 
 use crate::occlusion::Initial;
 use crate::scenario::{HOST_POPULATION_CAPACITY, Method, Scenario};
-use crate::sim::{self, SimBoard, TraceRow, World};
+use crate::sim::{self, Handover, SimBoard, TraceRow, World};
 
 /// The tracker the simulator runs: PA-10, the default population capacity (the size in use is
 /// the scenario's `[ga] population`) and sample rows.
@@ -45,6 +46,7 @@ pub fn feedforward(m: Method) -> Feedforward {
     match m {
         Method::Ga => Feedforward::Off,
         Method::Ff => Feedforward::On,
+        Method::FfTarget => Feedforward::OnWithTarget,
     }
 }
 
@@ -141,6 +143,104 @@ pub fn rms_columns<const N: usize>(rows: impl IntoIterator<Item = [f64; N]>) -> 
     (n > 0).then(|| sq.map(|s| (s / n as f64).sqrt()))
 }
 
+/// RMS errors of one pose series against a truth series.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PoseRms {
+    /// RMS error of x, y, z (mm).
+    pub rms_xyz_mm: [f64; 3],
+    /// RMS error of ε₁, ε₂, ε₃.
+    pub rms_eps: [f64; 3],
+    /// RMS of the position error's length (mm).
+    pub rms_position_mm: f64,
+    /// RMS of the ε error's length.
+    pub rms_eps_norm: f64,
+}
+
+impl PoseRms {
+    /// RMS of `estimate − truth` over the `(estimate, truth)` pairs (zeros for none).
+    pub fn of(pairs: impl Iterator<Item = (Psi, Psi)>) -> Self {
+        let diffs = pairs.map(|(e, t)| std::array::from_fn(|k| f64::from(e.0[k]) - f64::from(t.0[k])));
+        let r = rms_columns::<6>(diffs).unwrap_or([0.0; 6]);
+        let norm = |a: f64, b: f64, c: f64| (a * a + b * b + c * c).sqrt();
+        Self {
+            rms_xyz_mm: [r[0] * 1e3, r[1] * 1e3, r[2] * 1e3],
+            rms_eps: [r[3], r[4], r[5]],
+            rms_position_mm: norm(r[0], r[1], r[2]) * 1e3,
+            rms_eps_norm: norm(r[3], r[4], r[5]),
+        }
+    }
+}
+
+/// The hand-over at the output time (`[tracker] delay_s` after capture), over the frames
+/// reported as tracking (the others carry no measurement to hand over).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct HandoverSummary {
+    /// The delay (s).
+    pub delay_s: f64,
+    /// Frames counted.
+    pub frames: usize,
+    /// The estimate against the truth at capture time (the tracker's own error).
+    pub at_capture: PoseRms,
+    /// The estimate held unchanged until the output time, against the truth then.
+    pub held: PoseRms,
+    /// The core's prediction for the output time against the truth then.
+    pub predicted: PoseRms,
+    /// `predicted.rms_position_mm / at_capture.rms_position_mm`.
+    pub position_ratio: f64,
+    /// `predicted.rms_eps_norm / at_capture.rms_eps_norm`.
+    pub eps_ratio: f64,
+    /// Fraction of the frames whose prediction used a trusted target velocity.
+    pub trusted_fraction: f64,
+    /// Frames (of all, tracked or not) to which "ff+target" feeds a non-zero target velocity
+    /// forward ([`Handover::feedforward`]; in the other methods, what it would have fed). In a
+    /// "ff+target" run, 0 means the run is identical to "ff".
+    pub target_feedforward_frames: usize,
+    /// RMS error of the target velocity used (m/s), over the trusted frames.
+    pub rms_velocity_error_m_s: f64,
+    /// RMS error of the angular velocity used (rad/s), over the trusted frames.
+    pub rms_rate_error_rad_s: f64,
+}
+
+impl HandoverSummary {
+    /// The summary of a trace's hand-over (`None` without hand-over rows).
+    pub fn of(rows: &[TraceRow], delay_s: f64) -> Option<Self> {
+        let still = |v: &evorec_core::target_motion::TargetVelocity| v.v.norm() == 0.0 && v.w.norm() == 0.0;
+        let target_feedforward_frames =
+            rows.iter().filter(|r| r.handover.as_ref().is_some_and(|h| !still(&h.feedforward))).count();
+        let rows: Vec<(&TraceRow, &Handover)> = rows
+            .iter()
+            .filter(|r| r.status == Status::Tracking)
+            .filter_map(|r| r.handover.as_ref().map(|h| (r, h)))
+            .collect();
+        if rows.is_empty() {
+            return None;
+        }
+        let at_capture = PoseRms::of(rows.iter().map(|(r, _)| (r.estimate, r.truth)));
+        let held = PoseRms::of(rows.iter().map(|(r, h)| (r.estimate, h.truth_out)));
+        let predicted = PoseRms::of(rows.iter().map(|(_, h)| (h.predicted, h.truth_out)));
+        let trusted: Vec<&Handover> = rows.iter().map(|(_, h)| *h).filter(|h| h.trusted).collect();
+        let vel = rms_columns::<2>(trusted.iter().map(|h| {
+            let (dv, dw) = (h.velocity.v - h.true_velocity.v, h.velocity.w - h.true_velocity.w);
+            [f64::from(dv.norm()), f64::from(dw.norm())]
+        }))
+        .unwrap_or([0.0; 2]);
+        let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
+        Some(Self {
+            delay_s,
+            frames: rows.len(),
+            at_capture,
+            held,
+            predicted,
+            position_ratio: ratio(predicted.rms_position_mm, at_capture.rms_position_mm),
+            eps_ratio: ratio(predicted.rms_eps_norm, at_capture.rms_eps_norm),
+            trusted_fraction: trusted.len() as f64 / rows.len() as f64,
+            target_feedforward_frames,
+            rms_velocity_error_m_s: vel[0],
+            rms_rate_error_rad_s: vel[1],
+        })
+    }
+}
+
 /// `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
@@ -151,6 +251,9 @@ pub struct Summary {
     pub status: StatusCounts,
     /// Frames refused by the tracker (should be 0).
     pub rejected: u32,
+    /// The hand-over at the output time (`None` where not simulated).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub handover: Option<HandoverSummary>,
     /// The scenario, echoed.
     pub scenario: Scenario,
     /// Version of the simulator that produced the run.
@@ -164,6 +267,7 @@ impl Summary {
             accuracy: Accuracy::of(rows),
             status: StatusCounts::of(rows),
             rejected,
+            handover: HandoverSummary::of(rows, scenario.tracker.delay_s),
             scenario: *scenario,
             evorec_version: env!("CARGO_PKG_VERSION"),
         }

@@ -90,8 +90,24 @@ pub fn trace_header() -> Vec<String> {
     h.push("F".to_owned());
     h.push("status".to_owned());
     h.push("hidden".to_owned());
+    // The hand-over at the output time (`sim::Handover`); empty where not simulated.
+    h.push("t_out".to_owned());
+    for prefix in ["out_", "pred_"] {
+        for c in ["x_mm", "y_mm", "z_mm", "e1", "e2", "e3"] {
+            h.push(format!("{prefix}{c}"));
+        }
+    }
+    h.push("target_trusted".to_owned());
+    for prefix in ["target_", "ff_target_", "true_target_"] {
+        for c in ["vx", "vy", "vz", "wx", "wy", "wz"] {
+            h.push(format!("{prefix}{c}"));
+        }
+    }
     h
 }
+
+/// Columns of the hand-over in [`trace_header`].
+const HANDOVER_COLUMNS: usize = 1 + 12 + 1 + 18;
 
 /// Writes `rows` as `trace.csv` (one row per frame; see [`trace_header`]), atomically.
 ///
@@ -113,7 +129,7 @@ fn write_trace_to(out: &mut dyn Write, rows: &[TraceRow]) -> Result<()> {
 
 /// The fields of one row of `trace.csv` (see [`trace_header`]).
 pub fn trace_record(r: &TraceRow) -> Vec<String> {
-    let mut rec: Vec<String> = Vec::with_capacity(34);
+    let mut rec: Vec<String> = Vec::with_capacity(36 + HANDOVER_COLUMNS);
     rec.push(format!("{:.3}", r.t));
     rec.extend(r.q.iter().chain(r.qd.iter()).map(|v| format!("{v:.6}")));
     for psi in [&r.truth, &r.estimate] {
@@ -123,6 +139,20 @@ pub fn trace_record(r: &TraceRow) -> Vec<String> {
     rec.push(format!("{:.5}", r.fitness));
     rec.push(r.status.as_str().to_owned());
     rec.push(u8::from(r.hidden).to_string());
+    match &r.handover {
+        Some(ho) => {
+            rec.push(format!("{:.3}", ho.t_out));
+            for psi in [&ho.truth_out, &ho.predicted] {
+                rec.extend(psi.0[..3].iter().map(|v| format!("{:.4}", v * 1e3)));
+                rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
+            }
+            rec.push(u8::from(ho.trusted).to_string());
+            for vel in [&ho.velocity, &ho.feedforward, &ho.true_velocity] {
+                rec.extend(vel.v.iter().chain(vel.w.iter()).map(|v| format!("{v:.5}")));
+            }
+        }
+        None => rec.extend(std::iter::repeat_n(String::new(), HANDOVER_COLUMNS)),
+    }
     rec
 }
 

@@ -9,7 +9,8 @@
 //! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]); recorded stereo sequences
 //! (`evorec-seq/1`): the reader ([`sequence`]), tracking them ([`track`]) and writing a
 //! scenario as one ([`export`]); unknown starts and occlusions ([`occlusion`]) and the
-//! acquisition statistics ([`acquire`]).
+//! acquisition statistics ([`acquire`]); the block's own paths beyond the paper
+//! ([`target_path`]) and their grid ([`target_grid`]); the parallel grid runner ([`grid`]).
 
 pub mod acquire;
 pub mod arm;
@@ -17,6 +18,7 @@ pub mod closed_loop;
 pub mod experiment;
 pub mod export;
 pub mod frame;
+pub mod grid;
 pub mod hil;
 pub mod io;
 pub mod motion;
@@ -29,6 +31,8 @@ pub mod scenario;
 pub mod sequence;
 pub mod servo;
 pub mod sim;
+pub mod target_grid;
+pub mod target_path;
 pub mod text;
 pub mod timing;
 pub mod track;

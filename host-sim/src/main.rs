@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use evorec_core::tracker::Feedforward;
 use evorec_sim::scenario::{Method, Scenario};
 use evorec_sim::sequence::Sequence;
-use evorec_sim::{closed_loop, experiment, export, frame, hil, io, paper, servo, track};
+use evorec_sim::{closed_loop, experiment, export, frame, hil, io, paper, servo, target_grid, track};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -68,20 +68,32 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
+        /// Override the scenario's method: ga, ff or ff+target.
+        #[arg(long, value_parser = Method::parse)]
+        method: Option<Method>,
     },
-    /// The paper's experiment: motions A and B × ω ∈ {0, 0.125, 0.25, 0.5, 1.0} × (GA, GA + FF),
-    /// 72 s each, in parallel; writes DIR/paper_table.csv, DIR/paper_table.md and DIR/runs/.
+    /// The paper's experiment: motions A and B × ω ∈ {0, 0.125, 0.25, 0.5, 1.0} × (GA, GA + FF,
+    /// GA + FF + target), 72 s each, in parallel; writes DIR/paper_table.csv, DIR/paper_table.md
+    /// and DIR/runs/. `--grid target` runs the grid over the block's own motion instead
+    /// (DIR/target_table.*), `--grid both` both.
     Paper {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
         /// Scenario whose camera, target and seed the grid uses (default: built-in defaults,
-        /// seed 1).
+        /// seed 1, 72 s); the target grid also takes its duration (the paper's is 72 s).
         #[arg(long)]
         base: Option<PathBuf>,
         /// Hide the progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Which grid: the paper's, the one over the block's own motion, or both.
+        #[arg(long, value_enum, default_value_t = Grid::Paper)]
+        grid: Grid,
+        /// Run only this method's cells (ga, ff or ff+target; the target grid has ff and
+        /// ff+target).
+        #[arg(long, value_parser = Method::parse)]
+        method: Option<Method>,
     },
     /// Run one scenario with the tracker in the firmware under QEMU (the scenario must render
     /// the firmware's 160x120 frames); writes the same files as `run`. Builds nothing: build
@@ -96,6 +108,9 @@ enum Command {
         /// target/thumbv7em-none-eabihf/release/evorec-firmware).
         #[arg(long)]
         firmware: Option<PathBuf>,
+        /// Override the scenario's method: ga, ff or ff+target.
+        #[arg(long, value_parser = Method::parse)]
+        method: Option<Method>,
     },
     /// Closed-loop experiments (position-based visual servoing from the tracker's estimates):
     /// conveyor 0/0.05/0.1/0.2 m/s and turning block × (ga, ff, ff+target) × gains × delays,
@@ -215,8 +230,48 @@ enum Command {
     },
 }
 
+/// The grids of `evorec paper`.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+enum Grid {
+    /// The paper's grid (motions A/B × ω × GA, FF, FF + target).
+    Paper,
+    /// The block's own motion (conveyor speeds, ω_o) under motion A at 0.5 rad/s.
+    Target,
+    /// Both.
+    Both,
+}
+
 fn load(path: &Path) -> Result<Scenario> {
     Ok(Scenario::load(path)?)
+}
+
+/// [`load`] with the method overridden if `method` is given.
+fn load_with(path: &Path, method: Option<Method>) -> Result<Scenario> {
+    let mut s = load(path)?;
+    if let Some(m) = method {
+        s.method = m;
+    }
+    Ok(s)
+}
+
+fn report_handover(h: Option<&experiment::HandoverSummary>) {
+    let Some(h) = h else { return };
+    println!(
+        "hand-over {:.3} s after capture ({} tracked frames): RMS position at capture {:.2} mm, held {:.2} mm, \
+         predicted {:.2} mm (ratio {:.2}); RMS ε at capture {:.4}, held {:.4}, predicted {:.4} (ratio {:.2}); \
+         target velocity trusted in {:.0} %",
+        h.delay_s,
+        h.frames,
+        h.at_capture.rms_position_mm,
+        h.held.rms_position_mm,
+        h.predicted.rms_position_mm,
+        h.position_ratio,
+        h.at_capture.rms_eps_norm,
+        h.held.rms_eps_norm,
+        h.predicted.rms_eps_norm,
+        h.eps_ratio,
+        h.trusted_fraction * 100.0
+    );
 }
 
 fn report(a: &experiment::Accuracy, t0: Instant) {
@@ -309,8 +364,8 @@ fn report_servo(s: &closed_loop::ServoSummary) {
 
 fn execute(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Run { scenario, out } => {
-            let s = load(&scenario)?;
+        Command::Run { scenario, out, method } => {
+            let s = load_with(&scenario, method)?;
             io::create_out_dir(&out)?;
             let t0 = Instant::now();
             if s.servo.is_some() {
@@ -326,21 +381,34 @@ fn execute(cli: Cli) -> Result<()> {
             let title = format!("{} ({})", scenario.display(), s.method.as_str());
             experiment::write_outputs(&output, &out, &title)?;
             report(&output.summary.accuracy, t0);
+            report_handover(output.summary.handover.as_ref());
             println!("wrote {}", out.display());
         }
-        Command::Paper { out, base, quiet } => {
+        Command::Paper { out, base, quiet, grid, method } => {
             let base = match base {
                 Some(p) => load(&p)?,
                 None => Scenario::new(1, paper::DURATION_S, Method::Ff),
             };
             io::create_out_dir(&out)?;
             let t0 = Instant::now();
-            let results = paper::run_grid(&base, &out, !quiet)?;
-            println!("{}", paper::markdown(&results));
-            println!("{} runs in {:.1} s; wrote {}", results.len(), t0.elapsed().as_secs_f64(), out.display());
+            let wanted = |m: Method| method.is_none_or(|w| w == m);
+            let mut runs = 0;
+            if grid != Grid::Target {
+                let cells: Vec<_> = paper::grid().into_iter().filter(|c| wanted(c.method)).collect();
+                let results = paper::run_grid_of(&cells, &base, &out, !quiet)?;
+                println!("{}", paper::markdown(&results));
+                runs += results.len();
+            }
+            if grid != Grid::Paper {
+                let cells: Vec<_> = target_grid::grid().into_iter().filter(|c| wanted(c.method)).collect();
+                let results = target_grid::run_grid(&cells, &base, &out, !quiet)?;
+                println!("{}", target_grid::markdown(&results));
+                runs += results.len();
+            }
+            println!("{runs} runs in {:.1} s; wrote {}", t0.elapsed().as_secs_f64(), out.display());
         }
-        Command::Hil { scenario, out, firmware } => {
-            let s = load(&scenario)?;
+        Command::Hil { scenario, out, firmware, method } => {
+            let s = load_with(&scenario, method)?;
             io::create_out_dir(&out)?;
             let firmware = firmware.unwrap_or_else(evorec_firmware::host::default_firmware_path);
             let t0 = Instant::now();
@@ -348,6 +416,7 @@ fn execute(cli: Cli) -> Result<()> {
             let title = format!("{} ({}, firmware on QEMU)", scenario.display(), s.method.as_str());
             experiment::write_outputs(&output, &out, &title)?;
             report(&output.summary.accuracy, t0);
+            report_handover(output.summary.handover.as_ref());
             println!("wrote {}", out.display());
         }
         Command::Track {

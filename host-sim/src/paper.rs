@@ -1,14 +1,13 @@
 //! The paper's experiment grid (§5, Fig. 17 and Fig. 24): motions A and B, robot frequency
-//! ω ∈ {0, 0.125, 0.25, 0.5, 1.0} rad/s, with and without feedforward, 72 s each, and the
-//! comparison with the published tables.
+//! ω ∈ {0, 0.125, 0.25, 0.5, 1.0} rad/s, with and without feedforward, and beyond the paper
+//! with the feedforward of the target's own motion too ("1-step GA + FF + target", issue 12),
+//! 72 s each, and the comparison with the published tables. The grid over the target's own
+//! motions is [`crate::target_grid`].
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::sync::Mutex;
 
 use anyhow::Result;
-use indicatif::{ProgressBar, ProgressStyle};
-use rayon::prelude::*;
 
 use crate::experiment::{self, Accuracy};
 use crate::motion::MotionKind;
@@ -84,26 +83,31 @@ impl Cell {
         match self.method {
             Method::Ga => "1-step GA",
             Method::Ff => "1-step GA + FF",
+            Method::FfTarget => "1-step GA + FF + target",
         }
     }
 
     /// Directory name of the cell's run.
     pub fn slug(&self) -> String {
-        format!("{}_{}_w{}", self.motion_name(), self.method.as_str(), self.omega)
+        format!("{}_{}_w{}", self.motion_name(), self.method.as_str().replace('+', "_"), self.omega)
     }
 
     /// The published row of this cell, if any.
     pub fn published(&self) -> Option<&'static Published> {
-        let ff = self.method == Method::Ff;
+        let ff = match self.method {
+            Method::Ga => false,
+            Method::Ff => true,
+            Method::FfTarget => return None,
+        };
         PUBLISHED.iter().find(|p| p.motion == self.motion_name() && p.ff == ff && p.omega == self.omega)
     }
 }
 
-/// The full grid: A and B × [`OMEGAS`] × (GA, GA + FF).
+/// The full grid: A and B × [`OMEGAS`] × (GA, GA + FF, GA + FF + target).
 pub fn grid() -> Vec<Cell> {
     let mut cells = Vec::new();
     for motion in [MotionKind::A, MotionKind::B] {
-        for method in [Method::Ga, Method::Ff] {
+        for method in Method::ALL {
             for omega in OMEGAS {
                 cells.push(Cell { motion, method, omega });
             }
@@ -131,31 +135,21 @@ pub type GridResults = Vec<(Cell, Accuracy)>;
 /// # Errors
 /// Any run's or any file's error.
 pub fn run_grid(base: &Scenario, out: &Path, show_progress: bool) -> Result<GridResults> {
-    let cells = grid();
-    let frames: u64 = cells.iter().map(|c| u64::from(crate::sim::frame_total(&scenario_of(base, c)))).sum();
-    let bar = if show_progress {
-        let b = ProgressBar::new(frames);
-        b.set_style(
-            ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {percent:>3}% {pos}/{len} frames, eta {eta}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        b
-    } else {
-        ProgressBar::hidden()
-    };
-    let done = Mutex::new(Vec::new());
-    cells.par_iter().try_for_each(|cell| -> Result<()> {
-        let s = scenario_of(base, cell);
-        let output = experiment::run(&s, || bar.inc(1))?;
+    run_grid_of(&grid(), base, out, show_progress)
+}
+
+/// [`run_grid`] over some of the grid's cells (e.g. one method's), in the order given.
+///
+/// # Errors
+/// Any run's or any file's error.
+pub fn run_grid_of(cells: &[Cell], base: &Scenario, out: &Path, show_progress: bool) -> Result<GridResults> {
+    let frames = |c: &Cell| u64::from(crate::sim::frame_total(&scenario_of(base, c)));
+    let results = crate::grid::run_cells(cells, frames, show_progress, |cell, tick| {
+        let output = experiment::run(&scenario_of(base, cell), tick)?;
         let title = format!("motion {} / {} / ω = {} rad/s", cell.motion_name(), cell.method_name(), cell.omega);
         experiment::write_outputs(&output, &out.join("runs").join(cell.slug()), &title)?;
-        done.lock().map_err(|_| anyhow::anyhow!("poisoned"))?.push((*cell, output.summary.accuracy));
-        Ok(())
+        Ok((*cell, output.summary.accuracy))
     })?;
-    bar.finish();
-    let mut results = done.into_inner().map_err(|_| anyhow::anyhow!("poisoned"))?;
-    let order = |c: &Cell| cells.iter().position(|x| x == c).unwrap_or(usize::MAX);
-    results.sort_by_key(|(c, _)| order(c));
     write_tables(&results, out)?;
     Ok(results)
 }

@@ -5,13 +5,10 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::sync::Mutex;
 
 use anyhow::{Context, Result};
 use evorec_core::tracker::Feedforward;
-use indicatif::{ProgressBar, ProgressStyle};
 use plotters::prelude::*;
-use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::closed_loop::{self, Conveyor, LoopOptions, Outcome, ServoSummary};
@@ -178,7 +175,11 @@ pub fn cells(g: &GridSettings) -> Vec<Cell> {
 
 /// The scenario and loop options of a cell.
 pub fn scenario_of(g: &GridSettings, cell: &Cell) -> (Scenario, LoopOptions) {
-    let method = if cell.method == LoopMethod::Ga { Method::Ga } else { Method::Ff };
+    let method = match cell.method {
+        LoopMethod::Ga => Method::Ga,
+        LoopMethod::Ff => Method::Ff,
+        LoopMethod::FfTarget => Method::FfTarget,
+    };
     let mut s = Scenario::new(g.seed, g.duration_s, method);
     let w = g.width;
     s.camera.width = w;
@@ -216,26 +217,15 @@ pub fn scenario_of(g: &GridSettings, cell: &Cell) -> (Scenario, LoopOptions) {
 /// Any run's or file's error.
 pub fn run_grid(g: &GridSettings, out: &Path, show_progress: bool) -> Result<Vec<(Cell, ServoSummary)>> {
     let cells = cells(g);
-    let frames: u64 = cells.iter().map(|c| u64::from(frame_total(&scenario_of(g, c).0))).sum();
-    let bar = if show_progress { ProgressBar::new(frames) } else { ProgressBar::hidden() };
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {percent:>3}% {pos}/{len} frames, eta {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     crate::io::write_json(&out.join("settings.json"), g)?;
-    let done = Mutex::new(Vec::new());
-    cells.par_iter().try_for_each(|cell| -> Result<()> {
+    let frames = |c: &Cell| u64::from(frame_total(&scenario_of(g, c).0));
+    let results = crate::grid::run_cells(&cells, frames, show_progress, |cell, tick| {
         let (s, opts) = scenario_of(g, cell);
-        let output = closed_loop::run(&s, &opts, || bar.inc(1))?;
+        let output = closed_loop::run(&s, &opts, tick)?;
         write_error_series(&output.servo, &out.join("runs").join(cell.slug()))?;
-        done.lock().map_err(|_| anyhow::anyhow!("poisoned"))?.push((*cell, output.servo_summary));
-        Ok(())
+        Ok((*cell, output.servo_summary))
     })?;
-    bar.finish();
-    let mut results = done.into_inner().map_err(|_| anyhow::anyhow!("poisoned"))?;
-    let order = |c: &Cell| cells.iter().position(|x| x == c).unwrap_or(usize::MAX);
-    results.sort_by_key(|(c, _)| order(c));
     write_tables(&results, out)?;
     for target in &g.targets {
         stability_map(&results, g, target, &out.join(format!("stability_{}.png", target.slug())))?;

@@ -6,13 +6,23 @@
 //! RGB565 pixels a camera sensor delivers ([`render::rgb565_into`]), and handed over together
 //! with the joint sample `q, q̇` of that instant; the tracker computes the hue of the pixels it
 //! samples, as the board does (`evorec run` and `evorec hil` see the same bytes). Each published estimate is stored with the ground truth of its frame.
-
+//!
+//! ## Hand-over
+//! The board also plays the consumer of the estimates (a visual-servo loop): the estimate of
+//! the frame captured at `t` is output at `t + delay_s` (`[tracker] delay_s`). The board feeds
+//! every published estimate to its own copy of the core's [`TargetFilter`] (the same code and
+//! the same inputs as the tracker's filter, so it works for the firmware too, which publishes
+//! the estimate only) and asks it for the pose at the output time with the arm's joint sample
+//! of that time ([`TargetFilter::predict`]). Each row records the truth at the output time, the
+//! held estimate and the prediction ([`Handover`]).
 use anyhow::{Context, Result, bail};
 use evorec_core::board::{CameraController, Error as BoardError, ErrorKind, ErrorType, FrameInfo};
 use evorec_core::camera::{Pinhole, StereoRig};
+use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
+use evorec_core::target_motion::{self, TargetFilter, TargetVelocity};
 use evorec_core::tracker::{Estimate, JointSample};
 use nalgebra::Isometry3;
 use rand_core::SeedableRng;
@@ -23,6 +33,7 @@ use crate::motion::{self, FlangeTrajectory, TargetMotion, Twist};
 use crate::occlusion::{self, OcclusionKind, Placement};
 use crate::render::{self, AntiAlias, RenderOptions, StereoImages};
 use crate::scenario::Scenario;
+use crate::target_path::{self, TargetPath};
 
 /// The stereo rig of a scenario (both cameras share the intrinsics).
 ///
@@ -46,6 +57,7 @@ pub struct World {
     arm: ArmSim,
     trajectory: FlangeTrajectory,
     target: TargetMotion,
+    path: TargetPath,
     rig: StereoRig,
     block: Block,
     render: RenderOptions,
@@ -70,6 +82,7 @@ impl World {
             arm,
             trajectory: flange_trajectory(scenario),
             target: target_motion(scenario),
+            path: TargetPath::from_scenario(scenario),
             rig: rig(scenario)?,
             block: block(scenario),
             render: RenderOptions::default().with_antialias(antialias).with_noise(scenario.camera.noise_std as f32),
@@ -139,9 +152,31 @@ impl World {
 
     /// `^W T_M` at the current time.
     pub fn target_pose(&self) -> Isometry3<f64> {
-        let mut pose = self.target.target_world_pose(self.arm.time());
+        self.target_pose_at(self.arm.time())
+    }
+
+    fn target_pose_at(&self, t: f64) -> Isometry3<f64> {
+        let mut pose = target_path::target_pose(&self.target, &self.path, t);
         pose.translation.vector += self.target_offset;
         pose
+    }
+
+    /// The block's true twist in the world at the current time (scripted motion and path; the
+    /// caller's [`World::set_target_offset`] is not differentiated).
+    pub fn target_twist(&self) -> Twist {
+        target_path::target_twist(&self.target, &self.path, self.arm.time())
+    }
+
+    /// The true pose `^CR ψ_M` and the joint sample at a later time `t` along the scripted
+    /// trajectory, without advancing this world (a copy of the arm runs ahead).
+    pub fn look_ahead(&self, t: f64) -> (Psi, JointSample<DOF>) {
+        let mut arm = self.arm.clone();
+        while arm.time() + 0.5 * CONTROL_PERIOD_S < t {
+            arm.follow(CONTROL_PERIOD_S, &self.trajectory);
+        }
+        let target = self.target_pose_at(arm.time());
+        let iso: Isometry3<f32> = (arm.camera_pose(self.scenario.camera.baseline_m).inverse() * target).cast();
+        (Psi::from_isometry(&iso), arm.joint_sample())
     }
 
     /// `^CR T_M`: the target in the right camera frame (computed in f64).
@@ -203,8 +238,32 @@ pub struct TraceRow {
     pub status: Status,
     /// The block was hidden (occluded or removed) in this frame.
     pub hidden: bool,
+    /// The hand-over of this estimate at its output time (`None` where not simulated).
+    pub handover: Option<Handover>,
 }
 
+/// The estimate of one frame as a consumer sees it at the output time `t + delay`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Handover {
+    /// Output time (s).
+    pub t_out: f64,
+    /// True pose in `Σ_CR` at the output time.
+    pub truth_out: Psi,
+    /// The pose predicted for the output time by the core's `TargetFilter::predict` (the held
+    /// estimate when the filter has no track).
+    pub predicted: Psi,
+    /// Whether the prediction used a trusted target velocity.
+    pub trusted: bool,
+    /// The target velocity the prediction used (world).
+    pub velocity: TargetVelocity,
+    /// The target velocity fed forward to this frame's population in the "ff+target" method
+    /// (`TargetFilter::feedforward_velocity` before this estimate; the board's filter has the
+    /// same inputs as the tracker's, so it is the tracker's). Zero in every frame means the run
+    /// is bit-identical to "ff".
+    pub feedforward: TargetVelocity,
+    /// The true target velocity at capture (world).
+    pub true_velocity: TargetVelocity,
+}
 /// Why the simulated board stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SimError {
@@ -228,15 +287,19 @@ pub struct SimBoard {
     world: World,
     frames: u32,
     next: u32,
-    current: Option<(f64, Psi, JointSample<DOF>, bool)>,
+    current: Option<(f64, Psi, JointSample<DOF>, bool, TargetVelocity)>,
     rows: Vec<TraceRow>,
+    filter: TargetFilter,
+    flange_to_camera: Isometry3<f32>,
 }
 
 impl SimBoard {
     /// A board delivering [`frame_total`] frames of `world`'s scenario.
     pub fn new(world: World) -> Self {
         let frames = frame_total(world.scenario());
-        Self { world, frames, next: 0, current: None, rows: Vec::with_capacity(frames as usize) }
+        let flange_to_camera = flange_to_camera(world.scenario());
+        let rows = Vec::with_capacity(frames as usize);
+        Self { world, frames, next: 0, current: None, rows, filter: TargetFilter::with_defaults(), flange_to_camera }
     }
 
     /// Frames this board delivers in all.
@@ -281,7 +344,9 @@ impl CameraController<DOF> for SimBoard {
         render::rgb565_into(&images.left, left);
         render::rgb565_into(&images.right, right);
         let joints = self.world.arm().joint_sample();
-        self.current = Some((t, self.world.truth(), joints, self.world.occlusion().is_some()));
+        let tw = self.world.target_twist();
+        let velocity = TargetVelocity { v: tw.v.cast(), w: tw.w.cast() };
+        self.current = Some((t, self.world.truth(), joints, self.world.occlusion().is_some(), velocity));
         let info = FrameInfo {
             sequence: self.next,
             capture_time_us: (t * 1e6).round() as u64,
@@ -297,7 +362,8 @@ impl CameraController<DOF> for SimBoard {
     }
 
     fn publish(&mut self, _frame: &FrameInfo, estimate: &Estimate) -> Result<(), SimError> {
-        if let Some((t, truth, joints, hidden)) = self.current.take() {
+        if let Some((t, truth, joints, hidden, true_velocity)) = self.current.take() {
+            let handover = Some(self.hand_over(t, &joints, estimate, true_velocity));
             self.rows.push(TraceRow {
                 t,
                 q: joints.q,
@@ -307,9 +373,35 @@ impl CameraController<DOF> for SimBoard {
                 fitness: estimate.fitness,
                 status: estimate.status,
                 hidden,
+                handover,
             });
         }
         Ok(())
+    }
+}
+
+impl SimBoard {
+    /// Updates the board's target filter with `estimate` (captured at `t` with `joints`) and
+    /// predicts the pose at the output time `t + delay_s`.
+    fn hand_over(
+        &mut self,
+        t: f64,
+        joints: &JointSample<DOF>,
+        estimate: &Estimate,
+        true_velocity: TargetVelocity,
+    ) -> Handover {
+        let feedforward = self.filter.feedforward_velocity();
+        let world = target_motion::world_pose(&PA10, &joints.q, &self.flange_to_camera, &estimate.psi);
+        self.filter.update_with_status(&world, joints.time_us, estimate.fitness, estimate.status);
+        let t_out = t + self.world.scenario().tracker.delay_s;
+        let (truth_out, joints_out) = self.world.look_ahead(t_out);
+        let t_out_us = (t_out * 1e6).round() as u64;
+        let (predicted, trusted, velocity) =
+            match self.filter.predict(&PA10, &self.flange_to_camera, &joints_out, t_out_us) {
+                Ok(p) => (p.psi, p.trusted, p.velocity),
+                Err(_) => (estimate.psi, false, TargetVelocity::ZERO),
+            };
+        Handover { t_out, truth_out, predicted, trusted, velocity, feedforward, true_velocity }
     }
 }
 
@@ -450,4 +542,51 @@ pub fn world_at_frame(s: &Scenario, frame: u32) -> Result<World> {
     let mut world = World::new(s).context("building the simulated world")?;
     world.advance_to(t);
     Ok(world)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::Method;
+
+    /// A 1 s run at 160×120 of the block on a 0.2 m/s conveyor, static arm.
+    fn conveyor_run(method: Method) -> Vec<TraceRow> {
+        let mut s = Scenario::new(3, 1.0, method);
+        s.camera.width = 160;
+        s.camera.height = 120;
+        s.camera.fx = 200.0;
+        s.camera.fy = 200.0;
+        s.camera.cx = 80.0;
+        s.camera.cy = 60.0;
+        s.camera.supersample = 1;
+        s.target.conveyor_speed_m_s = 0.2;
+        s.target.conveyor_accel_m_s2 = 2.0;
+        let out = crate::experiment::run(&s, || {}).unwrap_or_else(|e| unreachable!("{e}"));
+        out.rows
+    }
+
+    #[test]
+    fn the_hand_over_compares_with_the_truth_one_delay_later() {
+        let rows = conveyor_run(Method::Ff);
+        assert_eq!(rows.len(), 31);
+        for pair in rows.windows(2) {
+            let h = pair[0].handover.unwrap_or_else(|| unreachable!("every frame has a hand-over"));
+            // Default delay: one frame period; the truth then is the next frame's.
+            assert!((h.t_out - pair[1].t).abs() < 1e-9);
+            assert_eq!(h.truth_out, pair[1].truth);
+            // The block rides the conveyor along world y.
+            assert_eq!((h.true_velocity.v.x, h.true_velocity.v.z), (0.0, 0.0));
+        }
+        let last = rows[rows.len() - 1].handover.unwrap_or_else(|| unreachable!());
+        assert!(last.true_velocity.v.y > 0.1, "{:?}", last.true_velocity);
+    }
+
+    #[test]
+    fn the_target_path_moves_the_rendered_block() {
+        let rows = conveyor_run(Method::FfTarget);
+        let (first, last) = (&rows[0].truth, &rows[rows.len() - 1].truth);
+        // Static arm: the truth in the camera moves with the conveyor (sideways, ~0.1 m in 1 s).
+        let moved = (last.translation() - first.translation()).norm();
+        assert!(moved > 0.05 && moved < 0.2, "moved {moved} m");
+    }
 }

@@ -10,6 +10,7 @@
 //! duration_s = 72.0        # required, (0, 3600]
 //! frame_period_s = 0.033   # [0.001, 1], ≤ duration_s
 //! method = "ff"            # required: "ga" (plain 1-step GA) | "ff" (GA + motion feedforward)
+//!                          #   | "ff+target" (GA + feedforward of the arm's and the target's motion)
 //!
 //! [camera]                 # both cameras share these intrinsics
 //! width = 640              # 16 ..= 4096 pixels
@@ -29,6 +30,12 @@
 //! amplitude_deg = 15.0     # [0, 180]: yaw oscillation amplitude
 //! omega_rad_s = 0.125      # [0, 10]: yaw oscillation angular frequency; 0 = still
 //! yaw0_deg = 25.0          # [-180, 180]: initial yaw about world z
+//! conveyor_speed_m_s = 0.0 # 0 (off) or [0.05, 0.3]: the centre shuttles along world y
+//! conveyor_travel_m = 0.2  # (0, 0.5]: length of the shuttle (starts at rest at its −y end)
+//! conveyor_accel_m_s2 = 0.5 # (0, 10], ≥ 2·speed²/travel: peak acceleration of the reversals
+//! random_amplitude_m = 0.0 # [0, 0.1]: 0 = off; seeded smooth random motion, per-axis scale
+//! random_amplitude_deg = 10.0 # [0, 30]: its rotation scale per axis
+//! random_omega_rad_s = 1.0 # (0, 2]: its highest angular frequency
 //!
 //! [robot]
 //! motion = "A"             # "static" | "A" | "B"
@@ -48,7 +55,11 @@
 //! max_accel_m_s2 = 1.0     # (0, 20]
 //! max_rot_accel_rad_s2 = 3.0   # (0, 50]
 //! delay_frames = 1         # 0 ..= 10: processing delay between capture and estimate
+//!
+//! [tracker]
+//! delay_s = 0.033          # [0, 1]: capture → output delay of the hand-over; default frame_period_s
 //! ```
+//! The target's paths (conveyor, random) are described in [`crate::target_path`].
 //! Acquisition keys (`[tracker] initial`, `[target] placement`, `[[occlusion]]`) are
 //! described in [`crate::occlusion`].
 //! All tables and all keys except `seed`, `duration_s` and `method` are optional; the values
@@ -58,7 +69,7 @@
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
-use toml::{Table, Value};
+use toml::Table;
 
 use crate::motion::MotionKind;
 use crate::occlusion::{self, Initial, Occlusions, Placement};
@@ -131,15 +142,34 @@ pub enum Method {
     /// The 1-step GA with quaternion motion feedforward (`Feedforward::On`).
     #[serde(rename = "ff")]
     Ff,
+    /// The 1-step GA with feedforward of the arm's and the target's own motion
+    /// (`Feedforward::OnWithTarget`, issue 12).
+    #[serde(rename = "ff+target")]
+    FfTarget,
 }
 
 impl Method {
-    /// The spelling used in scenario files.
+    /// Every method, in the order of the tables.
+    pub const ALL: [Method; 3] = [Method::Ga, Method::Ff, Method::FfTarget];
+
+    /// The spelling used in scenario files and on the command line.
     pub fn as_str(self) -> &'static str {
         match self {
             Self::Ga => "ga",
             Self::Ff => "ff",
+            Self::FfTarget => "ff+target",
         }
+    }
+
+    /// Parses [`Method::as_str`]'s spelling.
+    ///
+    /// # Errors
+    /// The message for an unknown method.
+    pub fn parse(text: &str) -> std::result::Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.as_str() == text)
+            .ok_or_else(|| format!("expected \"ga\", \"ff\" or \"ff+target\", got \"{text}\""))
     }
 }
 
@@ -199,6 +229,18 @@ pub struct TargetConfig {
     pub yaw0_deg: f64,
     /// Where the block stands: fixed (`distance_m`, `yaw0_deg`) or a random pose.
     pub placement: Placement,
+    /// Conveyor speed along world y (m/s); 0 = no conveyor ([`crate::target_path`]).
+    pub conveyor_speed_m_s: f64,
+    /// Length of the conveyor's shuttle (m).
+    pub conveyor_travel_m: f64,
+    /// Peak acceleration of the conveyor's reversals (m/s²).
+    pub conveyor_accel_m_s2: f64,
+    /// Scale of the random smooth motion per axis (m); 0 = off.
+    pub random_amplitude_m: f64,
+    /// Scale of the random smooth rotation per axis (degrees).
+    pub random_amplitude_deg: f64,
+    /// Highest angular frequency of the random motion (rad/s).
+    pub random_omega_rad_s: f64,
 }
 
 impl Default for TargetConfig {
@@ -211,6 +253,12 @@ impl Default for TargetConfig {
             omega_rad_s: 0.125,
             yaw0_deg: 25.0,
             placement: Placement::Fixed,
+            conveyor_speed_m_s: 0.0,
+            conveyor_travel_m: 0.2,
+            conveyor_accel_m_s2: 0.5,
+            random_amplitude_m: 0.0,
+            random_amplitude_deg: 10.0,
+            random_omega_rad_s: 1.0,
         }
     }
 }
@@ -287,11 +335,22 @@ impl ServoSection {
     }
 }
 
-/// `[tracker]`: how the tracker starts.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+/// `[tracker]`: how the tracker starts, and when its estimates are handed over.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct TrackerStart {
     /// Around the true pose, or unknown.
     pub initial: Initial,
+    /// Processing delay between a frame's capture and the output of its estimate (s); the
+    /// hand-over at the output time is measured ([`crate::sim::Handover`]). Default: one
+    /// frame period.
+    pub delay_s: f64,
+}
+
+impl TrackerStart {
+    /// Around the true pose, output one `frame_period_s` after capture.
+    pub fn new(frame_period_s: f64) -> Self {
+        Self { initial: Initial::default(), delay_s: frame_period_s }
+    }
 }
 
 /// One validated experiment description. See the module documentation for the file format.
@@ -336,7 +395,7 @@ impl Scenario {
             robot: RobotConfig::default(),
             ga: GaConfig::default(),
             servo: None,
-            tracker: TrackerStart::default(),
+            tracker: TrackerStart::new(0.033),
             occlusion: Occlusions::default(),
         }
     }
@@ -372,8 +431,8 @@ impl Scenario {
         let ga = parse_ga(&top.subtable("ga")?)?;
         let servo = parse_servo(&top.subtable("servo")?)?;
         let tracker_section = top.subtable("tracker")?;
-        tracker_section.check_keys(&["initial"])?;
-        let tracker = TrackerStart { initial: occlusion::parse_initial(tracker_section.get("initial"))? };
+        tracker_section.check_keys(&["initial", "delay_s"])?;
+        let initial = occlusion::parse_initial(tracker_section.get("initial"))?;
 
         let seed = top.int("seed", None)?;
         let seed = u64::try_from(seed).map_err(|_| invalid("seed", format!("must be ≥ 0, got {seed}")))?;
@@ -387,11 +446,9 @@ impl Scenario {
                 format!("must not exceed duration_s ({duration_s}), got {frame_period_s}"),
             ));
         }
-        let method = match top.string("method", None)?.as_str() {
-            "ga" => Method::Ga,
-            "ff" => Method::Ff,
-            other => return Err(invalid("method", format!("expected \"ga\" or \"ff\", got \"{other}\""))),
-        };
+        let method = Method::parse(&top.string("method", None)?).map_err(|m| invalid("method", m))?;
+        let delay_s = tracker_section.float_in("delay_s", frame_period_s, Bound::Closed(0.0), 1.0)?;
+        let tracker = TrackerStart { initial, delay_s };
         let occlusion = occlusion::parse_occlusions(top.get("occlusion"), duration_s)?;
         Ok(Self { seed, duration_s, frame_period_s, method, camera, target, robot, ga, servo, tracker, occlusion })
     }
@@ -458,7 +515,21 @@ fn parse_camera(s: &Section<'_>) -> Result<CameraConfig> {
 }
 
 fn parse_target(s: &Section<'_>) -> Result<TargetConfig> {
-    s.check_keys(&["size_m", "face_hues_deg", "distance_m", "amplitude_deg", "omega_rad_s", "yaw0_deg", "placement"])?;
+    s.check_keys(&[
+        "size_m",
+        "face_hues_deg",
+        "distance_m",
+        "amplitude_deg",
+        "omega_rad_s",
+        "yaw0_deg",
+        "placement",
+        "conveyor_speed_m_s",
+        "conveyor_travel_m",
+        "conveyor_accel_m_s2",
+        "random_amplitude_m",
+        "random_amplitude_deg",
+        "random_omega_rad_s",
+    ])?;
     let d = TargetConfig::default();
     let size_m: [f64; 3] = s.floats("size_m", d.size_m)?;
     for (i, x) in size_m.iter().enumerate() {
@@ -486,7 +557,50 @@ fn parse_target(s: &Section<'_>) -> Result<TargetConfig> {
     let omega_rad_s = s.float_in("omega_rad_s", d.omega_rad_s, Bound::Closed(0.0), 10.0)?;
     let yaw0_deg = s.float_in("yaw0_deg", d.yaw0_deg, Bound::Closed(-180.0), 180.0)?;
     let placement = occlusion::parse_placement(s.get("placement"))?;
-    Ok(TargetConfig { size_m, face_hues_deg, distance_m, amplitude_deg, omega_rad_s, yaw0_deg, placement })
+    let base = TargetConfig { size_m, face_hues_deg, distance_m, amplitude_deg, omega_rad_s, yaw0_deg, placement, ..d };
+    parse_target_path(s, base)
+}
+
+/// The `[target]` keys of the block's path ([`crate::target_path`]).
+fn parse_target_path(s: &Section<'_>, base: TargetConfig) -> Result<TargetConfig> {
+    let d = TargetConfig::default();
+    let conveyor_speed_m_s = s.float_in("conveyor_speed_m_s", d.conveyor_speed_m_s, Bound::Closed(0.0), 0.3)?;
+    if conveyor_speed_m_s != 0.0 && conveyor_speed_m_s < 0.05 {
+        return Err(invalid(
+            s.path("conveyor_speed_m_s"),
+            format!("must be 0 (off) or in [0.05, 0.3], got {conveyor_speed_m_s}"),
+        ));
+    }
+    let conveyor_travel_m = s.float_in("conveyor_travel_m", d.conveyor_travel_m, Bound::Open(0.0), 0.5)?;
+    let conveyor_accel_m_s2 = s.float_in("conveyor_accel_m_s2", d.conveyor_accel_m_s2, Bound::Open(0.0), 10.0)?;
+    let min_accel = 2.0 * conveyor_speed_m_s * conveyor_speed_m_s / conveyor_travel_m;
+    if conveyor_accel_m_s2 < min_accel * (1.0 - 1e-9) {
+        return Err(invalid(
+            s.path("conveyor_accel_m_s2"),
+            format!(
+                "must be at least 2·speed²/travel = {min_accel:.4} m/s² to reverse within the travel, got \
+                 {conveyor_accel_m_s2}"
+            ),
+        ));
+    }
+    let random_amplitude_m = s.float_in("random_amplitude_m", d.random_amplitude_m, Bound::Closed(0.0), 0.1)?;
+    let random_amplitude_deg = s.float_in("random_amplitude_deg", d.random_amplitude_deg, Bound::Closed(0.0), 30.0)?;
+    let random_omega_rad_s = s.float_in("random_omega_rad_s", d.random_omega_rad_s, Bound::Open(0.0), 2.0)?;
+    if conveyor_speed_m_s > 0.0 && random_amplitude_m > 0.0 {
+        return Err(invalid(
+            s.path("random_amplitude_m"),
+            "the block follows one path: set conveyor_speed_m_s or random_amplitude_m to 0",
+        ));
+    }
+    Ok(TargetConfig {
+        conveyor_speed_m_s,
+        conveyor_travel_m,
+        conveyor_accel_m_s2,
+        random_amplitude_m,
+        random_amplitude_deg,
+        random_omega_rad_s,
+        ..base
+    })
 }
 
 fn parse_robot(s: &Section<'_>) -> Result<RobotConfig> {
@@ -585,354 +699,8 @@ fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
     }))
 }
 
-/// Lower end of a range check.
-#[derive(Clone, Copy)]
-enum Bound {
-    Open(f64),
-    Closed(f64),
-}
-
-fn check_range(field: &str, x: f64, lo: Bound, hi: f64) -> Result<()> {
-    check_range_why(field, x, lo, hi, "")
-}
-
-fn check_range_why(field: &str, x: f64, lo: Bound, hi: f64, why: &str) -> Result<()> {
-    let (ok_lo, text) = match lo {
-        Bound::Open(l) => (x > l, format!("({l}, {hi}]")),
-        Bound::Closed(l) => (x >= l, format!("[{l}, {hi}]")),
-    };
-    if x.is_finite() && ok_lo && x <= hi {
-        Ok(())
-    } else {
-        Err(invalid(field, format!("must be in {text}{why}, got {x}")))
-    }
-}
-
-/// One TOML table and its dotted name, for typed look-ups with field-naming errors.
-struct Section<'a> {
-    name: &'static str,
-    table: Option<&'a Table>,
-}
-
-impl<'a> Section<'a> {
-    fn new(name: &'static str, table: &'a Table, known: &[&str]) -> Result<Self> {
-        let s = Self { name, table: Some(table) };
-        s.check_keys(known)?;
-        Ok(s)
-    }
-
-    fn path(&self, key: &str) -> String {
-        if self.name.is_empty() { key.to_owned() } else { format!("{}.{key}", self.name) }
-    }
-
-    fn check_keys(&self, known: &[&str]) -> Result<()> {
-        let Some(t) = self.table else { return Ok(()) };
-        match t.keys().find(|k| !known.contains(&k.as_str())) {
-            Some(k) => Err(invalid(self.path(k), format!("unknown key (expected one of: {})", known.join(", ")))),
-            None => Ok(()),
-        }
-    }
-
-    /// The sub-table `key` (absent → an empty section that yields defaults).
-    fn subtable(&self, key: &'static str) -> Result<Section<'a>> {
-        match self.table.and_then(|t| t.get(key)) {
-            None => Ok(Section { name: key, table: None }),
-            Some(Value::Table(t)) => Ok(Section { name: key, table: Some(t) }),
-            Some(v) => Err(invalid(self.path(key), format!("expected a table, got {}", describe(v)))),
-        }
-    }
-
-    fn get(&self, key: &str) -> Option<&'a Value> {
-        self.table.and_then(|t| t.get(key))
-    }
-
-    fn missing(&self, key: &str) -> ScenarioError {
-        invalid(self.path(key), "missing (this key is required)")
-    }
-
-    fn float(&self, key: &str, default: Option<f64>) -> Result<f64> {
-        match self.get(key) {
-            None => default.ok_or_else(|| self.missing(key)),
-            Some(v) => {
-                as_float(v).ok_or_else(|| invalid(self.path(key), format!("expected a number, got {}", describe(v))))
-            }
-        }
-    }
-
-    fn float_in(&self, key: &str, default: f64, lo: Bound, hi: f64) -> Result<f64> {
-        let x = self.float(key, Some(default))?;
-        check_range(&self.path(key), x, lo, hi)?;
-        Ok(x)
-    }
-
-    fn int(&self, key: &str, default: Option<i64>) -> Result<i64> {
-        match self.get(key) {
-            None => default.ok_or_else(|| self.missing(key)),
-            Some(Value::Integer(i)) => Ok(*i),
-            Some(v) => Err(invalid(self.path(key), format!("expected an integer, got {}", describe(v)))),
-        }
-    }
-
-    fn int_in(&self, key: &str, default: i64, lo: i64, hi: i64) -> Result<i64> {
-        let x = self.int(key, Some(default))?;
-        if (lo..=hi).contains(&x) {
-            Ok(x)
-        } else {
-            Err(invalid(self.path(key), format!("must be in {lo}..={hi}, got {x}")))
-        }
-    }
-
-    fn string(&self, key: &str, default: Option<&str>) -> Result<String> {
-        match self.get(key) {
-            None => default.map(str::to_owned).ok_or_else(|| self.missing(key)),
-            Some(Value::String(s)) => Ok(s.clone()),
-            Some(v) => Err(invalid(self.path(key), format!("expected a string, got {}", describe(v)))),
-        }
-    }
-
-    fn floats<const N: usize>(&self, key: &str, default: [f64; N]) -> Result<[f64; N]> {
-        let items = match self.get(key) {
-            None => return Ok(default),
-            Some(Value::Array(a)) => a,
-            Some(v) => {
-                return Err(invalid(self.path(key), format!("expected an array of {N} numbers, got {}", describe(v))));
-            }
-        };
-        if items.len() != N {
-            return Err(invalid(self.path(key), format!("expected {N} values, got {}", items.len())));
-        }
-        let mut out = default;
-        for (i, (o, v)) in out.iter_mut().zip(items).enumerate() {
-            *o = as_float(v).ok_or_else(|| {
-                invalid(format!("{}[{i}]", self.path(key)), format!("expected a number, got {}", describe(v)))
-            })?;
-        }
-        Ok(out)
-    }
-}
-
-fn as_float(v: &Value) -> Option<f64> {
-    match v {
-        Value::Float(x) => Some(*x),
-        Value::Integer(i) => Some(*i as f64),
-        _ => None,
-    }
-}
-
-/// `a string ("x")`, `an array`, … for error messages.
-fn describe(v: &Value) -> String {
-    match v {
-        Value::String(s) => format!("a string (\"{s}\")"),
-        Value::Integer(i) => format!("an integer ({i})"),
-        Value::Float(x) => format!("a float ({x})"),
-        Value::Boolean(b) => format!("a boolean ({b})"),
-        Value::Datetime(_) => "a datetime".to_owned(),
-        Value::Array(_) => "an array".to_owned(),
-        Value::Table(_) => "a table".to_owned(),
-    }
-}
-
+mod section;
 #[cfg(test)]
-mod tests {
-    use super::*;
+mod tests;
 
-    const BASE: &str = "seed = 1\nduration_s = 10.0\nmethod = \"ff\"\n";
-
-    fn err(text: &str) -> String {
-        match Scenario::from_toml_str(text) {
-            Ok(s) => unreachable!("accepted: {s:?}"),
-            Err(e) => e.to_string(),
-        }
-    }
-
-    fn with(extra: &str) -> String {
-        format!("{BASE}{extra}")
-    }
-
-    #[test]
-    fn minimal_file_gets_defaults() {
-        let s = Scenario::from_toml_str(BASE).unwrap_or_else(|e| unreachable!("{e}"));
-        assert_eq!(s, Scenario::new(1, 10.0, Method::Ff));
-        assert_eq!(s.camera.width, 640);
-        assert_eq!(s.target.face_hues_deg, [0.0, 120.0, 240.0, 0.0, 120.0, 240.0]);
-        assert_eq!(s.robot.motion, MotionKind::Static);
-        assert_eq!(s.frame_count(), 303);
-    }
-
-    #[test]
-    fn validation_errors_name_the_field() {
-        assert_eq!(err(&with("[camera]\nwidth = 0\n")), "camera.width: must be in 16..=4096, got 0");
-        assert_eq!(
-            err(&with("[robot]\nmotion = \"C\"\n")),
-            "robot.motion: expected \"static\", \"A\" or \"B\", got \"C\""
-        );
-        assert_eq!(
-            err(&with("[target]\nface_hues_deg = [0, 120, 240, 0, 120]\n")),
-            "target.face_hues_deg: expected 6 values, got 5"
-        );
-        assert!(err(&with("[camera]\nwidht = 640\n")).starts_with("camera.widht: unknown key"));
-        assert!(err(&with("colour = 3\n")).starts_with("colour: unknown key"));
-        assert!(err(&with("[lens]\nk1 = 0.1\n")).starts_with("lens: unknown key"));
-        assert_eq!(err("seed = 1\nmethod = \"ga\"\n"), "duration_s: missing (this key is required)");
-        assert_eq!(
-            err(&with("[camera]\ncx = 700.0\n")),
-            "camera.cx: must be in [0, 640] (inside the image width), got 700"
-        );
-        assert_eq!(err("seed = 1\nduration_s = 0\nmethod = \"ga\"\n"), "duration_s: must be in (0, 3600], got 0");
-        assert_eq!(err("seed = 1\nduration_s = 4000\nmethod = \"ga\"\n"), "duration_s: must be in (0, 3600], got 4000");
-        assert_eq!(err("seed = -3\nduration_s = 1\nmethod = \"ga\"\n"), "seed: must be ≥ 0, got -3");
-        assert_eq!(err("seed = 1\nduration_s = 1\nmethod = \"GA\"\n"), "method: expected \"ga\" or \"ff\", got \"GA\"");
-        assert_eq!(
-            err(&with("[camera]\nwidth = \"640\"\n")),
-            "camera.width: expected an integer, got a string (\"640\")"
-        );
-        assert_eq!(err(&with("camera = 3\n")), "camera: expected a table, got an integer (3)");
-        assert_eq!(
-            err(&with("[target]\nsize_m = [0.1, -0.2, 0.3]\n")),
-            "target.size_m[1]: must be in (0, 2], got -0.2"
-        );
-        assert_eq!(err(&with("[target]\ndistance_m = nan\n")), "target.distance_m: must be in (0, 5], got NaN");
-        assert!(err(&with("[target]\ndistance_m = 0.1\n")).starts_with("target.distance_m: must exceed"));
-        assert_eq!(
-            err(&with("[target]\nface_hues_deg = [0, 120, 360, 0, 120, 240]\n")),
-            "target.face_hues_deg[2]: must be in [0, 360), got 360"
-        );
-        assert_eq!(
-            err(&with("[ga]\npopulation = 0\n")),
-            "ga.population: must be in [16, 64] (room for the elite, one child, the immigrants and the \
-             acquisition's seeded and idle individuals; at most the host's compiled capacity), got 0"
-        );
-        assert!(err(&with("[ga]\npopulation = 65\n")).ends_with("got 65"));
-        assert!(err(&with("[ga]\npopulation = 15\n")).ends_with("got 15"));
-        assert_eq!(Scenario::from_toml_str(&with("[ga]\npopulation = 16\n")).map(|s| s.ga.population).ok(), Some(16));
-        assert!(err(&with("[ga]\npopulation = -1\n")).starts_with("ga.population: must be in [16, 64]"));
-        assert_eq!(Scenario::from_toml_str(&with("[ga]\npopulation = 64\n")).map(|s| s.ga.population).ok(), Some(64));
-        assert!(err("seed = 1\nduration_s = \n").starts_with("TOML syntax error"));
-    }
-
-    #[test]
-    fn servo_section_is_validated_field_by_field() {
-        let ok = Scenario::from_toml_str(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\n"))
-            .unwrap_or_else(|e| unreachable!("{e}"));
-        assert_eq!(ok.servo, Some(ServoSection::new([0.0, 0.0, 0.6])));
-        assert_eq!(Scenario::from_toml_str(BASE).map(|s| s.servo).ok(), Some(None));
-        assert_eq!(err(&with("[servo]\ngain = 2\n")), "servo.desired_t_m: missing (this key is required)");
-        assert_eq!(
-            err(&with("[servo]\ndesired_t_m = [0, 0, 0.1]\n")),
-            "servo.desired_t_m[2]: must be in (0.2, 3] (in front of the camera), got 0.1"
-        );
-        assert_eq!(
-            err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ngain = 0\n")),
-            "servo.gain: must be in (0, 50], got 0"
-        );
-        assert_eq!(
-            err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\nmax_speed_m_s = -1\n")),
-            "servo.max_speed_m_s: must be in (0, 2], got -1"
-        );
-        assert_eq!(
-            err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ndesired_q_xyzw = [0, 0, 0, 2]\n")),
-            "servo.desired_q_xyzw: must be a unit quaternion, got norm 2"
-        );
-        assert_eq!(
-            err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ndelay_frames = 11\n")),
-            "servo.delay_frames: must be in 0..=10, got 11"
-        );
-        assert!(err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ngian = 1\n")).starts_with("servo.gian: unknown key"));
-        let mut s = Scenario::new(3, 5.0, Method::Ff);
-        s.servo = Some(ServoSection {
-            desired_q_xyzw: Some([0.0, 0.0, 0.0, 1.0]),
-            gain: 3.5,
-            ..ServoSection::new([0.01, -0.02, 0.55])
-        });
-        let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
-        assert_eq!(Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{e}\n{text}")), s);
-    }
-
-    #[test]
-    fn integers_are_accepted_for_floats_but_not_the_reverse() {
-        let s = Scenario::from_toml_str(&with("[target]\ndistance_m = 1\n")).unwrap_or_else(|e| unreachable!("{e}"));
-        assert_eq!(s.target.distance_m, 1.0);
-        assert_eq!(
-            err(&with("[camera]\nsupersample = 2.0\n")),
-            "camera.supersample: expected an integer, got a float (2)"
-        );
-    }
-
-    #[test]
-    fn round_trip_through_toml() {
-        let mut s = Scenario::new(7, 12.5, Method::Ga);
-        s.frame_period_s = 0.04;
-        s.camera.width = 320;
-        s.camera.cx = 161.5;
-        s.camera.noise_std = 0.0;
-        s.target.size_m = [0.08, 0.12, 0.3];
-        s.target.face_hues_deg = [10.0, 50.0, 90.0, 130.0, 200.0, 300.5];
-        s.robot = RobotConfig { motion: MotionKind::B, omega_rad_s: 0.3, amplitude_m: 0.05, amplitude_deg: 10.0 };
-        let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
-        let back = Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{e}\n{text}"));
-        assert_eq!(back, s);
-        let json = serde_json::to_value(s).unwrap_or_else(|e| unreachable!("{e}"));
-        assert_eq!(json["robot"]["motion"], "B");
-        assert_eq!(json["method"], "ga");
-    }
-
-    #[test]
-    fn load_names_the_file() {
-        let dir = std::env::temp_dir().join(format!("evorec-scenario-test-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap_or_else(|e| unreachable!("{e}"));
-        let path = dir.join("bad.toml");
-        std::fs::write(&path, with("[camera]\nwidth = 0\n")).unwrap_or_else(|e| unreachable!("{e}"));
-        let e = Scenario::load(&path).err().unwrap_or_else(|| unreachable!());
-        assert_eq!(e.field(), Some("camera.width"));
-        assert!(e.to_string().ends_with("bad.toml: camera.width: must be in 16..=4096, got 0"), "{e}");
-        let _ = std::fs::remove_dir_all(&dir);
-        assert!(matches!(Scenario::load(dir.join("missing.toml")), Err(ScenarioError::Io { .. })));
-    }
-
-    #[test]
-    fn every_shipped_scenario_loads() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
-        let mut names = Vec::new();
-        for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| unreachable!("{e}")) {
-            let path = entry.unwrap_or_else(|e| unreachable!("{e}")).path();
-            if path.extension().is_some_and(|e| e == "toml") {
-                let s = Scenario::load(&path).unwrap_or_else(|e| unreachable!("{e}"));
-                assert!(s.duration_s > 0.0);
-                names.push(path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
-            }
-        }
-        names.sort();
-        for want in [
-            "motion_a_ff.toml",
-            "motion_a_ga.toml",
-            "motion_b_ff.toml",
-            "motion_b_ga.toml",
-            "smoke.toml",
-            "static.toml",
-        ] {
-            assert!(names.iter().any(|n| n == want), "{want} missing from {names:?}");
-        }
-    }
-
-    #[test]
-    fn shipped_scenarios_have_the_specified_settings() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
-        let load = |n: &str| Scenario::load(dir.join(n)).unwrap_or_else(|e| unreachable!("{e}"));
-        for (file, motion, method) in [
-            ("motion_a_ff.toml", MotionKind::A, Method::Ff),
-            ("motion_a_ga.toml", MotionKind::A, Method::Ga),
-            ("motion_b_ff.toml", MotionKind::B, Method::Ff),
-            ("motion_b_ga.toml", MotionKind::B, Method::Ga),
-        ] {
-            let s = load(file);
-            assert_eq!((s.robot.motion, s.method, s.seed, s.duration_s), (motion, method, 1, 72.0), "{file}");
-            assert_eq!(s.robot.omega_rad_s, 0.125, "{file}");
-        }
-        let smoke = load("smoke.toml");
-        assert_eq!(
-            (smoke.robot.motion, smoke.robot.omega_rad_s, smoke.method, smoke.duration_s),
-            (MotionKind::A, 0.5, Method::Ff, 3.0)
-        );
-        assert_eq!(load("static.toml").robot.motion, MotionKind::Static);
-    }
-}
+use section::{Bound, Section, check_range, check_range_why};

@@ -1,0 +1,210 @@
+//! Tests of scenario files.
+
+use super::*;
+
+const BASE: &str = "seed = 1\nduration_s = 10.0\nmethod = \"ff\"\n";
+
+fn err(text: &str) -> String {
+    match Scenario::from_toml_str(text) {
+        Ok(s) => unreachable!("accepted: {s:?}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn with(extra: &str) -> String {
+    format!("{BASE}{extra}")
+}
+
+#[test]
+fn minimal_file_gets_defaults() {
+    let s = Scenario::from_toml_str(BASE).unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(s, Scenario::new(1, 10.0, Method::Ff));
+    assert_eq!(s.camera.width, 640);
+    assert_eq!(s.target.face_hues_deg, [0.0, 120.0, 240.0, 0.0, 120.0, 240.0]);
+    assert_eq!(s.robot.motion, MotionKind::Static);
+    assert_eq!(s.frame_count(), 303);
+}
+
+#[test]
+fn validation_errors_name_the_field() {
+    assert_eq!(err(&with("[camera]\nwidth = 0\n")), "camera.width: must be in 16..=4096, got 0");
+    assert_eq!(err(&with("[robot]\nmotion = \"C\"\n")), "robot.motion: expected \"static\", \"A\" or \"B\", got \"C\"");
+    assert_eq!(
+        err(&with("[target]\nface_hues_deg = [0, 120, 240, 0, 120]\n")),
+        "target.face_hues_deg: expected 6 values, got 5"
+    );
+    assert!(err(&with("[camera]\nwidht = 640\n")).starts_with("camera.widht: unknown key"));
+    assert!(err(&with("colour = 3\n")).starts_with("colour: unknown key"));
+    assert!(err(&with("[lens]\nk1 = 0.1\n")).starts_with("lens: unknown key"));
+    assert_eq!(err("seed = 1\nmethod = \"ga\"\n"), "duration_s: missing (this key is required)");
+    assert_eq!(
+        err(&with("[camera]\ncx = 700.0\n")),
+        "camera.cx: must be in [0, 640] (inside the image width), got 700"
+    );
+    assert_eq!(err("seed = 1\nduration_s = 0\nmethod = \"ga\"\n"), "duration_s: must be in (0, 3600], got 0");
+    assert_eq!(err("seed = 1\nduration_s = 4000\nmethod = \"ga\"\n"), "duration_s: must be in (0, 3600], got 4000");
+    assert_eq!(err("seed = -3\nduration_s = 1\nmethod = \"ga\"\n"), "seed: must be ≥ 0, got -3");
+    assert_eq!(
+        err("seed = 1\nduration_s = 1\nmethod = \"GA\"\n"),
+        "method: expected \"ga\", \"ff\" or \"ff+target\", got \"GA\""
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_speed_m_s = 0.01\n")),
+        "target.conveyor_speed_m_s: must be 0 (off) or in [0.05, 0.3], got 0.01"
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_speed_m_s = 0.4\n")),
+        "target.conveyor_speed_m_s: must be in [0, 0.3], got 0.4"
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_speed_m_s = 0.3\nconveyor_travel_m = 0.2\n")),
+        "target.conveyor_accel_m_s2: must be at least 2·speed²/travel = 0.9000 m/s² to reverse within the \
+         travel, got 0.5"
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_speed_m_s = 0.1\nrandom_amplitude_m = 0.05\n")),
+        "target.random_amplitude_m: the block follows one path: set conveyor_speed_m_s or random_amplitude_m to 0"
+    );
+    assert_eq!(err(&with("[target]\nrandom_omega_rad_s = 0\n")), "target.random_omega_rad_s: must be in (0, 2], got 0");
+    assert_eq!(err(&with("[tracker]\ndelay_s = -0.1\n")), "tracker.delay_s: must be in [0, 1], got -0.1");
+    assert!(err(&with("[tracker]\ndelay = 0.1\n")).starts_with("tracker.delay: unknown key"));
+    assert_eq!(err(&with("[camera]\nwidth = \"640\"\n")), "camera.width: expected an integer, got a string (\"640\")");
+    assert_eq!(err(&with("camera = 3\n")), "camera: expected a table, got an integer (3)");
+    assert_eq!(err(&with("[target]\nsize_m = [0.1, -0.2, 0.3]\n")), "target.size_m[1]: must be in (0, 2], got -0.2");
+    assert_eq!(err(&with("[target]\ndistance_m = nan\n")), "target.distance_m: must be in (0, 5], got NaN");
+    assert!(err(&with("[target]\ndistance_m = 0.1\n")).starts_with("target.distance_m: must exceed"));
+    assert_eq!(
+        err(&with("[target]\nface_hues_deg = [0, 120, 360, 0, 120, 240]\n")),
+        "target.face_hues_deg[2]: must be in [0, 360), got 360"
+    );
+    assert_eq!(
+        err(&with("[ga]\npopulation = 0\n")),
+        "ga.population: must be in [16, 64] (room for the elite, one child, the immigrants and the \
+         acquisition's seeded and idle individuals; at most the host's compiled capacity), got 0"
+    );
+    assert!(err(&with("[ga]\npopulation = 65\n")).ends_with("got 65"));
+    assert!(err(&with("[ga]\npopulation = 15\n")).ends_with("got 15"));
+    assert_eq!(Scenario::from_toml_str(&with("[ga]\npopulation = 16\n")).map(|s| s.ga.population).ok(), Some(16));
+    assert!(err(&with("[ga]\npopulation = -1\n")).starts_with("ga.population: must be in [16, 64]"));
+    assert_eq!(Scenario::from_toml_str(&with("[ga]\npopulation = 64\n")).map(|s| s.ga.population).ok(), Some(64));
+    assert!(err("seed = 1\nduration_s = \n").starts_with("TOML syntax error"));
+}
+
+#[test]
+fn servo_section_is_validated_field_by_field() {
+    let ok =
+        Scenario::from_toml_str(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\n")).unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(ok.servo, Some(ServoSection::new([0.0, 0.0, 0.6])));
+    assert_eq!(Scenario::from_toml_str(BASE).map(|s| s.servo).ok(), Some(None));
+    assert_eq!(err(&with("[servo]\ngain = 2\n")), "servo.desired_t_m: missing (this key is required)");
+    assert_eq!(
+        err(&with("[servo]\ndesired_t_m = [0, 0, 0.1]\n")),
+        "servo.desired_t_m[2]: must be in (0.2, 3] (in front of the camera), got 0.1"
+    );
+    assert_eq!(err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ngain = 0\n")), "servo.gain: must be in (0, 50], got 0");
+    assert_eq!(
+        err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\nmax_speed_m_s = -1\n")),
+        "servo.max_speed_m_s: must be in (0, 2], got -1"
+    );
+    assert_eq!(
+        err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ndesired_q_xyzw = [0, 0, 0, 2]\n")),
+        "servo.desired_q_xyzw: must be a unit quaternion, got norm 2"
+    );
+    assert_eq!(
+        err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ndelay_frames = 11\n")),
+        "servo.delay_frames: must be in 0..=10, got 11"
+    );
+    assert!(err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ngian = 1\n")).starts_with("servo.gian: unknown key"));
+    let mut s = Scenario::new(3, 5.0, Method::Ff);
+    s.servo = Some(ServoSection {
+        desired_q_xyzw: Some([0.0, 0.0, 0.0, 1.0]),
+        gain: 3.5,
+        ..ServoSection::new([0.01, -0.02, 0.55])
+    });
+    let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{e}\n{text}")), s);
+}
+
+#[test]
+fn integers_are_accepted_for_floats_but_not_the_reverse() {
+    let s = Scenario::from_toml_str(&with("[target]\ndistance_m = 1\n")).unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(s.target.distance_m, 1.0);
+    assert_eq!(err(&with("[camera]\nsupersample = 2.0\n")), "camera.supersample: expected an integer, got a float (2)");
+}
+
+#[test]
+fn round_trip_through_toml() {
+    let mut s = Scenario::new(7, 12.5, Method::FfTarget);
+    s.frame_period_s = 0.04;
+    s.tracker.delay_s = 0.05;
+    s.target.conveyor_speed_m_s = 0.2;
+    s.target.conveyor_accel_m_s2 = 0.8;
+    s.camera.width = 320;
+    s.camera.cx = 161.5;
+    s.camera.noise_std = 0.0;
+    s.target.size_m = [0.08, 0.12, 0.3];
+    s.target.face_hues_deg = [10.0, 50.0, 90.0, 130.0, 200.0, 300.5];
+    s.robot = RobotConfig { motion: MotionKind::B, omega_rad_s: 0.3, amplitude_m: 0.05, amplitude_deg: 10.0 };
+    let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
+    let back = Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{e}\n{text}"));
+    assert_eq!(back, s);
+    let json = serde_json::to_value(s).unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(json["robot"]["motion"], "B");
+    assert_eq!(json["method"], "ff+target");
+    assert_eq!(json["tracker"]["delay_s"], 0.05);
+}
+
+#[test]
+fn load_names_the_file() {
+    let dir = std::env::temp_dir().join(format!("evorec-scenario-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| unreachable!("{e}"));
+    let path = dir.join("bad.toml");
+    std::fs::write(&path, with("[camera]\nwidth = 0\n")).unwrap_or_else(|e| unreachable!("{e}"));
+    let e = Scenario::load(&path).err().unwrap_or_else(|| unreachable!());
+    assert_eq!(e.field(), Some("camera.width"));
+    assert!(e.to_string().ends_with("bad.toml: camera.width: must be in 16..=4096, got 0"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(matches!(Scenario::load(dir.join("missing.toml")), Err(ScenarioError::Io { .. })));
+}
+
+#[test]
+fn every_shipped_scenario_loads() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| unreachable!("{e}")) {
+        let path = entry.unwrap_or_else(|e| unreachable!("{e}")).path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let s = Scenario::load(&path).unwrap_or_else(|e| unreachable!("{e}"));
+            assert!(s.duration_s > 0.0);
+            names.push(path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
+        }
+    }
+    names.sort();
+    for want in
+        ["motion_a_ff.toml", "motion_a_ga.toml", "motion_b_ff.toml", "motion_b_ga.toml", "smoke.toml", "static.toml"]
+    {
+        assert!(names.iter().any(|n| n == want), "{want} missing from {names:?}");
+    }
+}
+
+#[test]
+fn shipped_scenarios_have_the_specified_settings() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+    let load = |n: &str| Scenario::load(dir.join(n)).unwrap_or_else(|e| unreachable!("{e}"));
+    for (file, motion, method) in [
+        ("motion_a_ff.toml", MotionKind::A, Method::Ff),
+        ("motion_a_ga.toml", MotionKind::A, Method::Ga),
+        ("motion_b_ff.toml", MotionKind::B, Method::Ff),
+        ("motion_b_ga.toml", MotionKind::B, Method::Ga),
+    ] {
+        let s = load(file);
+        assert_eq!((s.robot.motion, s.method, s.seed, s.duration_s), (motion, method, 1, 72.0), "{file}");
+        assert_eq!(s.robot.omega_rad_s, 0.125, "{file}");
+    }
+    let smoke = load("smoke.toml");
+    assert_eq!(
+        (smoke.robot.motion, smoke.robot.omega_rad_s, smoke.method, smoke.duration_s),
+        (MotionKind::A, 0.5, Method::Ff, 3.0)
+    );
+    assert_eq!(load("static.toml").robot.motion, MotionKind::Static);
+}

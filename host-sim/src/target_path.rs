@@ -1,0 +1,278 @@
+//! The block's own path in the world, beyond the paper's slow yaw oscillation (issue 12).
+//!
+//! The paper's target turns about the vertical axis through its fixed centre
+//! ([`crate::motion::TargetMotion`]). On top of that, the centre (and the orientation) can
+//! follow a [`TargetPath`] (scenario keys `[target] conveyor_*` and `random_*`):
+//!
+//! - [`TargetPath::Conveyor`]: a part on a conveyor along world `y` (across the view), starting
+//!   at rest at `y = −travel/2`, accelerating to `speed`, and reversing smoothly at each end
+//!   (half-cosine velocity profiles with peak acceleration `accel`), back and forth, so it
+//!   stays in view;
+//! - [`TargetPath::Random`]: a seeded random smooth motion, each position axis and each angle
+//!   a sum of [`RANDOM_COMPONENTS`] sinusoids, zero at `t = 0` (an object in a person's hand).
+//!
+//! [`target_pose`] and [`target_twist`] combine the paper's motion with the path; twists are
+//! analytic derivatives of the poses (checked by finite differences in the tests).
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+
+use crate::motion::{TargetMotion, Twist};
+use crate::scenario::Scenario;
+
+/// Number of sinusoids per axis of [`TargetPath::Random`].
+pub const RANDOM_COMPONENTS: usize = 3;
+
+/// One sinusoid `a (sin(ω t + φ) − sin φ)` (zero at `t = 0`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sinusoid {
+    /// Amplitude.
+    pub amplitude: f64,
+    /// Angular frequency (rad/s).
+    pub omega: f64,
+    /// Phase (rad).
+    pub phase: f64,
+}
+
+impl Sinusoid {
+    fn value(&self, t: f64) -> f64 {
+        self.amplitude * ((self.omega * t + self.phase).sin() - self.phase.sin())
+    }
+
+    fn rate(&self, t: f64) -> f64 {
+        self.amplitude * self.omega * (self.omega * t + self.phase).cos()
+    }
+}
+
+/// The block centre's own path, on top of the paper's yaw oscillation.
+// One value per world, copied rarely: the size difference of the variants does not matter.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TargetPath {
+    /// The centre stays where it is (the paper).
+    Fixed,
+    /// A conveyor along world `y` (see the module docs).
+    Conveyor {
+        /// Speed of the straight runs (m/s).
+        speed_m_s: f64,
+        /// Length of the shuttle (m).
+        travel_m: f64,
+        /// Peak acceleration of the reversals (m/s²).
+        accel_m_s2: f64,
+    },
+    /// A seeded random smooth motion: each position axis and each rotation angle (about world
+    /// `z`, then `y`, then `x`) is a sum of [`RANDOM_COMPONENTS`] sinusoids, zero at `t = 0`,
+    /// bounded by twice the configured amplitude.
+    Random {
+        /// Position offsets along world x, y, z (m).
+        position: [[Sinusoid; RANDOM_COMPONENTS]; 3],
+        /// Angles about world z, y, x (rad).
+        angles: [[Sinusoid; RANDOM_COMPONENTS]; 3],
+    },
+}
+
+/// The pose offset of a [`TargetPath`] at one time and its derivative.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathOffset {
+    /// Displacement of the centre (world, m).
+    pub position: Vector3<f64>,
+    /// Its velocity (m/s).
+    pub velocity: Vector3<f64>,
+    /// Rotation about the centre, applied on the left of the paper's orientation.
+    pub rotation: UnitQuaternion<f64>,
+    /// Its angular velocity (world, rad/s).
+    pub angular_velocity: Vector3<f64>,
+}
+
+impl PathOffset {
+    /// No offset.
+    pub fn none() -> Self {
+        Self {
+            position: Vector3::zeros(),
+            velocity: Vector3::zeros(),
+            rotation: UnitQuaternion::identity(),
+            angular_velocity: Vector3::zeros(),
+        }
+    }
+}
+
+impl TargetPath {
+    /// The path of a scenario's `[target]` (the random one seeded by the scenario's seed).
+    pub fn from_scenario(s: &Scenario) -> Self {
+        let t = &s.target;
+        if t.conveyor_speed_m_s > 0.0 {
+            return Self::Conveyor {
+                speed_m_s: t.conveyor_speed_m_s,
+                travel_m: t.conveyor_travel_m,
+                accel_m_s2: t.conveyor_accel_m_s2,
+            };
+        }
+        if t.random_amplitude_m > 0.0 {
+            return Self::random(
+                s.seed,
+                t.random_amplitude_m,
+                t.random_amplitude_deg.to_radians(),
+                t.random_omega_rad_s,
+            );
+        }
+        Self::Fixed
+    }
+
+    /// A random path from `seed`: per axis, the component amplitudes sum to `amplitude_m` (or
+    /// `amplitude_rad`), frequencies are uniform in `[0.2, 1]·max_omega`, phases uniform.
+    pub fn random(seed: u64, amplitude_m: f64, amplitude_rad: f64, max_omega: f64) -> Self {
+        use rand_core::{Rng, SeedableRng};
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x7A26_E70D);
+        let mut unit = move || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let mut axis = |amp: f64| -> [Sinusoid; RANDOM_COMPONENTS] {
+            let weights: [f64; RANDOM_COMPONENTS] = core::array::from_fn(|_| 0.2 + unit());
+            let total: f64 = weights.iter().sum();
+            core::array::from_fn(|i| Sinusoid {
+                amplitude: amp * weights[i] / total,
+                omega: max_omega * (0.2 + 0.8 * unit()),
+                phase: std::f64::consts::TAU * unit(),
+            })
+        };
+        let position = [axis(amplitude_m), axis(amplitude_m), axis(amplitude_m)];
+        let angles = [axis(amplitude_rad), axis(amplitude_rad), axis(amplitude_rad)];
+        Self::Random { position, angles }
+    }
+
+    /// The offset at time `t` (s).
+    pub fn offset(&self, t: f64) -> PathOffset {
+        match *self {
+            Self::Fixed => PathOffset::none(),
+            Self::Conveyor { speed_m_s, travel_m, accel_m_s2 } => {
+                let (y, vy) = conveyor(t, speed_m_s, travel_m, accel_m_s2);
+                PathOffset {
+                    position: Vector3::new(0.0, y, 0.0),
+                    velocity: Vector3::new(0.0, vy, 0.0),
+                    ..PathOffset::none()
+                }
+            }
+            Self::Random { position, angles } => random_offset(&position, &angles, t),
+        }
+    }
+}
+
+fn random_offset(
+    position: &[[Sinusoid; RANDOM_COMPONENTS]; 3],
+    angles: &[[Sinusoid; RANDOM_COMPONENTS]; 3],
+    t: f64,
+) -> PathOffset {
+    let sum = |c: &[Sinusoid; RANDOM_COMPONENTS]| c.iter().map(|s| s.value(t)).sum::<f64>();
+    let rate = |c: &[Sinusoid; RANDOM_COMPONENTS]| c.iter().map(|s| s.rate(t)).sum::<f64>();
+    let p = Vector3::new(sum(&position[0]), sum(&position[1]), sum(&position[2]));
+    let v = Vector3::new(rate(&position[0]), rate(&position[1]), rate(&position[2]));
+    let (a, b, c) = (sum(&angles[0]), sum(&angles[1]), sum(&angles[2]));
+    let (ad, bd, cd) = (rate(&angles[0]), rate(&angles[1]), rate(&angles[2]));
+    let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), a);
+    let ry = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), b);
+    let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), c);
+    let w = Vector3::z() * ad + rz * (Vector3::y() * bd) + rz * ry * (Vector3::x() * cd);
+    PathOffset { position: p, velocity: v, rotation: rz * ry * rx, angular_velocity: w }
+}
+
+/// Position (relative to the shuttle's middle) and velocity of the conveyor at `t`.
+fn conveyor(t: f64, v: f64, travel: f64, accel: f64) -> (f64, f64) {
+    use std::f64::consts::PI;
+    // A reversal's half (rest → speed or speed → rest) lasts t_r/2 over the distance d_r.
+    let t_r = PI * v / accel;
+    let d_r = v * t_r / PI;
+    let straight = (travel - 2.0 * d_r).max(0.0);
+    let half = t_r + straight / v;
+    let u = t.rem_euclid(2.0 * half);
+    let (s, out) = if u < half { (u, true) } else { (u - half, false) };
+    let (y, vy) = if s < 0.5 * t_r {
+        (d_r * (1.0 - (PI * s / t_r).cos()), v * (PI * s / t_r).sin())
+    } else if s < 0.5 * t_r + straight / v {
+        (d_r + v * (s - 0.5 * t_r), v)
+    } else {
+        let s2 = s - 0.5 * t_r - straight / v;
+        (d_r + straight + d_r * (PI * s2 / t_r).sin(), v * (PI * s2 / t_r).cos())
+    };
+    // Out (0 → travel) and back (travel → 0), centred on the shuttle's middle.
+    if out { (y - 0.5 * travel, vy) } else { (0.5 * travel - y, -vy) }
+}
+
+/// `^W T_M(t)` with the block's path: the paper's turning block displaced by the path's offset
+/// and turned about its centre by the path's rotation.
+pub fn target_pose(motion: &TargetMotion, path: &TargetPath, t: f64) -> Isometry3<f64> {
+    let base = motion.target_world_pose(t);
+    let off = path.offset(t);
+    Isometry3::from_parts(Translation3::from(base.translation.vector + off.position), off.rotation * base.rotation)
+}
+
+/// The twist of [`target_pose`] (velocity of the centre and angular velocity, world).
+pub fn target_twist(motion: &TargetMotion, path: &TargetPath, t: f64) -> Twist {
+    let base = motion.target_world_twist(t);
+    let off = path.offset(t);
+    Twist { v: base.v + off.velocity, w: off.angular_velocity + off.rotation * base.w }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::{target_centre, target_rest_rotation};
+
+    fn check_path_twist(path: &TargetPath) {
+        let m = TargetMotion {
+            centre: target_centre(0.1, 0.7),
+            yaw0_rad: 25f64.to_radians(),
+            amplitude_rad: 15f64.to_radians(),
+            omega_rad_s: 0.5,
+            rest: target_rest_rotation(),
+        };
+        let h = 1e-6;
+        for k in 0..80 {
+            let t = 0.173 * k as f64;
+            let tw = target_twist(&m, path, t);
+            let (pp, pm) = (target_pose(&m, path, t + h), target_pose(&m, path, t - h));
+            let v = (pp.translation.vector - pm.translation.vector) / (2.0 * h);
+            let w = (pp.rotation * pm.rotation.inverse()).scaled_axis() / (2.0 * h);
+            assert!((v - tw.v).norm() < 1e-6, "t={t}: v {v} vs {}", tw.v);
+            assert!((w - tw.w).norm() < 1e-6, "t={t}: w {w} vs {}", tw.w);
+        }
+    }
+
+    #[test]
+    fn target_path_twists_are_derivatives() {
+        check_path_twist(&TargetPath::Fixed);
+        check_path_twist(&TargetPath::Conveyor { speed_m_s: 0.2, travel_m: 0.2, accel_m_s2: 0.5 });
+        check_path_twist(&TargetPath::Conveyor { speed_m_s: 0.3, travel_m: 0.2, accel_m_s2: 0.9 });
+        check_path_twist(&TargetPath::random(7, 0.05, 10f64.to_radians(), 1.0));
+    }
+
+    #[test]
+    fn conveyor_shuttles_within_its_travel_at_its_speed() {
+        let path = TargetPath::Conveyor { speed_m_s: 0.2, travel_m: 0.2, accel_m_s2: 0.5 };
+        let (mut lo, mut hi, mut vmax, mut amax): (f64, f64, f64, f64) = (0.0, 0.0, 0.0, 0.0);
+        let dt = 1e-3;
+        for k in 0..20_000 {
+            let t = k as f64 * dt;
+            let o = path.offset(t);
+            assert_eq!((o.position.x, o.position.z, o.velocity.x), (0.0, 0.0, 0.0));
+            lo = lo.min(o.position.y);
+            hi = hi.max(o.position.y);
+            vmax = vmax.max(o.velocity.y.abs());
+            amax = amax.max((path.offset(t + dt).velocity.y - o.velocity.y).abs() / dt);
+        }
+        assert!((lo + 0.1).abs() < 1e-9 && (hi - 0.1).abs() < 1e-6, "{lo}..{hi}");
+        assert!((vmax - 0.2).abs() < 1e-9);
+        assert!(amax <= 0.5 + 1e-3, "peak acceleration {amax}");
+        let o = path.offset(0.0);
+        assert!((o.position.y + 0.1).abs() < 1e-12 && o.velocity.y == 0.0, "starts at rest at one end");
+    }
+
+    #[test]
+    fn random_path_is_seeded_bounded_and_starts_at_rest_pose() {
+        let a = TargetPath::random(3, 0.05, 0.2, 1.0);
+        assert_eq!(a, TargetPath::random(3, 0.05, 0.2, 1.0));
+        assert_ne!(a, TargetPath::random(4, 0.05, 0.2, 1.0));
+        let o = a.offset(0.0);
+        assert!(o.position.norm() < 1e-15 && o.rotation.angle() < 1e-15);
+        for k in 0..2000 {
+            let o = a.offset(0.05 * k as f64);
+            assert!(o.position.iter().all(|p| p.abs() <= 0.1 + 1e-12));
+        }
+    }
+}

@@ -119,31 +119,34 @@ impl<'a, F: PixelFormat> View<'a, F> {
         }
     }
 
-    /// Sums `score(hue)` over the `G` points of a fixed-point row (the pinhole kernel's
-    /// inner loop).
+    /// `Σ plane[hue]` over the `G` points of a fixed-point row (the pinhole kernel's inner
+    /// loop; `pixels` must not be empty, see [`walk_edge`]).
     ///
     /// Per point: `u >> 16` is `⌊u⌋` (arithmetic shift), the column; as an unsigned number it
     /// is `≥ width` left of the image too, and such a column moves the index to `u32::MAX`.
     /// The row needs no compare of its own: for any `i32` `v`, `|v >> 16| ≤ 2¹⁵`, so with a
     /// column inside the image the wrapping index `row · width + col` is `< len` exactly when
-    /// `0 ≤ row < height` (a negative row wraps to at least `2³² − 2²⁶ > len`). The one bounds
-    /// check of `get` is the image test; the M4 code predicates the load on it (`ite`, no
-    /// branch), so every point costs the same inside and outside the image.
+    /// `0 ≤ row < height` (a negative row wraps to at least `2³² − 2²⁶ > len`). That compare
+    /// is the image test. A point outside reads pixel 0 instead and its score is not added:
+    /// the same instructions inside and outside the image and no branch (the index and the
+    /// addition are selected, the loads always happen), so every point costs the same.
     #[inline(always)]
-    fn walk<const G: usize>(&self, row: &FixedRow, score: &impl Fn(u8) -> u32, hits: &mut u32) {
+    fn walk<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
         let (mut u, mut v) = (row.u, row.v);
+        let mut hits = 0u32;
         for _ in 0..G {
             let col = (u >> FIX_BITS) as u32;
             let index = ((v >> FIX_BITS) as u32).wrapping_mul(self.width).wrapping_add(col);
             let index = if col < self.width { index } else { u32::MAX };
-            let hue = match self.pixels.get(index as usize) {
-                Some(&px) => F::hue(px),
-                None => NO_HUE,
-            };
-            *hits += score(hue);
+            let inside = (index as usize) < self.pixels.len();
+            // In bounds either way (pixel 0 exists), so the `None` arm is never taken.
+            let px = self.pixels.get(if inside { index as usize } else { 0 }).copied().unwrap_or(F::NONE);
+            let score = u32::from(plane[usize::from(F::hue(px))]);
+            hits += if inside { score } else { 0 };
             u = u.wrapping_add(row.du);
             v = v.wrapping_add(row.dv);
         }
+        hits
     }
 }
 
@@ -170,15 +173,51 @@ struct EdgeRows {
     span: [f32; 3],
 }
 
-/// How a camera walks the rows of an edge's strip: `G` points each, `inner(hue)` summed over
-/// the inner rows and `outer(hue)` over the outer rows.
+/// How the points of a face's strips score: an inner point 1 when its hue matches the face
+/// (`inner`, the face's plane of the [`HueLut`]), an outer point 1 when its hue matches any
+/// visible face (`outer`, the visible set's plane): one table load per point either way.
+#[derive(Clone, Copy)]
+struct Scores<'l> {
+    inner: &'l [u8; 256],
+    outer: &'l [u8; 256],
+}
+
+/// How a camera walks the rows of an edge's strip (`G` points each): the pinhole kernel's
+/// [`Affine`] walk or the distorted kernel's [`Lens`].
 trait RowWalk {
-    fn count_edge<const G: usize>(
-        &self,
-        rows: &EdgeRows,
-        inner: &impl Fn(u8) -> u32,
-        outer: &impl Fn(u8) -> u32,
-    ) -> (u32, u32);
+    /// One row, ready to walk.
+    type Row;
+
+    /// The rows of one edge's strip, ready to walk.
+    fn rows<const G: usize>(&self, edge: &EdgeRows) -> [Self::Row; ROWS_PER_EDGE];
+
+    /// `Σ plane[hue]` over the `G` points of `row`.
+    fn walk<const G: usize>(&self, row: &Self::Row, plane: &[u8; 256]) -> u32;
+
+    /// `(Σ inner, Σ outer)` over the rows of one edge.
+    #[inline(always)]
+    fn count_edge<const G: usize>(&self, edge: &EdgeRows, scores: &Scores<'_>) -> (u32, u32) {
+        sum_rows::<G, Self>(self, &self.rows::<G>(edge), scores)
+    }
+}
+
+/// `(Σ inner, Σ outer)` over the rows of one edge ([`ROW_DISTANCES_M`] order: the inner rows,
+/// then the outer rows): the row bookkeeping of both kernels.
+#[inline(always)]
+fn sum_rows<const G: usize, W: RowWalk + ?Sized>(
+    walk: &W,
+    rows: &[W::Row; ROWS_PER_EDGE],
+    scores: &Scores<'_>,
+) -> (u32, u32) {
+    let (ins, outs) = rows.split_at(INNER_INSETS_M.len());
+    let (mut hits_in, mut hits_out) = (0u32, 0u32);
+    for row in ins {
+        hits_in += walk.walk::<G>(row, scores.inner);
+    }
+    for row in outs {
+        hits_out += walk.walk::<G>(row, scores.outer);
+    }
+    (hits_in, hits_out)
 }
 
 /// One row of the pinhole kernel in 16.16 fixed point: its first point (pixel coordinates,
@@ -232,36 +271,38 @@ struct Affine<'v, 'p, F: PixelFormat> {
 }
 
 impl<F: PixelFormat> RowWalk for Affine<'_, '_, F> {
+    type Row = FixedRow;
+
     #[inline(always)]
-    fn count_edge<const G: usize>(
-        &self,
-        rows: &EdgeRows,
-        inner: &impl Fn(u8) -> u32,
-        outer: &impl Fn(u8) -> u32,
-    ) -> (u32, u32) {
-        let fixed = rows.starts.map(|start| FixedRow::new::<G>(start, rows.span));
-        walk_edge::<G, F>(self.view, &fixed, inner, outer)
+    fn rows<const G: usize>(&self, edge: &EdgeRows) -> [FixedRow; ROWS_PER_EDGE] {
+        edge.starts.map(|start| FixedRow::new::<G>(start, edge.span))
+    }
+
+    #[inline(always)]
+    fn walk<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
+        self.view.walk::<G>(row, plane)
+    }
+
+    #[inline(always)]
+    fn count_edge<const G: usize>(&self, edge: &EdgeRows, scores: &Scores<'_>) -> (u32, u32) {
+        walk_edge::<G, F>(self, &self.rows::<G>(edge), scores)
     }
 }
 
 /// The integer part of [`Affine`]: the fixed-point rows of one edge walked, out of line so
-/// that its registers hold only the walk (no spills in the hot loop).
+/// that its registers hold only the walk.
 #[inline(never)]
 fn walk_edge<const G: usize, F: PixelFormat>(
-    view: &View<'_, F>,
+    walk: &Affine<'_, '_, F>,
     rows: &[FixedRow; ROWS_PER_EDGE],
-    inner: &impl Fn(u8) -> u32,
-    outer: &impl Fn(u8) -> u32,
+    scores: &Scores<'_>,
 ) -> (u32, u32) {
-    let (ins, outs) = rows.split_at(INNER_INSETS_M.len());
-    let (mut hits_in, mut hits_out) = (0u32, 0u32);
-    for row in ins {
-        view.walk::<G>(row, inner, &mut hits_in);
+    // Never taken (an image has at least one pixel); it lets the walk read pixel 0 for the
+    // points outside the image without a bounds check.
+    if walk.view.pixels.is_empty() {
+        return (0, 0);
     }
-    for row in outs {
-        view.walk::<G>(row, outer, &mut hits_out);
-    }
-    (hits_in, hits_out)
+    sum_rows::<G, _>(walk, rows, scores)
 }
 
 /// The lens walk: every point is walked in normalised homogeneous coordinates (three
@@ -271,39 +312,32 @@ struct Lens<'v, 'p, F: PixelFormat, P: Fn(f32, f32, f32) -> (f32, f32)> {
     to_pixel: P,
 }
 
-impl<F: PixelFormat, P: Fn(f32, f32, f32) -> (f32, f32)> Lens<'_, '_, F, P> {
+/// A row of the [`Lens`] walk: its first point and the step, homogeneous, normalised.
+struct LensRow {
+    start: [f32; 3],
+    step: [f32; 3],
+}
+
+impl<F: PixelFormat, P: Fn(f32, f32, f32) -> (f32, f32)> RowWalk for Lens<'_, '_, F, P> {
+    type Row = LensRow;
+
     #[inline(always)]
-    fn row<const G: usize>(&self, start: [f32; 3], step: [f32; 3], score: &impl Fn(u8) -> u32) -> u32 {
-        let [mut x, mut y, mut w] = start;
+    fn rows<const G: usize>(&self, edge: &EdgeRows) -> [LensRow; ROWS_PER_EDGE] {
+        edge.starts.map(|start| LensRow { start, step: edge.step })
+    }
+
+    #[inline(always)]
+    fn walk<const G: usize>(&self, row: &LensRow, plane: &[u8; 256]) -> u32 {
+        let ([mut x, mut y, mut w], step) = (row.start, row.step);
         let mut hits = 0u32;
         for _ in 0..G {
             let (u1, v1) = (self.to_pixel)(x, y, w);
-            hits += score(self.view.hue(u1, v1));
+            hits += u32::from(plane[usize::from(self.view.hue(u1, v1))]);
             x += step[0];
             y += step[1];
             w += step[2];
         }
         hits
-    }
-}
-
-impl<F: PixelFormat, P: Fn(f32, f32, f32) -> (f32, f32)> RowWalk for Lens<'_, '_, F, P> {
-    #[inline(always)]
-    fn count_edge<const G: usize>(
-        &self,
-        rows: &EdgeRows,
-        inner: &impl Fn(u8) -> u32,
-        outer: &impl Fn(u8) -> u32,
-    ) -> (u32, u32) {
-        let (ins, outs) = rows.starts.split_at(INNER_INSETS_M.len());
-        let (mut hits_in, mut hits_out) = (0u32, 0u32);
-        for start in ins {
-            hits_in += self.row::<G>(*start, rows.step, inner);
-        }
-        for start in outs {
-            hits_out += self.row::<G>(*start, rows.step, outer);
-        }
-        (hits_in, hits_out)
     }
 }
 
@@ -478,12 +512,10 @@ fn count_faces<const G: usize>(
     let mut counts = Counts { visible: visible_mask, ..Counts::default() };
     for &k in &faces.chosen {
         let bit = 1u8 << k;
-        let plane = lut.plane(k);
         let a = k % 3;
         let centre = if k < 3 { add(proj.c, axes[a].half) } else { sub(proj.c, axes[a].half) };
         let (mut inner, mut outer) = (0u32, 0u32);
-        let inner_score = |h: u8| u32::from(plane[usize::from(h)]);
-        let outer_score = |h: u8| u32::from(lut.mask(h) & visible_mask != 0);
+        let scores = Scores { inner: lut.plane(k), outer: lut.any(visible_mask) };
         // Edges on the ±b sides run along c, those on the ±c sides along b (as `model::Edge`).
         for (side, along) in [((a + 1) % 3, (a + 2) % 3), ((a + 2) % 3, (a + 1) % 3)] {
             let (s, l) = (&axes[side], &axes[along]);
@@ -496,7 +528,7 @@ fn count_faces<const G: usize>(
                 // The inward direction is −side on the + side, +side on the − side.
                 let starts = s.rows.map(|d| if positive { sub(base, d) } else { add(base, d) });
                 let rows = EdgeRows { starts, step: l.step, span: l.span };
-                let (hits_in, hits_out) = walk.count_edge::<G>(&rows, &inner_score, &outer_score);
+                let (hits_in, hits_out) = walk.count_edge::<G>(&rows, &scores);
                 inner += hits_in;
                 // Outer rows count only on silhouette edges (the face across is hidden).
                 if !faces.front.get(neighbour).copied().unwrap_or(false) {

@@ -67,18 +67,75 @@ pub fn hue_distance(a: u8, b: u8) -> u8 {
     d.min(HUE_UNITS.saturating_sub(d))
 }
 
+/// Number of face sets with a plane in [`HueLut`]: of each of the block's three pairs of
+/// opposite faces `(k, k + 3)` none, the first or the second face (`3³`), which covers every
+/// set of faces a camera can see (never both faces of a pair).
+const FACE_SETS: usize = 27;
+
+/// The face set of [`HueLut::any`] for a face bitmask: `Σ_a 3^a · s_a` with `s_a` 1 when face
+/// `a` is in the mask, else 2 when face `a + 3` is, else 0 (bits 6 and 7 are ignored).
+const fn face_set(faces: u8) -> usize {
+    let mut set = 0usize;
+    let mut a = 0u32;
+    let mut weight = 1usize;
+    while a < 3 {
+        let s = if faces & (1 << a) != 0 {
+            1
+        } else if faces & (1 << (a + 3)) != 0 {
+            2
+        } else {
+            0
+        };
+        set += weight * s;
+        weight *= 3;
+        a += 1;
+    }
+    set
+}
+
+/// [`face_set`] of every 6-bit face mask.
+const FACE_SET: [u8; 64] = {
+    let mut t = [0u8; 64];
+    let mut m = 0usize;
+    while m < 64 {
+        t[m] = face_set(m as u8) as u8;
+        m += 1;
+    }
+    t
+};
+
+/// The face bitmask of face set `set` ([`face_set`]'s inverse on `0..FACE_SETS`).
+const fn set_faces(set: usize) -> u8 {
+    let (mut faces, mut rest, mut a) = (0u8, set, 0u32);
+    while a < 3 {
+        match rest % 3 {
+            1 => faces |= 1 << a,
+            2 => faces |= 1 << (a + 3),
+            _ => {}
+        }
+        rest /= 3;
+        a += 1;
+    }
+    faces
+}
+
 /// A 256-entry table: bit `k` of `lut[h]` is set when hue byte `h` matches the hue `b_k` of
 /// face `k` within the tolerance band (a real camera never returns exactly `b_k`, so the
 /// Kronecker δ of eq. 34 is applied to the quantised, banded hue).
+///
+/// Beside the bitmasks it holds one byte plane per set of faces a camera can see (see
+/// [`HueLut::any`]): `1` where the hue matches a face of the set. The fitness kernel scores
+/// every sample point with one load from a plane, the face's own for the inner points and
+/// the visible faces' for the contour points (7 KiB in all).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HueLut {
     table: [u8; 256],
-    planes: [[u8; 256]; 8],
+    sets: [[u8; 256]; FACE_SETS],
 }
 
 impl HueLut {
     /// The table that matches nothing (every entry 0).
-    pub const EMPTY: Self = Self { table: [0; 256], planes: [[0; 256]; 8] };
+    pub const EMPTY: Self = Self { table: [0; 256], sets: [[0; 256]; FACE_SETS] };
 
     /// Table for up to 8 face hues (in hue units) with a band of `±tolerance` units.
     /// `NO_HUE` and bytes `≥ HUE_UNITS` match nothing.
@@ -101,17 +158,28 @@ impl HueLut {
                 }
             }
             self.table[usize::from(h)] = mask;
-            for (k, plane) in self.planes.iter_mut().enumerate() {
-                plane[usize::from(h)] = (mask >> k) & 1;
+            for (set, plane) in self.sets.iter_mut().enumerate() {
+                plane[usize::from(h)] = u8::from(mask & set_faces(set) != 0);
             }
         }
     }
 
-    /// Bit `k` of every entry, as 0 or 1: `plane(k)[h] == (mask(h) >> k) & 1` (one load and
-    /// one addition per point when counting matches of a single face). `k ≥ 8` gives bit 7's.
+    /// The plane of face `k < 6`: `plane(k)[h] == (mask(h) >> k) & 1` (one load and one
+    /// addition per point when counting matches of a single face). `k ≥ 6` gives the plane
+    /// of no face (every entry 0).
     #[inline(always)]
     pub fn plane(&self, k: usize) -> &[u8; 256] {
-        &self.planes[k.min(7)]
+        self.any(u8::try_from(k).ok().and_then(|k| 1u8.checked_shl(u32::from(k))).unwrap_or(0))
+    }
+
+    /// The plane of a set of faces: `any(faces)[h] == u8::from(mask(h) & faces != 0)` for
+    /// every set with at most one face of each opposite pair `(a, a + 3)` of the block's six
+    /// faces (the faces one camera can see). Of a pair given both, only face `a` counts; bits 6
+    /// and 7 are ignored.
+    #[inline(always)]
+    pub fn any(&self, faces: u8) -> &[u8; 256] {
+        let set = FACE_SET.get(usize::from(faces & 0x3F)).copied().unwrap_or(0);
+        self.sets.get(usize::from(set)).unwrap_or(&self.sets[0])
     }
 
     /// The face bitmask of hue byte `h`.
@@ -180,7 +248,19 @@ mod tests {
             for k in 0..8 {
                 assert_eq!(lut.plane(k)[usize::from(h)], (lut.mask(h) >> k) & 1);
             }
+            // Every set of faces one camera can see: of each opposite pair none or one.
+            for set in 0..27u32 {
+                let faces = (0..3).fold(0u8, |m, a| match set / 3u32.pow(a) % 3 {
+                    1 => m | 1 << a,
+                    2 => m | 1 << (a + 3),
+                    _ => m,
+                });
+                assert_eq!(lut.any(faces)[usize::from(h)], u8::from(lut.mask(h) & faces != 0), "{faces:#b} {h}");
+            }
         }
+        let seven = HueLut::new(&[0, 60, 120, 0, 60, 120, 30], 5);
+        assert_eq!(seven.mask(30), 1 << 6);
+        assert_eq!(seven.plane(6)[30], 0, "no plane for a seventh face");
         let mut refilled = HueLut::new(&[90], 30);
         refilled.fill(&[0, 60, 120, 0, 60, 120], 5);
         assert_eq!(refilled, lut);

@@ -32,6 +32,9 @@ pub trait PixelFormat: Copy + Debug + Default + PartialEq + Eq + Send + Sync + '
     const NAME: &'static str;
     /// One pixel as stored.
     type Pixel: Copy;
+    /// A pixel whose hue is [`NO_HUE`]: what a sample point outside the image reads (so the
+    /// fitness kernel loads it without a branch when the point misses the image).
+    const NONE: Self::Pixel;
 
     /// The whole pixels of a byte buffer (a trailing partial pixel is dropped).
     fn split(bytes: &[u8]) -> &[Self::Pixel];
@@ -48,6 +51,7 @@ impl PixelFormat for Hue {
     const BYTES_PER_PIXEL: usize = 1;
     const NAME: &'static str = "hue";
     type Pixel = u8;
+    const NONE: u8 = NO_HUE;
 
     #[inline(always)]
     fn split(bytes: &[u8]) -> &[u8] {
@@ -68,6 +72,11 @@ impl PixelFormat for Rgb565 {
     const BYTES_PER_PIXEL: usize = 2;
     const NAME: &'static str = "RGB565";
     type Pixel = [u8; 2];
+    /// Black: below `MIN_VALUE`, so its [`RGB565_HUE`] entry is [`NO_HUE`].
+    const NONE: [u8; 2] = {
+        assert!(rgb_to_hue(0, 0, 0) == NO_HUE);
+        [0, 0]
+    };
 
     #[inline(always)]
     fn split(bytes: &[u8]) -> &[[u8; 2]] {

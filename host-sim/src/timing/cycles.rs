@@ -98,9 +98,9 @@ impl Mix {
 /// The cycle estimate's inputs from the disassembly of the measured image.
 #[derive(Debug, Clone)]
 pub struct MixAnalysis {
-    /// The mix of one sample point: the instructions between consecutive predicated pixel
-    /// loads (`ldrblo`/`ldrhlo`, one per point) of the fitness kernel's integer walk
-    /// (`walk_edge`, unrolled rows), averaged over those windows.
+    /// The mix of one sample point: the instructions between consecutive pixel loads (one per
+    /// point, see [`is_pixel_load`]) of the fitness kernel's integer walk (`walk_edge`,
+    /// unrolled rows), averaged over those windows.
     pub point: Mix,
     /// Number of point windows found.
     pub windows: usize,
@@ -112,6 +112,17 @@ pub struct MixAnalysis {
     pub rest_waits: Waits,
     /// The point windows' code span and whether it fits the ART instruction cache.
     pub hot: HotLoop,
+}
+
+/// One sample point's pixel load in the fitness kernel's walk: the RGB565 walk's halfword load
+/// through a register index scaled by 2 (`ldrh rT, [rPixels, rIndex, lsl #1]`, unconditional:
+/// a point outside the image reads pixel 0), or the predicated byte/halfword load of a walk
+/// that skips the load outside the image (`ldrblo`/`ldrhlo`).
+pub(super) fn is_pixel_load(i: &Insn) -> bool {
+    let m = i.mnemonic.as_str();
+    m.starts_with("ldrblo")
+        || m.starts_with("ldrhlo")
+        || (m.trim_end_matches(".w") == "ldrh" && i.operands.replace(' ', "").ends_with(",lsl#1]"))
 }
 
 /// The point and rest mixes of the generation in `elf`.
@@ -127,12 +138,10 @@ pub(super) fn analyse_mix(objdump: &Path, elf: &Path) -> Result<MixAnalysis> {
         .copied()
         .find(|&f| funcs.get(f).is_some_and(|x| x.name.contains("walk_edge")))
         .ok_or_else(|| anyhow!("no fitness walk_edge reachable from the generation in {}", elf.display()))?;
-    // Windows from one point's predicated pixel load to the next (a point each), where the row
-    // is unrolled; the row and edge bookkeeping makes the longer windows, left out below.
+    // Windows from one point's pixel load to the next (a point each), where the row is
+    // unrolled; the row and edge bookkeeping makes the longer windows, left out below.
     let kf = funcs.get(kernel).ok_or_else(|| anyhow!("kernel index"))?;
-    let is_pixel_load = |m: &str| m.starts_with("ldrblo") || m.starts_with("ldrhlo");
-    let divs: Vec<usize> =
-        kf.insns.iter().enumerate().filter(|(_, (_, i))| is_pixel_load(&i.mnemonic)).map(|(k, _)| k).collect();
+    let divs: Vec<usize> = kf.insns.iter().enumerate().filter(|(_, (_, i))| is_pixel_load(i)).map(|(k, _)| k).collect();
     let mut gaps: Vec<usize> = divs.windows(2).map(|w| w[1] - w[0]).collect();
     gaps.sort_unstable();
     let median = gaps.get(gaps.len() / 2).copied().unwrap_or(0);
@@ -254,7 +263,7 @@ pub(super) fn assumptions() -> Vec<&'static str> {
     vec![
         "Cortex-M4F at 168 MHz; the zero-wait-state figure assumes every code and data access at 0 wait states, the flash figure adds the wait states of the model below",
         "per-class worst-case costs from the Cortex-M4 TRM: ALU/IT 1, MUL/UMULL/UMLAL 1, MLA/MLS 2, SDIV/UDIV 12, LDR/STR 2, LDRD/STRD 3, LDM/STM/PUSH/POP 1+N (+3 if PC is loaded), every branch 1+P with P = 3 (pipeline refill, conditional branches counted as taken), VADD/VSUB/VMUL/VCVT/VMOV/VCMP 1, VMLA/VMLS 3, VDIV.F32/VSQRT.F32 14, VLDR/VSTR 2, VLDM/VSTM/VPUSH/VPOP 1+N words",
-        "instruction mix: sample points = measured points x the mean static mix of one point (the instructions between consecutive predicated pixel loads ldrblo/ldrhlo in the unrolled integer walk of the fitness kernel, walk_edge; the per-row perspective divisions are in the rest); every other measured instruction x the cycles per instruction of the static mix of all other code reachable from the generation function (llvm-objdump)",
+        "instruction mix: sample points = measured points x the mean static mix of one point (the instructions between consecutive pixel loads in the unrolled integer walk of the fitness kernel, walk_edge (the RGB565 walk's ldrh [pixels, index, lsl #1], one per point, or a predicated ldrblo/ldrhlo); the per-row perspective divisions are in the rest); every other measured instruction x the cycles per instruction of the static mix of all other code reachable from the generation function (llvm-objdump)",
         "no interrupts, no DMA contention, FPU lazy stacking not triggered",
     ]
 }
@@ -273,5 +282,17 @@ mod tests {
         assert_eq!(classify(&i("pop", "{r4, r5, pc}")).1, 7);
         assert_eq!(classify(&i("umlal", "r2, r4, r3, r6")).1, 1);
         assert_eq!(classify(&i("adds", "r2, r1, r0")).1, 1);
+    }
+
+    #[test]
+    fn pixel_loads_of_the_walk() {
+        let i = |m: &str, o: &str| Insn { mnemonic: m.to_owned(), operands: o.to_owned(), comment_addr: None };
+        assert!(is_pixel_load(&i("ldrh.w", "r4, [lr, r4, lsl #1]")));
+        assert!(is_pixel_load(&i("ldrhlo.w", "r3, [r3, r6, lsl #1]")));
+        assert!(is_pixel_load(&i("ldrblo", "r3, [r5, r2]")));
+        // The hue table and plane loads, and other halfword loads, are not.
+        assert!(!is_pixel_load(&i("ldrb.w", "r0, [r8, r0]")));
+        assert!(!is_pixel_load(&i("ldrh", "r4, [r0, #10]")));
+        assert!(!is_pixel_load(&i("ldrh.w", "r4, [r0, r1]")));
     }
 }

@@ -300,7 +300,7 @@ pub(super) fn markdown(r: &Results) -> String {
     );
     let _ = writeln!(
         s,
-        "One sample point ({} windows between the predicated pixel loads of the fitness kernel's walk; {:.1} static instructions per point):\n",
+        "One sample point ({} windows between the pixel loads of the fitness kernel's walk; {:.1} static instructions per point):\n",
         mix.windows, mix.point.instructions
     );
     let _ = writeln!(s, "| class (worst-case cycles) | instructions per point |\n|---|---:|");

@@ -1,21 +1,37 @@
 #!/usr/bin/env python3
 """Writes the hand-made seed inputs of the fuzz corpora (fuzz/corpus/<target>/seed-*).
 
-Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 2: 24-byte header,
-payload, CRC-32/ISO-HDLC trailer = zlib.crc32; frames carry RGB565 images, 2 bytes a pixel). Run from anywhere: python3 fuzz/make_seeds.py
+Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 5: 24-byte header,
+payload, CRC-32/ISO-HDLC trailer = zlib.crc32, the whole COBS-framed between two zero bytes;
+frames carry RGB565 images, 2 bytes a pixel). Run from anywhere: python3 fuzz/make_seeds.py
 """
 import os
 import struct
 import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-VERSION = 3
+VERSION = 5
 
 
-def msg(kind, payload=b"", seq=0, time_us=0):
-    header = b"EVRC" + bytes([VERSION, kind]) + b"\0\0" + struct.pack("<IIQ", seq, len(payload), time_us)
+def cobs(raw):
+    """COBS-encodes raw (no zero byte in the result)."""
+    out, run = bytearray(), bytearray()
+    for b in raw:
+        if b == 0:
+            out += bytes([len(run) + 1]) + run
+            run = bytearray()
+        else:
+            run.append(b)
+            if len(run) == 254:
+                out += b"\xff" + run
+                run = bytearray()
+    return bytes(out + bytes([len(run) + 1]) + run)
+
+
+def msg(kind, payload=b"", seq=0, time_us=0, flags=0):
+    header = b"EVRC" + bytes([VERSION, kind]) + struct.pack("<HIIQ", flags, seq, len(payload), time_us)
     body = header + payload
-    return body + struct.pack("<I", zlib.crc32(body))
+    return b"\0" + cobs(body + struct.pack("<I", zlib.crc32(body))) + b"\0"
 
 
 def f32s(*v):
@@ -65,10 +81,15 @@ def main():
     write("link_decode", "stream", config + frames + end)
     write("firmware_serve", "conversation", config + frames + end)
     write("firmware_serve", "wrong-size-frame", config + msg(2, frame(4, 3, 1, 0), seq=1) + end)
+    superseded = msg(2, frame(w, h, 33_333, 10), seq=1, time_us=33_333, flags=1)
+    write("firmware_serve", "overload", config + superseded + frames[len(frames) // 2 :] + end)
+    damaged = bytearray(frames)
+    damaged[60] ^= 0x10
+    write("firmware_serve", "damaged", config + bytes(damaged[: len(damaged) - 40]) + frames + end)
     replies = msg(5, struct.pack("<I", 0))
     replies += msg(3, f32s(0.01, -0.02, 0.7, 0.05, 0.1, -0.03, 0.9) + struct.pack("<IB", 1, 1), seq=1, time_us=33_333)
     replies += msg(6, seq=2, time_us=66_666)
-    replies += msg(7, struct.pack("<5I", 2, 1, 1, 13_892, 90_000))
+    replies += msg(7, struct.pack("<13I", 2, 1, 1, 13_892, 90_000, 1, 0, 0, 2, 0, 1, 0, 0))
     write("host_replies", "conversation", replies)
     write("host_replies", "error", msg(8, struct.pack("<I", 2)))
     # tracker_step: camera 16x12, no reset, one step on 16x12 RGB565 images with zero joints, dt 0.033

@@ -23,7 +23,8 @@ use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, TrackerConfig}
 use evorec_firmware::host::IoLink;
 use evorec_firmware::link_board::{StackUsage, serve};
 use evorec_firmware::protocol::{
-    ByteSink, Envelope, Message, ReadError, SliceSource, Truncated, decode, encoded_len, read_message, write_message,
+    ByteSource, Envelope, LinkReader, Message, ReadError, SliceSource, VecSink, decode, encode_to_vec, max_encoded_len,
+    read_message, write_message_with_flags,
 };
 use evorec_firmware::{FirmwareTracker, IMAGE_BYTES};
 
@@ -37,89 +38,89 @@ pub const TARGETS: &[(&str, fn(&[u8]))] = &[
     ("sequence_files", sequence_files),
 ];
 
-/// A growable byte sink (the fuzz bodies' stand-in for a link's transmit side).
-struct VecSink(Vec<u8>);
-
-impl ByteSink for VecSink {
-    type Error = Truncated;
-    fn write_all(&mut self, bytes: &[u8]) -> Result<(), Truncated> {
-        self.0.extend_from_slice(bytes);
-        Ok(())
-    }
-}
-
-/// Encodes one message.
-fn encode(env: &Envelope<'_>) -> Vec<u8> {
-    let mut sink = VecSink(Vec::with_capacity(encoded_len(&env.message)));
-    let written = write_message(&mut sink, env);
+/// Encodes one message with header `flags`.
+fn encode(env: &Envelope<'_>, flags: u16) -> Vec<u8> {
+    let mut sink = VecSink::default();
+    let written = write_message_with_flags(&mut sink, env, flags);
     assert!(written.is_ok(), "a decoded message must encode again: {written:?}");
-    assert_eq!(sink.0.len(), encoded_len(&env.message), "encoded_len disagrees with write_message");
+    assert!(sink.0.len() <= max_encoded_len(&env.message), "max_encoded_len is too small");
     sink.0
 }
 
-/// The firmware's link decoder ([`decode`] over a byte stream, frames read into buffers of the
-/// firmware's size): decodes messages from the front of the input until an error. Every
-/// accepted message must encode again, and decoding that encoding must give the same bytes
-/// once more (the only bytes the decoder may ignore are the header's reserved ones).
-pub fn link_decode(data: &[u8]) {
-    let (mut left, mut right) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
-    let mut rest = data;
-    while !rest.is_empty() {
-        let (env, used) = match decode(rest, &mut left, &mut right) {
-            Ok(ok) => ok,
-            Err(ReadError::Link(Truncated) | ReadError::Decode(_)) => return,
+/// Decodes every message of the stream `rx` (dropping damaged ones and reading on, as the
+/// firmware and the host do) until the input ends; checks that each accepted message encodes
+/// again and that decoding that encoding gives the same bytes once more. Returns the last
+/// message accepted, re-encoded.
+fn decode_all<S: ByteSource>(rx: &mut LinkReader<S>, frames: bool) -> Option<Vec<u8>> {
+    let (mut left, mut right) =
+        if frames { (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]) } else { (vec![], vec![]) };
+    let mut last = None;
+    loop {
+        let env = match read_message(rx, &mut left, &mut right) {
+            Ok(env) => env,
+            Err(ReadError::Decode(_)) => continue,
+            Err(ReadError::Link(_)) => return last,
         };
-        assert!(used > 0 && used <= rest.len(), "decode used {used} of {} bytes", rest.len());
-        assert_eq!(used, encoded_len(&env.message), "decode used other than the message's encoded length");
-        let once = encode(&env);
+        assert!(frames || !matches!(env.message, Message::Frame(_)), "a frame was decoded into empty buffers");
+        let once = encode(&env, rx.last_flags());
         let (mut l2, mut r2) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
         let again = decode(&once, &mut l2, &mut r2);
         let Ok((env2, used2)) = again else { panic!("re-encoded message does not decode: {again:?}") };
         assert_eq!(used2, once.len());
-        assert_eq!(encode(&env2), once, "decode∘encode is not the identity on encoded messages");
-        rest = rest.get(used..).unwrap_or_default();
+        assert_eq!(encode(&env2, rx.last_flags()), once, "decode∘encode is not the identity on encoded messages");
+        last = Some(once);
     }
+}
+
+/// A well-formed message appended to every input (the resynchronisation property).
+fn marker() -> Vec<u8> {
+    let env = Envelope { sequence: 0x5EC5, capture_time_us: 77, message: Message::Rejected };
+    let bytes = encode_to_vec(&env);
+    let Ok(bytes) = bytes else { panic!("marker does not encode: {bytes:?}") };
+    bytes
+}
+
+/// The firmware's link decoder (the COBS reader over a byte stream, frames read into buffers
+/// of the firmware's size): decodes every message of the input, dropping damaged ones as the
+/// firmware does. Every accepted message must encode again, and decoding that encoding must
+/// give the same bytes once more. And after any input, a well-formed message appended to it
+/// is decoded (resynchronisation): it is the last message accepted.
+pub fn link_decode(data: &[u8]) {
+    let mut rx = LinkReader::new(SliceSource::new(data));
+    decode_all(&mut rx, true);
+    let mut stream = data.to_vec();
+    let marker = marker();
+    stream.extend(&marker);
+    let mut rx = LinkReader::new(SliceSource::new(&stream));
+    assert_eq!(decode_all(&mut rx, true), Some(marker), "the message after the input was not decoded");
 }
 
 /// The firmware's whole conversation ([`serve`]: `CONFIG`, frames through the core's board
 /// loop, `END`) on the input as the host→firmware stream, with the firmware's frame buffers.
-/// Whatever arrives, `serve` must return, and what it sent back must be a sequence of valid
-/// messages.
+/// Whatever arrives, `serve` must return (damaged messages are dropped and counted), and what
+/// it sent back must be a sequence of valid messages.
 pub fn firmware_serve(data: &[u8]) {
     let (mut left, mut right) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
     let mut slot: Option<FirmwareTracker> = None;
-    let mut tx = VecSink(Vec::new());
+    let mut tx = VecSink::default();
     let _ = serve(SliceSource::new(data), &mut tx, &mut slot, &mut left, &mut right, StackUsage::default);
-    let mut src = SliceSource::new(&tx.0);
-    while !src.remaining().is_empty() {
-        let reply = read_message(&mut src, &mut [], &mut []);
+    let mut rx = LinkReader::new(SliceSource::new(&tx.0));
+    while !rx.get_ref().remaining().is_empty() || !rx.buffered().is_empty() {
+        let reply = read_message(&mut rx, &mut [], &mut []);
         assert!(reply.is_ok(), "the firmware sent a malformed message: {reply:?}");
     }
 }
 
-/// The host's reader of the firmware's replies (as in `host::HilSession`: [`read_message`]
-/// over an `std::io` stream with no frame buffers): reads until an error; every accepted
-/// reply must re-encode to the bytes it came from, CRC included, except the reserved header
-/// bytes.
+/// The host's reader of the firmware's replies (as in `host::HilSession`: the COBS reader over
+/// an `std::io` stream with no frame buffers): decodes every reply, dropping damaged ones;
+/// every accepted reply must encode again and decode to the same bytes; and a well-formed
+/// reply after the input is decoded.
 pub fn host_replies(data: &[u8]) {
-    let mut src = IoLink(Cursor::new(data));
-    loop {
-        let start = usize::try_from(src.0.position()).unwrap_or(usize::MAX);
-        let env = match read_message(&mut src, &mut [], &mut []) {
-            Ok(env) => env,
-            Err(_) => return,
-        };
-        assert!(!matches!(env.message, Message::Frame(_)), "a frame was decoded into empty buffers");
-        let end = usize::try_from(src.0.position()).unwrap_or(usize::MAX);
-        let original = data.get(start..end).unwrap_or_default();
-        let encoded = encode(&env);
-        assert_eq!(encoded.len(), original.len());
-        // Bytes 6..8 of the header are reserved (ignored on receipt, 0 when sent), and the
-        // CRC covers them; everything else must match exactly.
-        let payload_and_crc_len = encoded.len() - 8;
-        assert_eq!(encoded[..6], original[..6]);
-        assert_eq!(encoded[8..8 + payload_and_crc_len - 4], original[8..8 + payload_and_crc_len - 4]);
-    }
+    let mut stream = data.to_vec();
+    let marker = marker();
+    stream.extend(&marker);
+    let mut rx = LinkReader::new(IoLink(Cursor::new(stream)));
+    assert_eq!(decode_all(&mut rx, false), Some(marker), "the reply after the input was not decoded");
 }
 
 /// A little-endian reader over the fuzzer's bytes that yields zeros once they run out.

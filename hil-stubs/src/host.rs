@@ -30,11 +30,12 @@
 
 use std::format;
 use std::fs::{self, File, OpenOptions};
-use std::io::{self, BufReader, Read, Write};
+use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::string::{String, ToString};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 use std::vec::Vec;
@@ -43,9 +44,10 @@ use evorec_core::Tracker;
 use evorec_core::tracker::Estimate;
 
 use crate::BoardProfile;
+use crate::faults::{FaultConfig, FaultCounts, FaultInjector, MessageSplitter};
 use crate::protocol::{
-    ByteSink, ByteSource, DecodeError, Done, Envelope, ErrorCode, Frame, Message, MsgType, ReadError, Setup,
-    WriteError, read_message, write_message,
+    ByteSink, ByteSource, DecodeError, Done, DropCounts, Envelope, ErrorCode, FLAG_NEWER_FOLLOWS, Frame, LinkReader,
+    Message, MsgType, ReadError, Setup, WriteError, read_message, write_message_with_flags,
 };
 use crate::setup::SetupError;
 
@@ -61,6 +63,8 @@ pub const HOST_TO_FIRMWARE: &str = "evorec-h2f.fifo";
 pub const FIRMWARE_TO_HOST: &str = "evorec-f2h.fifo";
 /// QEMU's output file name.
 pub const LOG_FILE: &str = "firmware.log";
+/// With faults: how often `CONFIG` and `END` are sent before the session gives up waiting.
+pub const HANDSHAKE_TRIES: u32 = 8;
 
 /// Where `cargo build --release` in `hil-stubs/` puts the firmware: `$EVOREC_FIRMWARE_ELF` if
 /// set, else `$CARGO_TARGET_DIR` (relative paths taken from the workspace root) or the
@@ -132,6 +136,16 @@ pub struct HilOptions {
     pub start_timeout: Duration,
     /// Longest wait for any one reply, and for QEMU to exit after `DONE` (default 60 s).
     pub reply_timeout: Duration,
+    /// Link fault injection into the messages to the firmware (default none). With faults in
+    /// either direction, a frame whose answer does not come within
+    /// [`HilOptions::lost_timeout`] is [`Reply::Lost`], damaged and out-of-sequence replies are
+    /// dropped and counted, and `CONFIG` and `END` are sent again when their answer does not
+    /// come.
+    pub faults_to_firmware: Option<FaultConfig>,
+    /// Link fault injection into the replies (default none; never into `ACK` and `DONE`).
+    pub faults_to_host: Option<FaultConfig>,
+    /// With faults: how long to wait for a frame's answer (default 1 s).
+    pub lost_timeout: Duration,
 }
 
 impl Default for HilOptions {
@@ -141,6 +155,9 @@ impl Default for HilOptions {
             profile: BoardProfile::M4,
             start_timeout: Duration::from_secs(30),
             reply_timeout: Duration::from_secs(60),
+            faults_to_firmware: None,
+            faults_to_host: None,
+            lost_timeout: Duration::from_secs(1),
         }
     }
 }
@@ -287,8 +304,15 @@ pub struct IoLink<T>(pub T);
 
 impl<T: Read> ByteSource for IoLink<T> {
     type Error = io::Error;
-    fn read_exact(&mut self, buf: &mut [u8]) -> Result<(), io::Error> {
-        self.0.read_exact(buf)
+    fn read_some(&mut self, buf: &mut [u8]) -> Result<usize, io::Error> {
+        loop {
+            match self.0.read(buf) {
+                Ok(0) if !buf.is_empty() => return Err(io::ErrorKind::UnexpectedEof.into()),
+                Ok(n) => return Ok(n),
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
     }
 }
 
@@ -306,6 +330,9 @@ pub enum Reply {
     Estimate(Estimate),
     /// The tracker refused the frame (wrong size, non-finite joints, time step out of range).
     Rejected,
+    /// No valid answer came in time (only with fault injection: the frame or its answer was
+    /// damaged, dropped or delayed).
+    Lost,
 }
 
 /// What a finished session reports.
@@ -315,9 +342,26 @@ pub struct Summary {
     pub done: Done,
     /// QEMU's output (the firmware's log).
     pub log_path: PathBuf,
+    /// The host's side of the link: replies it dropped, by reason (damaged, out-of-sequence).
+    pub host_drops: DropCounts,
+    /// Frames that got no valid answer in time ([`Reply::Lost`]).
+    pub lost: u32,
+    /// Faults injected into the host → firmware direction.
+    pub faults_sent: FaultCounts,
+    /// Faults injected into the firmware → host direction.
+    pub faults_received: FaultCounts,
 }
 
-type Incoming = Result<Envelope<'static>, HilError>;
+/// What the reader thread hands over.
+#[derive(Debug)]
+enum Incoming {
+    /// A valid message.
+    Message(Envelope<'static>),
+    /// A damaged message (dropped).
+    Damaged(DecodeError),
+    /// The link closed or failed.
+    Closed(HilError),
+}
 
 /// A running firmware under QEMU with an open link; see the [module docs](self).
 #[derive(Debug)]
@@ -328,6 +372,12 @@ pub struct HilSession {
     rx: Receiver<Incoming>,
     log_path: PathBuf,
     options: HilOptions,
+    faults: Option<FaultInjector>,
+    /// Faults in either direction: lenient waiting (see [`HilOptions::faults_to_firmware`]).
+    fault_mode: bool,
+    reply_faults: Arc<Mutex<FaultCounts>>,
+    host_drops: DropCounts,
+    lost: u32,
 }
 
 impl HilSession {
@@ -374,18 +424,54 @@ impl HilSession {
                 _ => HilError::Io { what: format!("start {}", options.qemu.display()), source: e },
             })?;
         let (_unused_tx, rx) = mpsc::channel();
-        let mut session = Self { qemu, exited: None, tx: None, rx, log_path, options: options.clone() };
+        let mut session = Self {
+            qemu,
+            exited: None,
+            tx: None,
+            rx,
+            log_path,
+            options: options.clone(),
+            faults: options.faults_to_firmware.map(FaultInjector::new),
+            fault_mode: options.faults_to_firmware.is_some() || options.faults_to_host.is_some(),
+            reply_faults: Arc::default(),
+            host_drops: DropCounts::default(),
+            lost: 0,
+        };
         let deadline = Instant::now() + options.start_timeout;
         session.tx = Some(session.open_fifo(&h2f, true, deadline)?);
         let from_fw = session.open_fifo(&f2h, false, deadline)?;
-        session.rx = spawn_reader(from_fw);
+        let reply_faults = options.faults_to_host.map(FaultInjector::new);
+        session.rx = spawn_reader(from_fw, reply_faults, Arc::clone(&session.reply_faults));
 
-        session.send(&Envelope::bare(Message::Config(*setup)))?;
-        match session.recv("ACK")? {
+        match session.handshake(&Envelope::bare(Message::Config(*setup)), "ACK")? {
             Envelope { message: Message::Ack(0), .. } => Ok(session),
             Envelope { message: Message::Ack(code), .. } => Err(HilError::ConfigRefused { code }),
             env => Err(unexpected(&env, "ACK")),
         }
+    }
+
+    /// Sends `env` and waits for the next valid message; with faults, sends `env` again
+    /// (up to [`HANDSHAKE_TRIES`] times) while no answer comes within the lost timeout.
+    fn handshake(&mut self, env: &Envelope<'_>, waiting_for: &'static str) -> Result<Envelope<'static>, HilError> {
+        if !self.fault_mode {
+            self.send(env, 0)?;
+            return self.recv(waiting_for);
+        }
+        for _ in 0..HANDSHAKE_TRIES {
+            self.send(env, 0)?;
+            let deadline = Instant::now() + self.options.lost_timeout;
+            loop {
+                match self.recv_until(deadline)? {
+                    None => break,
+                    // Late answers to frames may still arrive: not what is awaited.
+                    Some(got) if matches!(got.message, Message::Estimate(_) | Message::Rejected) => {
+                        self.host_drops.sequence += 1;
+                    }
+                    Some(got) => return Ok(got),
+                }
+            }
+        }
+        self.recv(waiting_for)
     }
 
     /// Sends one frame pair (`sequence`, `capture_time_us` as the board's `FrameInfo`) and
@@ -394,15 +480,58 @@ impl HilSession {
     /// # Errors
     /// [`HilError::BadFrame`], or a failure of the link or QEMU.
     pub fn step(&mut self, sequence: u32, capture_time_us: u64, frame: &Frame<'_>) -> Result<Reply, HilError> {
-        self.send(&Envelope { sequence, capture_time_us, message: Message::Frame(*frame) })?;
-        let env = self.recv("ESTIMATE")?;
-        match env.message {
-            // The firmware's tracker stamps its estimate with the joint sample's time.
-            Message::Estimate(e) if env.sequence == sequence => {
-                Ok(Reply::Estimate(Estimate { capture_time_us: frame.joints.time_us, ..e }))
+        self.send(&Envelope { sequence, capture_time_us, message: Message::Frame(*frame) }, 0)?;
+        self.answer_to(sequence, frame.joints.time_us)
+    }
+
+    /// Overload: offers `frames` back to back, each but the last flagged
+    /// [`FLAG_NEWER_FOLLOWS`] (the camera delivered them while the board was busy), and waits
+    /// for the answer to the last; the board drops the older ones (counted in `DONE` as
+    /// `superseded`) and answers only the newest.
+    ///
+    /// # Errors
+    /// As [`HilSession::step`].
+    pub fn step_burst(&mut self, frames: &[(u32, u64, Frame<'_>)]) -> Result<Option<(u32, Reply)>, HilError> {
+        let Some(((last_seq, _, last), older)) = frames.split_last() else { return Ok(None) };
+        for (sequence, capture_time_us, frame) in older {
+            let env =
+                Envelope { sequence: *sequence, capture_time_us: *capture_time_us, message: Message::Frame(*frame) };
+            self.send(&env, FLAG_NEWER_FOLLOWS)?;
+        }
+        let (_, t, _) = frames[frames.len() - 1];
+        self.send(&Envelope { sequence: *last_seq, capture_time_us: t, message: Message::Frame(*last) }, 0)?;
+        Ok(Some((*last_seq, self.answer_to(*last_seq, last.joints.time_us)?)))
+    }
+
+    /// Waits for the answer to frame `sequence`. Without faults the next message must be it;
+    /// with faults, damaged and out-of-sequence replies are dropped (counted) and no answer
+    /// within the lost timeout is [`Reply::Lost`].
+    fn answer_to(&mut self, sequence: u32, joint_time_us: u64) -> Result<Reply, HilError> {
+        if !self.fault_mode {
+            let env = self.recv("ESTIMATE")?;
+            return match env.message {
+                // The firmware's tracker stamps its estimate with the joint sample's time.
+                Message::Estimate(e) if env.sequence == sequence => {
+                    Ok(Reply::Estimate(Estimate { capture_time_us: joint_time_us, ..e }))
+                }
+                Message::Rejected if env.sequence == sequence => Ok(Reply::Rejected),
+                _ => Err(unexpected(&env, "ESTIMATE or REJECTED for the frame just sent")),
+            };
+        }
+        let deadline = Instant::now() + self.options.lost_timeout;
+        loop {
+            let Some(env) = self.recv_until(deadline)? else {
+                self.lost += 1;
+                return Ok(Reply::Lost);
+            };
+            match env.message {
+                Message::Estimate(e) if env.sequence == sequence => {
+                    return Ok(Reply::Estimate(Estimate { capture_time_us: joint_time_us, ..e }));
+                }
+                Message::Rejected if env.sequence == sequence => return Ok(Reply::Rejected),
+                Message::Estimate(_) | Message::Rejected => self.host_drops.sequence += 1,
+                _ => self.host_drops.unexpected += 1,
             }
-            Message::Rejected if env.sequence == sequence => Ok(Reply::Rejected),
-            _ => Err(unexpected(&env, "ESTIMATE or REJECTED for the frame just sent")),
         }
     }
 
@@ -411,15 +540,22 @@ impl HilSession {
     /// # Errors
     /// A failure of the link, or QEMU exiting with failure ([`HilError::QemuExited`]).
     pub fn finish(mut self) -> Result<Summary, HilError> {
-        self.send(&Envelope::bare(Message::End))?;
-        let done = match self.recv("DONE")? {
+        let done = match self.handshake(&Envelope::bare(Message::End), "DONE")? {
             Envelope { message: Message::Done(d), .. } => d,
             env => return Err(unexpected(&env, "DONE")),
+        };
+        let summary = Summary {
+            done,
+            log_path: self.log_path.clone(),
+            host_drops: self.host_drops,
+            lost: self.lost,
+            faults_sent: self.faults.as_ref().map(FaultInjector::counts).unwrap_or_default(),
+            faults_received: self.reply_faults.lock().map(|c| *c).unwrap_or_default(),
         };
         self.tx = None;
         let status = self.wait_exit(self.options.reply_timeout)?;
         match status {
-            Some(s) if s.success() => Ok(Summary { done, log_path: self.log_path.clone() }),
+            Some(s) if s.success() => Ok(summary),
             Some(s) => Err(HilError::QemuExited { status: Some(s), log_tail: self.log_tail() }),
             None => {
                 self.kill();
@@ -437,16 +573,20 @@ impl HilSession {
         &self.log_path
     }
 
-    fn send(&mut self, env: &Envelope<'_>) -> Result<(), HilError> {
-        let mut bytes = IoLink(Vec::with_capacity(crate::protocol::encoded_len(&env.message)));
-        write_message(&mut bytes, env).map_err(|e| match e {
+    fn send(&mut self, env: &Envelope<'_>, flags: u16) -> Result<(), HilError> {
+        let mut bytes = IoLink(Vec::with_capacity(crate::protocol::max_encoded_len(&env.message)));
+        write_message_with_flags(&mut bytes, env, flags).map_err(|e| match e {
             WriteError::ImageSize { expected, left, right } => HilError::BadFrame { expected, left, right },
             WriteError::Link(e) => HilError::Io { what: "encode a message".to_string(), source: e },
         })?;
+        let wire = match self.faults.as_mut() {
+            Some(f) => f.pass(&bytes.0),
+            None => bytes.0,
+        };
         let Some(tx) = self.tx.as_mut() else {
             return Err(HilError::Io { what: "send".to_string(), source: io::ErrorKind::NotConnected.into() });
         };
-        match tx.write_all(&bytes.0).and_then(|()| tx.flush()) {
+        match tx.write_all(&wire).and_then(|()| tx.flush()) {
             Ok(()) => Ok(()),
             // A broken pipe means QEMU went away: report that rather than the pipe.
             Err(e) if e.kind() == io::ErrorKind::BrokenPipe => Err(self.link_closed()),
@@ -455,17 +595,33 @@ impl HilSession {
     }
 
     fn recv(&mut self, waiting_for: &'static str) -> Result<Envelope<'static>, HilError> {
-        match self.rx.recv_timeout(self.options.reply_timeout) {
-            Ok(Ok(Envelope { message: Message::Error(code), .. })) => {
-                let _ = self.wait_exit(Duration::from_secs(5));
-                Err(HilError::Firmware { code, log_tail: self.log_tail() })
-            }
-            Ok(Ok(env)) => Ok(env),
-            Ok(Err(HilError::QemuExited { .. })) | Err(RecvTimeoutError::Disconnected) => Err(self.link_closed()),
-            Ok(Err(e)) => Err(e),
-            Err(RecvTimeoutError::Timeout) => {
+        match self.recv_until(Instant::now() + self.options.reply_timeout)? {
+            Some(env) => Ok(env),
+            None => {
                 self.kill();
                 Err(HilError::Timeout { waiting_for, after: self.options.reply_timeout, log_tail: self.log_tail() })
+            }
+        }
+    }
+
+    /// The next valid message before `deadline` (`None` after it). A damaged message is an
+    /// error without faults; with faults it is counted and skipped.
+    fn recv_until(&mut self, deadline: Instant) -> Result<Option<Envelope<'static>>, HilError> {
+        loop {
+            let wait = deadline.saturating_duration_since(Instant::now());
+            match self.rx.recv_timeout(wait) {
+                Ok(Incoming::Message(Envelope { message: Message::Error(code), .. })) => {
+                    let _ = self.wait_exit(Duration::from_secs(5));
+                    return Err(HilError::Firmware { code, log_tail: self.log_tail() });
+                }
+                Ok(Incoming::Message(env)) => return Ok(Some(env)),
+                Ok(Incoming::Damaged(e)) if self.fault_mode => self.host_drops.count(&e),
+                Ok(Incoming::Damaged(e)) => return Err(HilError::Protocol(e)),
+                Ok(Incoming::Closed(HilError::QemuExited { .. })) | Err(RecvTimeoutError::Disconnected) => {
+                    return Err(self.link_closed());
+                }
+                Ok(Incoming::Closed(e)) => return Err(e),
+                Err(RecvTimeoutError::Timeout) => return Ok(None),
             }
         }
     }
@@ -579,26 +735,84 @@ fn make_fifo(path: &Path) -> Result<(), HilError> {
     }
 }
 
+/// The firmware → host stream as the host sees it: the FIFO, with faults injected message
+/// by message when a [`FaultInjector`] is given (never into `ACK` and `DONE`, which the
+/// firmware does not repeat).
+struct ReplyStream {
+    file: File,
+    faults: Option<FaultInjector>,
+    counts: Arc<Mutex<FaultCounts>>,
+    splitter: MessageSplitter,
+    queue: std::collections::VecDeque<u8>,
+}
+
+impl ByteSource for ReplyStream {
+    type Error = io::Error;
+    fn read_some(&mut self, buf: &mut [u8]) -> Result<usize, io::Error> {
+        let mut chunk = [0u8; 4096];
+        while self.queue.is_empty() {
+            let n = self.file.read(&mut chunk)?;
+            if n == 0 {
+                return Err(io::ErrorKind::UnexpectedEof.into());
+            }
+            let data = chunk.get(..n).unwrap_or_default();
+            let Some(faults) = self.faults.as_mut() else {
+                self.queue.extend(data);
+                continue;
+            };
+            let queue = &mut self.queue;
+            self.splitter.push(data, |m| {
+                let handshake = matches!(
+                    crate::protocol::decode(&m, &mut [], &mut []),
+                    Ok((Envelope { message: Message::Ack(_) | Message::Done(_), .. }, _))
+                );
+                if handshake {
+                    queue.extend(faults.release());
+                    queue.extend(m);
+                } else {
+                    queue.extend(faults.pass(&m));
+                }
+            });
+            if let Ok(mut c) = self.counts.lock() {
+                *c = faults.counts();
+            }
+        }
+        let n = buf.len().min(self.queue.len());
+        for (dst, src) in buf.iter_mut().zip(self.queue.drain(..n)) {
+            *dst = src;
+        }
+        Ok(n)
+    }
+}
+
 /// Reads messages from the firmware until the link closes; each goes to the channel.
-fn spawn_reader(file: File) -> Receiver<Incoming> {
+fn spawn_reader(file: File, faults: Option<FaultInjector>, counts: Arc<Mutex<FaultCounts>>) -> Receiver<Incoming> {
     let (tx, rx) = mpsc::channel();
     thread::spawn(move || {
-        let mut src = IoLink(BufReader::new(file));
+        let stream =
+            ReplyStream { file, faults, counts, splitter: MessageSplitter::default(), queue: Default::default() };
+        let mut src = LinkReader::new(stream);
         loop {
             let item = match read_message(&mut src, &mut [], &mut []) {
                 Ok(env) => match env.message.detach() {
-                    Some(message) => {
-                        Ok(Envelope { sequence: env.sequence, capture_time_us: env.capture_time_us, message })
-                    }
-                    None => {
-                        Err(HilError::Unexpected { got: MsgType::Frame, sequence: env.sequence, expected: "a reply" })
-                    }
+                    Some(message) => Incoming::Message(Envelope {
+                        sequence: env.sequence,
+                        capture_time_us: env.capture_time_us,
+                        message,
+                    }),
+                    None => Incoming::Closed(HilError::Unexpected {
+                        got: MsgType::Frame,
+                        sequence: env.sequence,
+                        expected: "a reply",
+                    }),
                 },
-                Err(ReadError::Decode(e)) => Err(HilError::Protocol(e)),
+                Err(ReadError::Decode(e)) => Incoming::Damaged(e),
                 // End of file (QEMU closed the FIFO) or a read error: the link is gone.
-                Err(ReadError::Link(_)) => Err(HilError::QemuExited { status: None, log_tail: String::new() }),
+                Err(ReadError::Link(_)) => {
+                    Incoming::Closed(HilError::QemuExited { status: None, log_tail: String::new() })
+                }
             };
-            let stop = item.is_err();
+            let stop = matches!(item, Incoming::Closed(_));
             if tx.send(item).is_err() || stop {
                 break;
             }

@@ -86,6 +86,8 @@ pub mod setup;
 pub mod timing;
 
 #[cfg(feature = "host")]
+pub mod faults;
+#[cfg(feature = "host")]
 pub mod host;
 
 #[cfg(target_os = "none")]

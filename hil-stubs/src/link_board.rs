@@ -5,18 +5,23 @@
 //! Both are generic over the link's [`ByteSource`]/[`ByteSink`], so the same code runs on the
 //! Cortex-M4 over semihosting FIFOs and in host unit tests over byte buffers.
 //!
-//! Lock-step guarantee: every `FRAME` gets exactly one answer before the next message is
-//! read, an `ESTIMATE` from [`CameraController::publish`] or, when the tracker refused the
-//! frame (the core's loop then skips `publish`), a `REJECTED` sent by the next
+//! Lock-step guarantee: every `FRAME` the board works on gets exactly one answer before the
+//! next message is read, an `ESTIMATE` from [`CameraController::publish`] or, when the tracker
+//! refused the frame (the core's loop then skips `publish`), a `REJECTED` sent by the next
 //! [`CameraController::next_frame`] (or by [`serve`] at `END`).
+//!
+//! Faults and overload: a damaged message, a frame whose sequence number is not above the
+//! last one, a message of a type not expected, and a frame superseded by a newer one
+//! ([`FLAG_NEWER_FOLLOWS`]) get no answer; each is counted by reason ([`DropCounts`], reported
+//! in `DONE`) and the board reads on. Only a failing link ends the loop early.
 
 use evorec_core::Tracker;
 use evorec_core::board::{self, CameraController, ErrorKind, ErrorType, FrameInfo, LoopStats};
 use evorec_core::tracker::{Estimate, JointSample};
 
 use crate::protocol::{
-    ByteSink, ByteSource, DOF, DecodeError, Done, Envelope, ErrorCode, Message, MsgType, ReadError, WriteError,
-    read_message, write_message,
+    ByteSink, ByteSource, DOF, DecodeError, Done, DropCounts, Envelope, ErrorCode, FLAG_NEWER_FOLLOWS, LinkReader,
+    Message, MsgType, ReadError, WriteError, read_valid_message, write_message,
 };
 use crate::setup::SetupError;
 
@@ -92,11 +97,14 @@ impl<E: core::fmt::Debug> core::fmt::Display for LinkError<E> {
 /// The link board: receives frames, answers with estimates.
 #[derive(Debug)]
 pub struct LinkBoard<R, W> {
-    rx: R,
+    rx: LinkReader<R>,
     tx: W,
     joints: JointSample<DOF>,
     /// The last frame received and not answered yet: (sequence, capture time).
     pending: Option<(u32, u64)>,
+    /// Sequence number of the last valid frame.
+    last_sequence: Option<u32>,
+    drops: DropCounts,
 }
 
 impl<R, W, E> LinkBoard<R, W>
@@ -106,7 +114,19 @@ where
 {
     /// A board over the two ends of a link.
     pub fn new(rx: R, tx: W) -> Self {
-        Self { rx, tx, joints: JointSample { q: [0.0; DOF], qd: [0.0; DOF], time_us: 0 }, pending: None }
+        Self {
+            rx: LinkReader::new(rx),
+            tx,
+            joints: JointSample { q: [0.0; DOF], qd: [0.0; DOF], time_us: 0 },
+            pending: None,
+            last_sequence: None,
+            drops: DropCounts::default(),
+        }
+    }
+
+    /// Messages dropped so far, by reason.
+    pub fn drops(&self) -> DropCounts {
+        self.drops
     }
 
     /// Sends one message.
@@ -128,9 +148,9 @@ where
         Ok(())
     }
 
-    /// The two ends of the link.
+    /// The two ends of the link (bytes read but not decoded yet are lost).
     pub fn into_inner(self) -> (R, W) {
-        (self.rx, self.tx)
+        (self.rx.into_inner(), self.tx)
     }
 }
 
@@ -153,20 +173,35 @@ where
 
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, Self::Error> {
         self.answer_pending()?;
-        let env = read_message(&mut self.rx, left, right)?;
-        match env.message {
-            Message::Frame(f) => {
-                self.joints = f.joints;
-                self.pending = Some((env.sequence, env.capture_time_us));
-                Ok(FrameInfo {
-                    sequence: env.sequence,
-                    capture_time_us: env.capture_time_us,
-                    width: f.width,
-                    height: f.height,
-                })
+        loop {
+            let drops = &mut self.drops;
+            let env = read_valid_message(&mut self.rx, &mut *left, &mut *right, |e| drops.count(&e))
+                .map_err(LinkError::Link)?;
+            let f = match env.message {
+                Message::Frame(f) => f,
+                Message::End => return Err(LinkError::EndOfStream),
+                _ => {
+                    self.drops.unexpected = self.drops.unexpected.saturating_add(1);
+                    continue;
+                }
+            };
+            if self.last_sequence.is_some_and(|s| env.sequence <= s) {
+                self.drops.sequence = self.drops.sequence.saturating_add(1);
+                continue;
             }
-            Message::End => Err(LinkError::EndOfStream),
-            other => Err(LinkError::Unexpected(other.kind())),
+            self.last_sequence = Some(env.sequence);
+            if self.rx.last_flags() & FLAG_NEWER_FOLLOWS != 0 {
+                self.drops.superseded = self.drops.superseded.saturating_add(1);
+                continue;
+            }
+            self.joints = f.joints;
+            self.pending = Some((env.sequence, env.capture_time_us));
+            return Ok(FrameInfo {
+                sequence: env.sequence,
+                capture_time_us: env.capture_time_us,
+                width: f.width,
+                height: f.height,
+            });
         }
     }
 
@@ -263,7 +298,8 @@ where
     W: ByteSink<Error = E>,
     E: core::fmt::Debug,
 {
-    let env = read_message(&mut board.rx, left, right).map_err(LinkError::from)?;
+    let drops = &mut board.drops;
+    let env = read_valid_message(&mut board.rx, left, right, |e| drops.count(&e)).map_err(LinkError::Link)?;
     let setup = match env.message {
         Message::Config(setup) => setup,
         other => return Err(LinkError::Unexpected(other.kind()).into()),
@@ -292,6 +328,7 @@ where
         rejected: stats.rejected,
         stack_used_bytes: s.used_bytes,
         stack_size_bytes: s.size_bytes,
+        drops: board.drops,
     })))?;
     Ok(stats)
 }
@@ -300,27 +337,16 @@ where
 mod tests {
     use super::*;
     use crate::protocol::tests::sample_setup;
-    use crate::protocol::{BYTES_PER_PIXEL, Frame, SliceSource, Truncated};
+    use crate::protocol::{
+        BYTES_PER_PIXEL, Frame, LinkReader, SliceSource, Truncated, VecSink, encode_to_vec, read_message,
+        write_message_with_flags,
+    };
     use evorec_core::image::{RGB565_GREY, Rgb565Image, hue_to_rgb565};
     use std::vec;
     use std::vec::Vec;
 
-    /// A sink that collects everything (never fails).
-    #[derive(Default)]
-    struct VecSink(Vec<u8>);
-
-    impl ByteSink for VecSink {
-        type Error = Truncated;
-        fn write_all(&mut self, bytes: &[u8]) -> Result<(), Truncated> {
-            self.0.extend_from_slice(bytes);
-            Ok(())
-        }
-    }
-
     fn encode(env: &Envelope<'_>) -> Vec<u8> {
-        let mut s = VecSink::default();
-        write_message(&mut s, env).unwrap();
-        s.0
+        encode_to_vec(env).unwrap()
     }
 
     fn frame_env<'a>(seq: u32, w: u16, h: u16, l: &'a [u8], r: &'a [u8]) -> Envelope<'a> {
@@ -338,10 +364,10 @@ mod tests {
     }
 
     fn replies(bytes: &[u8]) -> Vec<Envelope<'static>> {
-        let mut src = SliceSource::new(bytes);
+        let mut rx = LinkReader::new(SliceSource::new(bytes));
         let mut out = Vec::new();
-        while !src.remaining().is_empty() {
-            out.push(read_message(&mut src, &mut [], &mut []).unwrap());
+        while !rx.get_ref().remaining().is_empty() || !rx.buffered().is_empty() {
+            out.push(read_message(&mut rx, &mut [], &mut []).unwrap());
         }
         out
     }
@@ -429,23 +455,81 @@ mod tests {
         assert_eq!(replies(&out.0)[0].message, Message::Error(ErrorCode::Unexpected as u32));
     }
 
-    #[test]
-    fn corrupt_frame_stops_the_loop_with_an_error_message() {
+    /// Runs `serve` on `input` with receive buffers of the sample setup's size; returns the
+    /// result and the replies.
+    fn serve_bytes(input: &[u8]) -> (Result<LoopStats, ServeError<Truncated>>, Vec<Envelope<'static>>) {
         let setup = sample_setup();
         let n = usize::from(setup.width) * usize::from(setup.height) * BYTES_PER_PIXEL;
-        let l = vec![0u8; n];
-        let mut input = encode(&Envelope::bare(Message::Config(setup)));
-        let mut frame = encode(&frame_env(1, setup.width, setup.height, &l, &l));
-        frame[100] ^= 1;
-        input.extend(frame);
         let mut out = VecSink::default();
         let mut slot: Option<Tracker> = None;
         let (mut lb, mut rb) = (vec![0u8; n], vec![0u8; n]);
-        let r = serve(SliceSource::new(&input), &mut out, &mut slot, &mut lb, &mut rb, StackUsage::default);
-        assert!(matches!(r, Err(ServeError::Link(LinkError::Decode(DecodeError::BadCrc { .. })))));
-        let got = replies(&out.0);
-        assert_eq!(got.last().map(|e| e.message), Some(Message::Error(ErrorCode::Decode as u32)));
-        // The corrupt frame is only known as corrupt at its end: it is not answered.
-        assert_eq!(got.len(), 2);
+        let r = serve(SliceSource::new(input), &mut out, &mut slot, &mut lb, &mut rb, StackUsage::default);
+        (r, replies(&out.0))
+    }
+
+    #[test]
+    fn damaged_messages_are_dropped_counted_and_the_stream_resynchronises() {
+        let setup = sample_setup();
+        let n = usize::from(setup.width) * usize::from(setup.height) * BYTES_PER_PIXEL;
+        let l = vec![0x55u8; n];
+        let (w, h) = (setup.width, setup.height);
+        let mut input = b"garbage before the config".to_vec();
+        input.extend(encode(&Envelope::bare(Message::Config(setup))));
+        let mut flipped = encode(&frame_env(1, w, h, &l, &l));
+        flipped[100] ^= 1; // bad CRC
+        input.extend(flipped);
+        let cut = encode(&frame_env(2, w, h, &l, &l));
+        input.extend(&cut[..cut.len() / 2]); // truncated: ended by the next message's delimiter
+        input.extend(encode(&frame_env(3, w, h, &l, &l)));
+        input.extend(encode(&frame_env(3, w, h, &l, &l))); // duplicate
+        input.extend(encode(&frame_env(2, w, h, &l, &l))); // late
+        input.extend(encode(&Envelope::bare(Message::Config(setup)))); // unexpected
+        let mut superseded = Vec::new();
+        let mut sink = VecSink::default();
+        write_message_with_flags(&mut sink, &frame_env(4, w, h, &l, &l), FLAG_NEWER_FOLLOWS).unwrap();
+        superseded.extend(sink.0);
+        input.extend(superseded);
+        input.extend(encode(&frame_env(5, w, h, &l, &l)));
+        input.extend(encode(&Envelope::bare(Message::End)));
+        let (r, got) = serve_bytes(&input);
+        assert_eq!(r.unwrap(), LoopStats { frames: 2, published: 2, rejected: 0 });
+        let kinds: Vec<(MsgType, u32)> = got.iter().map(|e| (e.message.kind(), e.sequence)).collect();
+        assert_eq!(kinds, [(MsgType::Ack, 0), (MsgType::Estimate, 3), (MsgType::Estimate, 5), (MsgType::Done, 0)]);
+        let Message::Done(done) = got[3].message else { panic!("no DONE") };
+        assert_eq!(
+            done.drops,
+            DropCounts {
+                header: 1,  // the garbage in front: its first 24 bytes are no header
+                framing: 1, // the cut frame
+                crc: 1,
+                sequence: 2,
+                unexpected: 1,
+                superseded: 1,
+                ..DropCounts::default()
+            }
+        );
+    }
+
+    #[test]
+    fn a_newer_frame_behind_supersedes_older_ones_so_latency_stays_one_frame() {
+        // Overload: frames offered at twice the rate the board works them off (two per
+        // generation, the older one flagged). The board answers only the newest of each pair.
+        let setup = sample_setup();
+        let n = usize::from(setup.width) * usize::from(setup.height) * BYTES_PER_PIXEL;
+        let l = vec![0u8; n];
+        let mut sink = VecSink::default();
+        write_message(&mut sink, &Envelope::bare(Message::Config(setup))).unwrap();
+        for k in 1..=20u32 {
+            let flags = if k % 2 == 1 { FLAG_NEWER_FOLLOWS } else { 0 };
+            write_message_with_flags(&mut sink, &frame_env(k, setup.width, setup.height, &l, &l), flags).unwrap();
+        }
+        write_message(&mut sink, &Envelope::bare(Message::End)).unwrap();
+        let (r, got) = serve_bytes(&sink.0);
+        assert_eq!(r.unwrap().frames, 10);
+        let answered: Vec<u32> =
+            got.iter().filter(|e| e.message.kind() == MsgType::Estimate).map(|e| e.sequence).collect();
+        assert_eq!(answered, (1..=10).map(|k| 2 * k).collect::<Vec<_>>());
+        let Some(Message::Done(done)) = got.last().map(|e| e.message) else { panic!("no DONE") };
+        assert_eq!(done.drops.superseded, 10);
     }
 }

@@ -60,22 +60,19 @@ impl HostFile {
 impl ByteSource for HostFile {
     type Error = HostIoError;
 
-    fn read_exact(&mut self, buf: &mut [u8]) -> Result<(), HostIoError> {
-        let mut done = 0;
-        while let Some(rest) = buf.get_mut(done..).filter(|r| !r.is_empty()) {
-            let len = rest.len();
-            // SAFETY: SYS_READ takes (fd, buffer, length) and writes at most `length` bytes
-            // into the buffer; `rest` is a live, exclusively borrowed slice of that length.
-            let not_read = unsafe { syscall(nr::READ, &[self.fd, rest.as_mut_ptr() as usize, len]) };
-            // The call returns the number of bytes NOT read (so `len` means end of file), or
-            // an error value above `len`.
-            let got = len.checked_sub(not_read).ok_or(HostIoError::Io)?;
-            if got == 0 {
-                return Err(HostIoError::EndOfFile);
-            }
-            done += got;
+    fn read_some(&mut self, buf: &mut [u8]) -> Result<usize, HostIoError> {
+        let len = buf.len();
+        // SAFETY: SYS_READ takes (fd, buffer, length) and writes at most `length` bytes into
+        // the buffer; `buf` is a live, exclusively borrowed slice of that length. On a FIFO the
+        // host's read returns what is there (at least one byte, or end of file).
+        let not_read = unsafe { syscall(nr::READ, &[self.fd, buf.as_mut_ptr() as usize, len]) };
+        // The call returns the number of bytes NOT read (so `len` means end of file), or an
+        // error value above `len`.
+        let got = len.checked_sub(not_read).ok_or(HostIoError::Io)?;
+        if got == 0 {
+            return Err(HostIoError::EndOfFile);
         }
-        Ok(())
+        Ok(got)
     }
 }
 

@@ -12,7 +12,8 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use evorec_core::board::{CameraController, Error as _, ErrorKind};
-use evorec_firmware::host::{HilSession, Reply};
+use evorec_firmware::faults::FaultConfig;
+use evorec_firmware::host::{HilOptions, HilSession, Reply};
 use evorec_firmware::protocol::{Frame, Setup};
 use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, IMAGE_BYTES};
 
@@ -26,7 +27,108 @@ use crate::sim::{SimBoard, World};
 /// # Errors
 /// A scenario not at the firmware's frame size, a missing QEMU or firmware (the message says
 /// how to install or build it), or a link failure.
-pub fn run(s: &Scenario, firmware: &Path, workdir: &Path, mut on_frame: impl FnMut()) -> Result<RunOutput> {
+pub fn run(s: &Scenario, firmware: &Path, workdir: &Path, on_frame: impl FnMut()) -> Result<RunOutput> {
+    Ok(run_with_faults(s, firmware, workdir, None, on_frame)?.0)
+}
+
+/// What the link did in a run (`evorec hil --faults`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LinkReport {
+    /// The firmware's `DONE` (its loop counts and what it dropped, by reason).
+    pub done: evorec_firmware::protocol::Done,
+    /// The host's session summary: replies dropped, frames lost, faults injected.
+    pub host_drops: evorec_firmware::protocol::DropCounts,
+    /// Frames without a valid answer in time.
+    pub lost: u32,
+    /// Faults injected host → firmware.
+    pub faults_sent: evorec_firmware::faults::FaultCounts,
+    /// Faults injected firmware → host.
+    pub faults_received: evorec_firmware::faults::FaultCounts,
+}
+
+impl LinkReport {
+    /// One paragraph for the terminal.
+    pub fn describe(&self) -> String {
+        let d = &self.done;
+        format!(
+            "link: faults injected {} of {} messages to the firmware, {} of {} replies; firmware: {} frames, {} \
+             estimates, {} refused, dropped {:?}; host: {} frames lost, dropped replies {:?}",
+            self.faults_sent.total(),
+            self.faults_sent.messages,
+            self.faults_received.total(),
+            self.faults_received.messages,
+            d.frames,
+            d.published,
+            d.rejected,
+            d.drops,
+            self.lost,
+            self.host_drops
+        )
+    }
+
+    /// The report as JSON.
+    pub fn to_json(&self) -> String {
+        let f = |c: &evorec_firmware::faults::FaultCounts| {
+            format!(
+                "{{\"messages\": {}, \"flip\": {}, \"drop\": {}, \"duplicate\": {}, \"truncate\": {}, \"delay\": {}}}",
+                c.messages, c.flip, c.drop, c.duplicate, c.truncate, c.delay
+            )
+        };
+        let dr = |c: &evorec_firmware::protocol::DropCounts| {
+            format!(
+                "{{\"framing\": {}, \"header\": {}, \"length\": {}, \"crc\": {}, \"value\": {}, \"sequence\": {}, \"unexpected\": {}, \"superseded\": {}}}",
+                c.framing, c.header, c.length, c.crc, c.value, c.sequence, c.unexpected, c.superseded
+            )
+        };
+        let d = &self.done;
+        format!(
+            "{{\n  \"firmware\": {{\"frames\": {}, \"published\": {}, \"rejected\": {}, \"dropped\": {}}},\n  \"host\": {{\"lost\": {}, \"dropped\": {}}},\n  \"faults_to_firmware\": {},\n  \"faults_to_host\": {}\n}}\n",
+            d.frames,
+            d.published,
+            d.rejected,
+            dr(&d.drops),
+            self.lost,
+            dr(&self.host_drops),
+            f(&self.faults_sent),
+            f(&self.faults_received)
+        )
+    }
+}
+
+/// [`run`] with link fault injection at `faults`' rate into both directions (`None`: a clean
+/// link); also returns what the link did.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with_faults(
+    s: &Scenario,
+    firmware: &Path,
+    workdir: &Path,
+    faults: Option<FaultConfig>,
+    on_frame: impl FnMut(),
+) -> Result<(RunOutput, LinkReport)> {
+    // Both directions, each with its own random stream.
+    let options = HilOptions {
+        faults_to_firmware: faults,
+        faults_to_host: faults.map(|c| FaultConfig { seed: c.seed.wrapping_add(1), ..c }),
+        ..Default::default()
+    };
+    run_with_options(s, firmware, workdir, &options, on_frame)
+}
+
+/// [`run`] with the session's `options` (fault injection per direction, timeouts); also
+/// returns what the link did. A frame without a valid answer ([`Reply::Lost`]) is counted as
+/// refused, as the board publishes nothing for it.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with_options(
+    s: &Scenario,
+    firmware: &Path,
+    workdir: &Path,
+    options: &HilOptions,
+    mut on_frame: impl FnMut(),
+) -> Result<(RunOutput, LinkReport)> {
     if (s.camera.width, s.camera.height) != (FRAME_WIDTH, FRAME_HEIGHT) {
         bail!(
             "the firmware takes {FRAME_WIDTH}x{FRAME_HEIGHT} frames but this scenario renders {}x{}; \
@@ -40,7 +142,7 @@ pub fn run(s: &Scenario, firmware: &Path, workdir: &Path, mut on_frame: impl FnM
     let config = experiment::tracker_config(s)?;
     let setup = Setup::from_tracker_config(&config, experiment::feedforward(s.method), &truth0, &INITIAL_SPREAD)
         .map_err(|e| anyhow::anyhow!("firmware setup: {e:?}"))?;
-    let mut session = HilSession::start(firmware, workdir, &setup).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut session = HilSession::start_with(firmware, workdir, &setup, options).map_err(|e| anyhow::anyhow!("{e}"))?;
     let mut board = SimBoard::new(world);
     let (mut left, mut right) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
     let mut rejected = 0u32;
@@ -56,13 +158,20 @@ pub fn run(s: &Scenario, firmware: &Path, workdir: &Path, mut on_frame: impl FnM
             Reply::Estimate(estimate) => {
                 board.publish(&info, &estimate).map_err(|e| anyhow::anyhow!("simulated board: {e:?}"))?;
             }
-            Reply::Rejected => rejected += 1,
+            Reply::Rejected | Reply::Lost => rejected += 1,
         }
         on_frame();
     }
     let done = session.finish().map_err(|e| anyhow::anyhow!("{e}")).context("finishing the firmware run")?;
     log::info!("firmware: {:?}, log in {}", done.done, done.log_path.display());
+    let link = LinkReport {
+        done: done.done,
+        host_drops: done.host_drops,
+        lost: done.lost,
+        faults_sent: done.faults_sent,
+        faults_received: done.faults_received,
+    };
     let rows = board.into_rows();
     let summary = Summary::of(&rows, rejected, s);
-    Ok(RunOutput { rows, summary })
+    Ok((RunOutput { rows, summary }, link))
 }

@@ -111,6 +111,13 @@ enum Command {
         /// Override the scenario's method: ga, ff or ff+target.
         #[arg(long, value_parser = Method::parse)]
         method: Option<Method>,
+        /// Link fault injection: the fraction of messages (both directions) that are bit-flipped,
+        /// dropped, duplicated, truncated or delayed, e.g. 0.01 for 1 %. Writes `link.json`.
+        #[arg(long)]
+        faults: Option<f64>,
+        /// Seed of the fault injection.
+        #[arg(long, default_value_t = 1)]
+        fault_seed: u64,
     },
     /// Closed-loop experiments (position-based visual servoing from the tracker's estimates):
     /// conveyor 0/0.05/0.1/0.2 m/s and turning block × (ga, ff, ff+target) × gains × delays,
@@ -407,12 +414,24 @@ fn execute(cli: Cli) -> Result<()> {
             }
             println!("{runs} runs in {:.1} s; wrote {}", t0.elapsed().as_secs_f64(), out.display());
         }
-        Command::Hil { scenario, out, firmware, method } => {
+        Command::Hil { scenario, out, firmware, method, faults, fault_seed } => {
             let s = load_with(&scenario, method)?;
             io::create_out_dir(&out)?;
             let firmware = firmware.unwrap_or_else(evorec_firmware::host::default_firmware_path);
             let t0 = Instant::now();
-            let output = hil::run(&s, &firmware, &out.join("qemu"), || {})?;
+            let faults = match faults {
+                Some(r) if !(0.0..=1.0).contains(&r) => {
+                    anyhow::bail!("--faults {r}: a fraction in [0, 1] (0.01 = 1 %)")
+                }
+                Some(r) => Some(evorec_firmware::faults::FaultConfig::from_rate(r, fault_seed)),
+                None => None,
+            };
+            let (output, link) = hil::run_with_faults(&s, &firmware, &out.join("qemu"), faults, || {})?;
+            if faults.is_some() {
+                println!("{}", link.describe());
+                std::fs::write(out.join("link.json"), link.to_json())
+                    .with_context(|| format!("write {}", out.join("link.json").display()))?;
+            }
             let title = format!("{} ({}, firmware on QEMU)", scenario.display(), s.method.as_str());
             experiment::write_outputs(&output, &out, &title)?;
             report(&output.summary.accuracy, t0);

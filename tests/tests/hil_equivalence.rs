@@ -241,6 +241,7 @@ fn equivalence(elf: &Path, profile: BoardProfile) -> Result<(), Failure> {
         match hil.step(f.info.sequence, f.info.capture_time_us, &frame)? {
             Reply::Estimate(e) => fw.push((f.info.sequence, e)),
             Reply::Rejected => fw_rejected.push(f.info.sequence),
+            Reply::Lost => panic!("frame {} lost without fault injection", f.info.sequence),
         }
     }
     let summary = hil.finish()?;

@@ -22,7 +22,7 @@ mod probe {
     use cortex_m_rt::entry;
     use evorec_core::image::Rgb565Image;
     use evorec_core::tracker::{Estimate, Feedforward, JointSample, StereoFrame};
-    use evorec_firmware::protocol::{ReadError, SliceSource, Truncated, read_message};
+    use evorec_firmware::protocol::{LinkReader, ReadError, SliceSource, Truncated, read_message};
     use evorec_firmware::selftest;
     use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, FirmwareTracker, rt};
     use static_cell::ConstStaticCell;
@@ -34,8 +34,8 @@ mod probe {
     /// Root of the decode path: one message from `bytes` into the frame buffers.
     #[inline(never)]
     fn decode_root(bytes: &[u8], left: &mut [u8], right: &mut [u8]) -> Result<u32, ReadError<Truncated>> {
-        let mut src = SliceSource::new(bytes);
-        let env = read_message(&mut src, left, right)?;
+        let mut rx = LinkReader::new(SliceSource::new(bytes));
+        let env = read_message(&mut rx, left, right)?;
         Ok(env.sequence)
     }
 

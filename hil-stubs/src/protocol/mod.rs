@@ -1,14 +1,17 @@
 //! The framed link protocol between the host and the firmware (`no_std`, shared by both).
 //!
 //! The link is a pair of byte streams (under QEMU: two named FIFOs read and written with
-//! semihosting file calls). Every message is
+//! semihosting file calls). Every message travels COBS-framed ([`framing`]):
+//! `0x00 ‖ COBS(header ‖ payload ‖ CRC) ‖ 0x00`, so a zero byte on the wire always delimits
+//! messages and a receiver drops a damaged message and is in step again at the next zero.
+//! Before framing a message is
 //!
 //! ```text
 //!  offset  size  field
 //!       0     4  magic "EVRC"
-//!       4     1  version (1)
+//!       4     1  version (5)
 //!       5     1  message type (MsgType)
-//!       6     2  reserved, 0
+//!       6     2  flags (FLAG_NEWER_FOLLOWS on a FRAME; 0 otherwise)
 //!       8     4  sequence number: the frame a FRAME/ESTIMATE/REJECTED is about; 0 otherwise
 //!      12     4  payload size in bytes
 //!      16     8  capture time (µs, the host's clock) of that frame; 0 otherwise
@@ -29,15 +32,18 @@
 //! | `END`      4  | h→f | empty: no more frames                                           |
 //! | `ACK`      5  | f→h | status u32 answering CONFIG: 0 = tracker built, else a [`crate::setup::SetupError`] code |
 //! | `REJECTED` 6  | f→h | empty: the tracker refused that frame (size, joints, time step) |
-//! | `DONE`     7  | f→h | [`Done`]: loop counts and the stack high-water mark             |
+//! | `DONE`     7  | f→h | [`Done`]: loop counts, stack high-water mark, [`DropCounts`]    |
 //! | `ERROR`    8  | f→h | code u32: the firmware gives up (see [`ErrorCode`])             |
 //!
-//! The conversation is lock-step: `CONFIG` → `ACK`; then per `FRAME` exactly one `ESTIMATE` or
+//! The conversation is lock-step: `CONFIG` → `ACK`; then per `FRAME` one `ESTIMATE` or
 //! `REJECTED` with the frame's sequence number and capture time; `END` → `DONE`, after which
-//! the firmware exits.
+//! the firmware exits. A damaged message gets no answer (the firmware counts it in
+//! [`DropCounts`]; the host times out and goes on), nor does a frame whose sequence number is
+//! not above the last one (a duplicate or a late copy), nor a frame with
+//! [`FLAG_NEWER_FOLLOWS`] (overload: the board works on the newest frame).
 //!
-//! Decoding streams: [`read_message`] reads the header, checks magic, version, type and size,
-//! then reads a frame's images straight into the caller's buffers while the CRC runs, so the
+//! Decoding streams: [`read_message`] checks the header as soon as it has arrived, then
+//! decodes a frame's images straight into the caller's buffers while the CRC runs, so the
 //! firmware needs no second frame buffer. Encoding is [`write_message`]. Both work over the
 //! two small traits [`ByteSource`] and [`ByteSink`].
 
@@ -48,25 +54,32 @@ use evorec_core::tracker::{Estimate, Feedforward, JointSample};
 
 use payload::{Dec, Enc};
 
+pub mod framing;
 mod payload;
 mod stream;
 #[cfg(test)]
 pub(crate) mod tests;
+#[cfg(any(test, feature = "host"))]
+mod vec;
 
-pub use stream::{
-    ByteSink, ByteSource, Full, ReadError, SliceSink, SliceSource, Truncated, WriteError, decode, encoded_len,
-    read_message, write_message,
+pub use framing::{
+    FLAG_NEWER_FOLLOWS, LinkReader, decode, max_encoded_len, raw_len, read_message, read_valid_message, write_message,
+    write_message_with_flags,
 };
+pub use stream::{ByteSink, ByteSource, Full, ReadError, SliceSink, SliceSource, Truncated, WriteError};
+#[cfg(any(test, feature = "host"))]
+pub use vec::{VecSink, encode_to_vec};
 
 /// Joints of the arm carried in every frame (the PA-10's 7).
 pub const DOF: usize = PA10_DOF;
 
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
-/// Protocol version carried in every header (4: `CONFIG` carries the population size; 3:
+/// Protocol version carried in every header (5: COBS framing, header flags, drop counts in
+/// `DONE`; 4: `CONFIG` carries the population size; 3:
 /// estimates carry the tracker's status; 2: frames carry the sensor's RGB565 pixels; 1: hue
 /// frames).
-pub const VERSION: u8 = 4;
+pub const VERSION: u8 = 5;
 /// The pixel format of a frame's images on the link: the camera sensor's own RGB565, so the
 /// hue is computed on the board (see [`evorec_core::image::Rgb565`]).
 pub type LinkFormat = evorec_core::image::Rgb565;
@@ -89,8 +102,8 @@ pub const FRAME_FIXED_LEN: usize = 2 + 2 + 8 + 4 * DOF * 2;
 pub const ESTIMATE_LEN: usize = 4 * 6 + 4 + 4 + 1;
 /// `ACK` payload size.
 pub const ACK_LEN: usize = 4;
-/// `DONE` payload size.
-pub const DONE_LEN: usize = 5 * 4;
+/// `DONE` payload size: five counts and the [`DropCounts`].
+pub const DONE_LEN: usize = 5 * 4 + DropCounts::LEN;
 /// `ERROR` payload size.
 pub const ERROR_LEN: usize = 4;
 /// Largest payload other than a frame's (sizes the decoder's scratch buffer).
@@ -181,6 +194,9 @@ pub enum DecodeError {
     },
     /// A field holds a value outside its range (e.g. a feedforward flag other than 0/1/2).
     BadValue,
+    /// The message's framing is broken: it ended (at a delimiter) before its announced size,
+    /// or a delimiter arrived inside a COBS run (a cut or damaged message).
+    Framing,
 }
 
 impl core::fmt::Display for DecodeError {
@@ -197,6 +213,7 @@ impl core::fmt::Display for DecodeError {
                 write!(f, "CRC mismatch: received {received:#010x}, computed {computed:#010x}")
             }
             Self::BadValue => f.write_str("field value out of range"),
+            Self::Framing => f.write_str("message cut short (delimiter inside the message)"),
         }
     }
 }
@@ -296,6 +313,60 @@ pub struct Frame<'a> {
     pub right: &'a [u8],
 }
 
+/// Messages a receiver dropped, by reason (the firmware's are reported in `DONE`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct DropCounts {
+    /// Cut short or with a delimiter inside ([`DecodeError::Framing`]).
+    pub framing: u32,
+    /// Bad magic, version or type.
+    pub header: u32,
+    /// Payload size wrong for the type, or a frame larger than the buffers.
+    pub length: u32,
+    /// CRC mismatch.
+    pub crc: u32,
+    /// A field out of range ([`DecodeError::BadValue`]).
+    pub value: u32,
+    /// A valid frame whose sequence number is not above the last one (duplicate or late).
+    pub sequence: u32,
+    /// A valid message of a type not expected there (e.g. a second `CONFIG`).
+    pub unexpected: u32,
+    /// Frames superseded by a newer one (overload, [`FLAG_NEWER_FOLLOWS`]).
+    pub superseded: u32,
+}
+
+impl DropCounts {
+    /// Encoded size (eight `u32`).
+    pub const LEN: usize = 8 * 4;
+
+    /// Counts one message dropped for `e`.
+    pub fn count(&mut self, e: &DecodeError) {
+        let c = match e {
+            DecodeError::Framing => &mut self.framing,
+            DecodeError::BadMagic(_) | DecodeError::BadVersion(_) | DecodeError::UnknownType(_) => &mut self.header,
+            DecodeError::BadLength { .. } | DecodeError::FrameTooLarge { .. } => &mut self.length,
+            DecodeError::BadCrc { .. } => &mut self.crc,
+            DecodeError::BadValue => &mut self.value,
+        };
+        *c = c.saturating_add(1);
+    }
+
+    /// Messages dropped as damaged (framing, header, length, CRC, value).
+    pub fn damaged(&self) -> u32 {
+        [self.framing, self.header, self.length, self.crc, self.value].iter().fold(0u32, |a, &b| a.saturating_add(b))
+    }
+
+    /// The counts in wire order.
+    pub fn to_array(self) -> [u32; 8] {
+        [self.framing, self.header, self.length, self.crc, self.value, self.sequence, self.unexpected, self.superseded]
+    }
+
+    /// The counts from wire order.
+    pub fn from_array(a: [u32; 8]) -> Self {
+        let [framing, header, length, crc, value, sequence, unexpected, superseded] = a;
+        Self { framing, header, length, crc, value, sequence, unexpected, superseded }
+    }
+}
+
 /// The firmware's report at the end of the stream (the `DONE` payload).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Done {
@@ -309,6 +380,8 @@ pub struct Done {
     pub stack_used_bytes: u32,
     /// Size of the stack region (top of RAM down to the end of the statics).
     pub stack_size_bytes: u32,
+    /// Messages the firmware dropped, by reason.
+    pub drops: DropCounts,
 }
 
 /// One message.
@@ -388,6 +461,8 @@ impl<'a> Envelope<'a> {
 pub struct Header {
     /// Message type.
     pub kind: MsgType,
+    /// Flags ([`FLAG_NEWER_FOLLOWS`]); unknown bits are carried, not interpreted.
+    pub flags: u16,
     /// Sequence number.
     pub sequence: u32,
     /// Payload size.
@@ -404,7 +479,7 @@ impl Header {
         e.bytes(&MAGIC);
         e.u8(VERSION);
         e.u8(self.kind as u8);
-        e.u16(0);
+        e.u16(self.flags);
         e.u32(self.sequence);
         e.u32(self.payload_len);
         e.u64(self.capture_time_us);
@@ -428,7 +503,7 @@ impl Header {
         }
         let t = d.u8();
         let kind = MsgType::from_u8(t).ok_or(DecodeError::UnknownType(t))?;
-        let _reserved = d.u16();
+        let flags = d.u16();
         let sequence = d.u32();
         let payload_len = d.u32();
         let capture_time_us = d.u64();
@@ -439,6 +514,6 @@ impl Header {
         if !len_ok {
             return Err(DecodeError::BadLength { kind, len: payload_len });
         }
-        Ok(Self { kind, sequence, payload_len, capture_time_us })
+        Ok(Self { kind, flags, sequence, payload_len, capture_time_us })
     }
 }

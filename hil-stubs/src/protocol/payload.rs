@@ -5,7 +5,7 @@ use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 use evorec_core::tracker::{Estimate, Feedforward};
 
-use super::{DecodeError, Done, FRAME_FIXED_LEN, MAX_SMALL_PAYLOAD, Message, MsgType, Setup};
+use super::{DecodeError, Done, DropCounts, FRAME_FIXED_LEN, MAX_SMALL_PAYLOAD, Message, MsgType, Setup};
 
 /// A frame's left and right images.
 pub(super) type Images<'m> = (&'m [u8], &'m [u8]);
@@ -41,6 +41,9 @@ pub(super) fn encode_payload<'m>(
             e.u32(d.rejected);
             e.u32(d.stack_used_bytes);
             e.u32(d.stack_size_bytes);
+            for c in d.drops.to_array() {
+                e.u32(c);
+            }
         }
         Message::Error(code) => e.u32(code),
     }
@@ -185,6 +188,7 @@ pub(super) fn decode_small(kind: MsgType, payload: &[u8]) -> Result<Message<'sta
             rejected: d.u32(),
             stack_used_bytes: d.u32(),
             stack_size_bytes: d.u32(),
+            drops: DropCounts::from_array(core::array::from_fn(|_| d.u32())),
         }),
         MsgType::Error => Message::Error(d.u32()),
         MsgType::Frame => return Err(DecodeError::BadLength { kind, len: payload.len() as u32 }),

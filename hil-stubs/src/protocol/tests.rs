@@ -32,11 +32,40 @@ pub(crate) fn sample_setup() -> Setup {
 }
 
 fn encode(env: &Envelope<'_>) -> Vec<u8> {
-    let mut buf = vec![0u8; encoded_len(&env.message)];
+    let bytes = encode_to_vec(env).unwrap();
+    assert!(bytes.len() <= max_encoded_len(&env.message));
+    // Through a slice sink the same bytes come out.
+    let mut buf = vec![0u8; bytes.len()];
     let mut sink = SliceSink::new(&mut buf);
     write_message(&mut sink, env).unwrap();
-    assert_eq!(sink.written().len(), buf.len());
-    buf
+    assert_eq!(sink.written(), &bytes[..]);
+    bytes
+}
+
+/// The message before framing (header, payload, CRC), through the `cobs` crate's decoder.
+fn unframe(wire: &[u8]) -> Vec<u8> {
+    assert_eq!((wire[0], wire[wire.len() - 1]), (0, 0), "delimiters");
+    let mut raw = vec![0u8; wire.len()];
+    let n = cobs::decode(&wire[1..wire.len() - 1], &mut raw).unwrap().frame_size();
+    raw.truncate(n);
+    raw
+}
+
+/// Frames raw bytes with the `cobs` crate's encoder (the reference for ours).
+fn frame_raw(raw: &[u8]) -> Vec<u8> {
+    let mut out = vec![0u8; raw.len() + raw.len() / 254 + 3];
+    let n = cobs::encode(raw, &mut out[1..]);
+    out.truncate(n + 2);
+    out[0] = 0;
+    out[n + 1] = 0;
+    out
+}
+
+/// `good` with its raw message changed by `f` and framed again.
+fn reframe(good: &[u8], f: impl FnOnce(&mut Vec<u8>)) -> Vec<u8> {
+    let mut raw = unframe(good);
+    f(&mut raw);
+    frame_raw(&raw)
 }
 
 fn small_messages() -> Vec<Envelope<'static>> {
@@ -62,6 +91,7 @@ fn small_messages() -> Vec<Envelope<'static>> {
             rejected: 1,
             stack_used_bytes: 5000,
             stack_size_bytes: 80_000,
+            drops: DropCounts { framing: 1, crc: 2, superseded: 3, unexpected: u32::MAX, ..DropCounts::default() },
         })),
         Envelope::bare(Message::Error(2)),
     ]
@@ -88,7 +118,9 @@ fn the_population_crosses_the_link() {
 
 #[test]
 fn payload_sizes_match_the_constants() {
-    assert_eq!(encode(&Envelope::bare(Message::Config(sample_setup()))).len(), HEADER_LEN + CONFIG_LEN + CRC_LEN);
+    let config = Envelope::bare(Message::Config(sample_setup()));
+    assert_eq!(unframe(&encode(&config)).len(), HEADER_LEN + CONFIG_LEN + CRC_LEN);
+    assert_eq!(raw_len(&config.message), HEADER_LEN + CONFIG_LEN + CRC_LEN);
     assert_eq!(FRAME_FIXED_LEN, 68);
     assert_eq!(ESTIMATE_LEN, 33);
 }
@@ -129,7 +161,7 @@ fn frame_round_trip_into_receive_buffers() {
         message: Message::Frame(Frame { width: 16, height: 9, joints: joints(), left: &l, right: &r }),
     };
     let bytes = encode(&env);
-    assert_eq!(bytes.len(), HEADER_LEN + FRAME_FIXED_LEN + 2 * 2 * 144 + CRC_LEN);
+    assert_eq!(unframe(&bytes).len(), HEADER_LEN + FRAME_FIXED_LEN + 2 * 2 * 144 + CRC_LEN);
     let (mut lb, mut rb) = ([0u8; 400], [0u8; 400]);
     let (back, used) = decode(&bytes, &mut lb, &mut rb).unwrap();
     assert_eq!(used, bytes.len());
@@ -168,30 +200,22 @@ fn frame_with_wrong_image_slices_is_not_written() {
 #[test]
 fn bad_magic_version_type_and_length_are_rejected() {
     let good = encode(&Envelope::bare(Message::Ack(0)));
-    let mut b = good.clone();
-    b[0] = b'X';
-    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadMagic(*b"XVRC")));
-    let mut b = good.clone();
-    b[4] = VERSION + 1;
-    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::BadVersion(VERSION + 1)));
-    let mut b = good.clone();
-    b[5] = 99;
-    assert_eq!(decode(&b, &mut [], &mut []).unwrap_err(), ReadError::Decode(DecodeError::UnknownType(99)));
-    let mut b = good.clone();
-    b[12] = 5;
-    assert_eq!(
-        decode(&b, &mut [], &mut []).unwrap_err(),
-        ReadError::Decode(DecodeError::BadLength { kind: MsgType::Ack, len: 5 })
-    );
+    let err = |f: &dyn Fn(&mut Vec<u8>)| decode(&reframe(&good, f), &mut [], &mut []).unwrap_err();
+    assert_eq!(err(&|r| r[0] = b'X'), ReadError::Decode(DecodeError::BadMagic(*b"XVRC")));
+    assert_eq!(err(&|r| r[4] = VERSION + 1), ReadError::Decode(DecodeError::BadVersion(VERSION + 1)));
+    assert_eq!(err(&|r| r[5] = 99), ReadError::Decode(DecodeError::UnknownType(99)));
+    assert_eq!(err(&|r| r[12] = 5), ReadError::Decode(DecodeError::BadLength { kind: MsgType::Ack, len: 5 }));
+    // One byte too many or too few before the delimiter.
+    assert_eq!(err(&|r| r.push(7)), ReadError::Decode(DecodeError::BadLength { kind: MsgType::Ack, len: 4 }));
+    assert_eq!(err(&|r| r.truncate(r.len() - 1)), ReadError::Decode(DecodeError::Framing));
 }
 
 #[test]
 fn bad_crc_is_rejected() {
     let good = encode(&Envelope::bare(Message::Config(sample_setup())));
     // A flipped payload bit, a flipped header bit that keeps the header valid, a bad trailer.
-    for pos in [HEADER_LEN + 10, 9, good.len() - 1] {
-        let mut b = good.clone();
-        b[pos] ^= 0x10;
+    for pos in [HEADER_LEN + 10, 9, HEADER_LEN + CONFIG_LEN + 3] {
+        let b = reframe(&good, |r| r[pos] ^= 0x10);
         assert!(
             matches!(decode(&b, &mut [], &mut []), Err(ReadError::Decode(DecodeError::BadCrc { .. }))),
             "flip at {pos}"
@@ -207,6 +231,54 @@ fn truncated_input_is_rejected() {
     for cut in [0, 1, HEADER_LEN - 1, HEADER_LEN, HEADER_LEN + 30, good.len() - 5, good.len() - 1] {
         let (mut lb, mut rb) = ([0u8; 128], [0u8; 128]);
         assert_eq!(decode(&good[..cut], &mut lb, &mut rb).unwrap_err(), ReadError::Link(Truncated), "cut {cut}");
+        // Ended by a delimiter instead (the next message's), the cut message is a framing error.
+        let mut cut_then_zero = good[..cut].to_vec();
+        cut_then_zero.push(0);
+        if cut > 1 && cut < good.len() - 1 {
+            assert_eq!(
+                decode(&cut_then_zero, &mut lb, &mut rb).unwrap_err(),
+                ReadError::Decode(DecodeError::Framing),
+                "cut {cut}"
+            );
+        }
+    }
+}
+
+#[test]
+fn our_encoder_matches_the_cobs_crate() {
+    let (l, r) = frame_bytes(23, 17);
+    let frame = Envelope::bare(Message::Frame(Frame { width: 23, height: 17, joints: joints(), left: &l, right: &r }));
+    let zeros = vec![0u8; 23 * 17 * 2];
+    let ones = vec![1u8; 23 * 17 * 2];
+    let runs =
+        Envelope::bare(Message::Frame(Frame { width: 23, height: 17, joints: joints(), left: &zeros, right: &ones }));
+    for env in small_messages().into_iter().chain([frame, runs]) {
+        let wire = encode(&env);
+        assert_eq!(frame_raw(&unframe(&wire)), wire);
+        assert!(wire[1..wire.len() - 1].iter().all(|&b| b != 0), "a zero inside a framed message");
+    }
+}
+
+#[test]
+fn after_garbage_the_next_message_decodes() {
+    let env = Envelope::bare(Message::Config(sample_setup()));
+    let good = encode(&env);
+    let garbage: [&[u8]; 5] = [b"", &[0xFF; 300], &[3, 1, 2], &good[..good.len() / 2], &good[1..good.len() - 1]];
+    for g in garbage {
+        let mut stream = g.to_vec();
+        stream.extend(&good);
+        let mut rx = LinkReader::new(SliceSource::new(&stream));
+        let (mut errors, mut last) = (0, None);
+        loop {
+            match read_message(&mut rx, &mut [], &mut []) {
+                Ok(e) => last = Some(e),
+                Err(ReadError::Decode(_)) => errors += 1,
+                Err(ReadError::Link(Truncated)) => break,
+            }
+        }
+        // The last garbage is the message without its delimiters: it decodes as the message.
+        assert_eq!(last, Some(env));
+        assert!(errors <= 1, "{errors} errors after {g:?}");
     }
 }
 
@@ -227,11 +299,11 @@ fn stream_of_messages_decodes_in_order() {
     for env in small_messages() {
         stream.extend(encode(&env));
     }
-    let mut src = SliceSource::new(&stream);
+    let mut rx = LinkReader::new(SliceSource::new(&stream));
     for env in small_messages() {
-        assert_eq!(read_message(&mut src, &mut [], &mut []).unwrap(), env);
+        assert_eq!(read_message(&mut rx, &mut [], &mut []).unwrap(), env);
     }
-    assert!(src.remaining().is_empty());
+    assert!(rx.get_ref().remaining().is_empty() && rx.buffered().is_empty());
 }
 
 mod prop {
@@ -288,14 +360,45 @@ mod prop {
         }
 
         /// Any single flipped bit anywhere in a message is detected (as a bad header,
-        /// a length mismatch, a truncation or a CRC mismatch), never decoded as valid.
+        /// a length mismatch, a framing error or a CRC mismatch), never decoded as valid; and
+        /// the message after it decodes.
         #[test]
         fn any_single_bit_flip_is_rejected(which in 0usize..7, bit in any::<usize>()) {
             let env = small_messages()[which];
             let mut bytes = encode(&env);
             let bit = bit % (bytes.len() * 8);
             bytes[bit / 8] ^= 1 << (bit % 8);
-            prop_assert!(decode(&bytes, &mut [], &mut []).is_err());
+            let next = Envelope::bare(Message::Ack(7));
+            bytes.extend(encode(&next));
+            let mut rx = LinkReader::new(SliceSource::new(&bytes));
+            let mut got = Vec::new();
+            loop {
+                match read_message(&mut rx, &mut [], &mut []) {
+                    Ok(e) => got.push(e),
+                    Err(ReadError::Decode(_)) => {}
+                    Err(ReadError::Link(Truncated)) => break,
+                }
+            }
+            prop_assert_eq!(got, vec![next]);
+        }
+
+        /// After any garbage, the next well-formed message is decoded (messages the garbage
+        /// happens to hold may decode before it).
+        #[test]
+        fn after_any_garbage_the_next_message_decodes(garbage in proptest::collection::vec(any::<u8>(), 0..600), which in 0usize..7) {
+            let env = small_messages()[which];
+            let mut stream = garbage;
+            stream.extend(encode(&env));
+            let mut rx = LinkReader::new(SliceSource::new(&stream));
+            let mut last = None;
+            loop {
+                match read_message(&mut rx, &mut [], &mut []) {
+                    Ok(e) => last = Some(e),
+                    Err(ReadError::Decode(_)) => {}
+                    Err(ReadError::Link(Truncated)) => break,
+                }
+            }
+            prop_assert_eq!(last, Some(env));
         }
     }
 }

@@ -99,6 +99,11 @@ impl PixelFormat for Rgb888 {
     const BYTES_PER_PIXEL: usize = 3;
     const NAME: &'static str = "RGB888";
     type Pixel = [u8; 3];
+    /// Black: below `MIN_VALUE`, so it has no hue.
+    const NONE: [u8; 3] = {
+        assert!(rgb_to_hue(0, 0, 0) == NO_HUE);
+        [0, 0, 0]
+    };
 
     #[inline(always)]
     fn split(bytes: &[u8]) -> &[[u8; 3]] {

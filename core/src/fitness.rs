@@ -512,13 +512,19 @@ fn count_faces<const G: usize>(
     let mut counts = Counts { visible: visible_mask, ..Counts::default() };
     for &k in &faces.chosen {
         let bit = 1u8 << k;
-        let a = k % 3;
-        let centre = if k < 3 { add(proj.c, axes[a].half) } else { sub(proj.c, axes[a].half) };
+        // The face's axis `a` and the two others in cyclic order, `b = a + 1`, `c = a + 2`
+        // (matched, not indexed: no bounds check).
+        let [x, y, z] = &axes;
+        let (a, (ax, bx, cx)) = match k % 3 {
+            0 => (0, (x, y, z)),
+            1 => (1, (y, z, x)),
+            _ => (2, (z, x, y)),
+        };
+        let centre = if k < 3 { add(proj.c, ax.half) } else { sub(proj.c, ax.half) };
         let (mut inner, mut outer) = (0u32, 0u32);
         let scores = Scores { inner: lut.plane(k), outer: lut.any(visible_mask) };
         // Edges on the ±b sides run along c, those on the ±c sides along b (as `model::Edge`).
-        for (side, along) in [((a + 1) % 3, (a + 2) % 3), ((a + 2) % 3, (a + 1) % 3)] {
-            let (s, l) = (&axes[side], &axes[along]);
+        for (side, s, l) in [((a + 1) % 3, bx, cx), ((a + 2) % 3, cx, bx)] {
             for positive in [true, false] {
                 let (base, neighbour) = if positive {
                     (add(add(centre, s.half), l.start), side)

@@ -37,7 +37,15 @@ fn main() -> anyhow::Result<()> {
         let seed_pose = acquire::seed_pose(&cfg.rig, &hh, &bl, &br, cfg.acquire.min_face_hits);
         let raw_err = seed_pose.and_then(|sp| sp.psi()).map(|p| pose_error(&p, &truth));
         let seed_pose = seed_pose.map(|sp| {
-            acquire::refine(&cfg.rig, &hh, &bl, &br, cfg.acquire.scan_stride, cfg.acquire.min_face_hits, &sp)
+            let m = acquire::Measured {
+                rig: &cfg.rig,
+                half: &hh,
+                left: &bl,
+                right: &br,
+                stride: cfg.acquire.scan_stride,
+                min_hits: cfg.acquire.min_face_hits,
+            };
+            acquire::refine(&m, &sp)
         });
         let seed_err = seed_pose.and_then(|sp| sp.psi()).map(|p| pose_error(&p, &truth));
         let f_truth = tracker.fitness_of(&truth, &frame).map_err(|e| anyhow::anyhow!("{e}"))?.total;

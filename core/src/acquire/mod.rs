@@ -70,7 +70,7 @@ use crate::hue::HueLut;
 use crate::image::{Image, PixelFormat};
 
 pub use pipeline::{Acquisition, Stage};
-pub use refine::{REFINE_ITERATIONS, Refinement, best_seed, refine, refine_with_cost};
+pub use refine::{Measured, REFINE_ITERATIONS, Refinement, best_seed, refine, refine_with_cost};
 pub use seed::seed_immigrant;
 pub use solve::{Seed, seed_pose, seed_pose_from, triangulate};
 
@@ -240,6 +240,10 @@ pub fn scan_part<B: AsRef<[u8]>, F: PixelFormat>(
     let end = start.saturating_add(count).min(gw * gh);
     let (w, s, o) = (usize::from(image.width()), stride as usize, usize::from(stride / 2));
     let pixels = image.pixels();
+    if s == 0 || gw == 0 {
+        // No grid (a zero stride or an image narrower than it): nothing to read.
+        return end;
+    }
     let mut i = start;
     while i < end {
         let gy = i / gw;

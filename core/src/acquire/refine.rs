@@ -25,14 +25,14 @@ fn face_image(
 ) -> Option<(f32, Point2<f32>)> {
     let a = k % 3;
     let sign = if k < 3 { 1.0 } else { -1.0 };
-    let n = r.column(a) * sign;
+    let n = column(r, a) * sign;
     let centre = t + n * half.get(a).copied().unwrap_or(0.0);
     if n.dot(&centre) >= 0.0 {
         return Some((0.0, Point2::origin()));
     }
     let (b, c) = ((a + 1) % 3, (a + 2) % 3);
-    let eb = r.column(b) * half.get(b).copied().unwrap_or(0.0);
-    let ec = r.column(c) * half.get(c).copied().unwrap_or(0.0);
+    let eb = column(r, b) * half.get(b).copied().unwrap_or(0.0);
+    let ec = column(r, c) * half.get(c).copied().unwrap_or(0.0);
     let mut p = [Point2::origin(); 4];
     for (q, (sb, sc)) in p.iter_mut().zip([(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]) {
         let x = centre + eb * sb + ec * sc;
@@ -42,8 +42,8 @@ fn face_image(
         *q = Point2::new(cam.fx() * x.x / x.z + cam.cx(), cam.fy() * x.y / x.z + cam.cy());
     }
     let (mut area2, mut cx, mut cy) = (0.0f32, 0.0f32, 0.0f32);
-    for i in 0..4 {
-        let (p0, p1) = (p[i], p[(i + 1) % 4]);
+    for (i, &p0) in p.iter().enumerate() {
+        let p1 = p.get((i + 1) % 4).copied().unwrap_or(p0);
         let cross = p0.x * p1.y - p1.x * p0.y;
         area2 += cross;
         cx += (p0.x + p1.x) * cross;
@@ -98,6 +98,15 @@ fn residuals(
 
 fn cost(r: &[f32; RESIDUALS]) -> f32 {
     r.iter().map(|x| x * x).sum()
+}
+
+/// Column `i` of `r` (the last one for `i ≥ 2`), without nalgebra's bounds assertion.
+fn column(r: &Matrix3<f32>, i: usize) -> Vector3<f32> {
+    match i {
+        0 => r.column(0).into_owned(),
+        1 => r.column(1).into_owned(),
+        _ => r.column(2).into_owned(),
+    }
 }
 
 /// The pose `(r, t)` moved by `d = [δt; δθ]` (`δθ` a rotation vector applied on the left).
@@ -187,22 +196,27 @@ impl Refinement {
                 return;
             };
             for (i, (a, b)) in rp.iter().zip(self.res.iter()).enumerate() {
-                jac[(i, j)] = (a - b) / h;
+                if let Some(x) = jac.get_mut((i, j)) {
+                    *x = (a - b) / h;
+                }
             }
         }
-        let rv = nalgebra::SVector::<f32, RESIDUALS>::from_column_slice(&self.res);
+        let rv = nalgebra::SVector::<f32, RESIDUALS>::from(self.res);
         let jtj = jac.transpose() * jac;
         let jtr = jac.transpose() * rv;
         let mut a = jtj;
         for k in 0..6 {
-            a[(k, k)] += self.lambda * (jtj[(k, k)] + 1e-6);
+            let diagonal = jtj.get((k, k)).copied().unwrap_or(0.0);
+            if let Some(x) = a.get_mut((k, k)) {
+                *x += self.lambda * (diagonal + 1e-6);
+            }
         }
         let Some(inv) = a.try_inverse() else {
             self.lambda *= 10.0;
             return;
         };
         let step = -(inv * jtr);
-        let d: [f32; 6] = core::array::from_fn(|k| step[k]);
+        let d: [f32; 6] = step.into();
         let (rn, tn) = moved(&self.r, &self.t, &d);
         match m.residuals(&rn, &tn) {
             Some(new) if cost(&new) < cost(&self.res) && d.iter().all(|x| x.is_finite()) => {
@@ -227,34 +241,18 @@ impl Refinement {
     }
 }
 
-/// Refines a seed completely: [`Refinement::start`] and [`REFINE_ITERATIONS`] iterations.
-pub fn refine(
-    rig: &StereoRig,
-    half: &[f32; 3],
-    left: &HueBlobs,
-    right: &HueBlobs,
-    stride: u16,
-    min_hits: u32,
-    seed: &Seed,
-) -> Seed {
-    refine_with_cost(rig, half, left, right, stride, min_hits, seed).0
+/// Refines a seed completely against `m`: [`Refinement::start`] and [`REFINE_ITERATIONS`]
+/// iterations.
+pub fn refine(m: &Measured<'_>, seed: &Seed) -> Seed {
+    refine_with_cost(m, seed).0
 }
 
 /// [`refine`] and the final sum of squared residuals (px²; infinite if the pose cannot be
 /// projected).
-pub fn refine_with_cost(
-    rig: &StereoRig,
-    half: &[f32; 3],
-    left: &HueBlobs,
-    right: &HueBlobs,
-    stride: u16,
-    min_hits: u32,
-    seed: &Seed,
-) -> (Seed, f32) {
-    let m = Measured { rig, half, left, right, stride, min_hits };
-    let mut refinement = Refinement::start(&m, seed);
+pub fn refine_with_cost(m: &Measured<'_>, seed: &Seed) -> (Seed, f32) {
+    let mut refinement = Refinement::start(m, seed);
     for _ in 0..REFINE_ITERATIONS {
-        refinement.iterate(&m);
+        refinement.iterate(m);
     }
     refinement.result()
 }
@@ -272,9 +270,10 @@ pub fn best_seed(
     min_hits: u32,
 ) -> Option<Seed> {
     let mut best: Option<(Seed, f32)> = None;
+    let m = Measured { rig, half, left, right, stride, min_hits };
     for faces in [3, 2] {
         let Some(s) = seed_pose_from(rig, half, left, right, min_hits, faces) else { continue };
-        let (s, c) = refine_with_cost(rig, half, left, right, stride, min_hits, &s);
+        let (s, c) = refine_with_cost(&m, &s);
         if best.is_none_or(|(_, b)| c < b) {
             best = Some((s, c));
         }

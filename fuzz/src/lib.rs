@@ -54,6 +54,7 @@ fn encode(env: &Envelope<'_>, flags: u16) -> Vec<u8> {
 fn decode_all<S: ByteSource>(rx: &mut LinkReader<S>, frames: bool) -> Option<Vec<u8>> {
     let (mut left, mut right) =
         if frames { (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]) } else { (vec![], vec![]) };
+    let (mut l2, mut r2) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
     let mut last = None;
     loop {
         let env = match read_message(rx, &mut left, &mut right) {
@@ -63,7 +64,6 @@ fn decode_all<S: ByteSource>(rx: &mut LinkReader<S>, frames: bool) -> Option<Vec
         };
         assert!(frames || !matches!(env.message, Message::Frame(_)), "a frame was decoded into empty buffers");
         let once = encode(&env, rx.last_flags());
-        let (mut l2, mut r2) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
         let again = decode(&once, &mut l2, &mut r2);
         let Ok((env2, used2)) = again else { panic!("re-encoded message does not decode: {again:?}") };
         assert_eq!(used2, once.len());

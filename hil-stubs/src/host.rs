@@ -352,8 +352,9 @@ pub struct Summary {
     pub faults_received: FaultCounts,
 }
 
-/// What the reader thread hands over.
+/// What the reader thread hands over (one at a time, so the large variant is not boxed).
 #[derive(Debug)]
+#[allow(clippy::large_enum_variant)]
 enum Incoming {
     /// A valid message.
     Message(Envelope<'static>),

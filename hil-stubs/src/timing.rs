@@ -457,6 +457,67 @@ fn image_kind(k: u32, kind: CaseKind) -> CaseKind {
     }
 }
 
+/// Watchdog-style deadline of one generation, in instructions: the project's per-generation
+/// budget (`evorec timing`'s `GENERATION_BUDGET`). The timing firmware checks every measured
+/// generation against it and prints a [`DeadlineReport`] per run.
+pub const DEADLINE_INSTRUCTIONS: u32 = 1_000_000;
+
+/// TIMER0 ticks of [`DEADLINE_INSTRUCTIONS`] under `-icount shift=`[`ICOUNT_SHIFT`].
+pub const DEADLINE_TICKS: u32 = ((DEADLINE_INSTRUCTIONS as u64) << ICOUNT_SHIFT).div_ceil(NS_PER_TICK) as u32;
+
+/// The deadline check of one run: `DEADLINE limit=… checked=… missed=… worst=…` (ticks).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct DeadlineReport {
+    /// Generations checked.
+    pub checked: u32,
+    /// Generations whose call took longer than [`DEADLINE_TICKS`].
+    pub missed: u32,
+    /// Ticks of the longest generation.
+    pub worst: u32,
+}
+
+impl DeadlineReport {
+    /// Checks one generation of `call` ticks; true if it met the deadline.
+    pub fn check(&mut self, call: u32) -> bool {
+        self.checked += 1;
+        self.worst = self.worst.max(call);
+        let met = call <= DEADLINE_TICKS;
+        if !met {
+            self.missed += 1;
+        }
+        met
+    }
+
+    /// Parses a line printed by `Display`; `None` for any other line.
+    pub fn parse(line: &str) -> Option<Self> {
+        let mut words = line.split_whitespace();
+        if words.next()? != "DEADLINE" {
+            return None;
+        }
+        let mut r = Self::default();
+        for word in words {
+            let (key, value) = word.split_once('=')?;
+            match key {
+                "checked" => r.checked = value.parse().ok()?,
+                "missed" => r.missed = value.parse().ok()?,
+                "worst" => r.worst = value.parse().ok()?,
+                _ => {}
+            }
+        }
+        Some(r)
+    }
+}
+
+impl fmt::Display for DeadlineReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "DEADLINE limit={} checked={} missed={} worst={}",
+            DEADLINE_TICKS, self.checked, self.missed, self.worst
+        )
+    }
+}
+
 /// One measured generation, as printed by the firmware and parsed by the host.
 ///
 /// `GEN p=40 g=8 k=3 kind=blank status=lost call=… ff=… eval=… breed=… stack=… fitness=…`:
@@ -654,5 +715,17 @@ mod tests {
         assert!(cases.frame(0, CaseKind::Blank, &mut l[..10], &mut r).is_err());
         // Hue-sized buffers are too small for RGB565 frames.
         assert!(cases.frame(0, CaseKind::Blank, &mut l[..160 * 120], &mut r).is_err());
+    }
+
+    #[test]
+    fn deadline_report_counts_misses_and_round_trips() {
+        assert_eq!(DEADLINE_TICKS, 25_600_000); // 10⁶ instructions · 2¹⁰ ns / 40 ns
+        let mut r = DeadlineReport::default();
+        assert!(r.check(DEADLINE_TICKS));
+        assert!(!r.check(DEADLINE_TICKS + 1));
+        assert!(r.check(5));
+        assert_eq!(r, DeadlineReport { checked: 3, missed: 1, worst: DEADLINE_TICKS + 1 });
+        assert_eq!(DeadlineReport::parse(&format!("{r}")), Some(r));
+        assert_eq!(DeadlineReport::parse("GEN p=1"), None);
     }
 }

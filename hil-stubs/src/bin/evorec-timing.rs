@@ -30,8 +30,8 @@ mod firmware {
     use evorec_firmware::cmsdk_timer::{self, Timer0};
     use evorec_firmware::protocol::Setup;
     use evorec_firmware::timing::{
-        BANNER, CaseGen, DownCounter, FRAME_PERIOD_US, FULL_FRAMES, GenLine, PhaseTicks, PhaseTimer, SWEEP_FRAMES,
-        schedule,
+        BANNER, CaseGen, DeadlineReport, DownCounter, FRAME_PERIOD_US, FULL_FRAMES, GenLine, PhaseTicks, PhaseTimer,
+        SWEEP_FRAMES, schedule,
     };
     use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, rt, selftest, sys};
     use static_cell::ConstStaticCell;
@@ -164,6 +164,7 @@ mod firmware {
             FRAME_WIDTH,
             FRAME_HEIGHT
         );
+        let mut deadline = DeadlineReport::default();
         for k in 0..frames {
             let kind = schedule(k, frames);
             let Ok(joints) = cases.frame(k, kind, left, right) else {
@@ -187,10 +188,14 @@ mod firmware {
                 hprintln!("ERROR generation {} refused", k);
                 return false;
             };
+            if !deadline.check(call) {
+                hprintln!("DEADLINE-MISSED k={} call={}", k, call);
+            }
             let line =
                 GenLine { population: P as u32, grid: G as u32, frame: k, kind, status, call, phases, stack, fitness };
             hprintln!("{}", line);
         }
+        hprintln!("{}", deadline);
         true
     }
 

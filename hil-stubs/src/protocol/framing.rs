@@ -26,7 +26,7 @@ use crate::crc::Crc32;
 use evorec_core::tracker::JointSample;
 
 /// Size of [`LinkReader`]'s read buffer (bytes read from the link per call at most).
-pub const RX_CHUNK: usize = 128;
+pub const RX_CHUNK: usize = 32;
 /// Size of the encoder's output buffer (bytes handed to the sink per call at most).
 pub const TX_CHUNK: usize = 256;
 /// Longest COBS run: 254 data bytes after a code byte.

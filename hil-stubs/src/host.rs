@@ -15,6 +15,7 @@
 //! match hil.step(1, 33_333, &frame)? {
 //!     Reply::Estimate(e) => println!("ψ = {:?}, F = {}", e.psi, e.fitness),
 //!     Reply::Rejected => println!("the tracker refused the frame"),
+//!     Reply::Lost => println!("no valid reply in time (a damaged link): the frame is lost"),
 //! }
 //! let summary = hil.finish()?; // END → DONE, QEMU exits with success
 //! println!("stack high-water mark: {} bytes", summary.done.stack_used_bytes);

@@ -429,7 +429,7 @@ impl<const P: usize> Ga<P> {
     /// others keep their pose, get fitness 0 and are never the best.
     pub fn evaluate_first(&mut self, count: usize, mut fitness: impl FnMut(&Psi) -> f32) -> Best {
         let mut best = Best { psi: Psi::IDENTITY, fitness: f32::NEG_INFINITY };
-        let n = count.clamp(1, self.len);
+        let n = count.max(1).min(self.len);
         if let Some(idle) = self.fitness.get_mut(n..) {
             idle.fill(0.0);
         }

@@ -56,6 +56,7 @@
 //! the Cortex-M4 (`evorec timing`, frame kinds `searching` and `lost`; checked by
 //! `tests/tests/timing_budget.rs`), so the instruction budget is set by tracking alone.
 
+mod linalg;
 mod pipeline;
 mod refine;
 mod seed;
@@ -63,6 +64,7 @@ mod solve;
 #[cfg(test)]
 mod tests;
 
+use linalg::column;
 use nalgebra::Point2;
 
 use crate::config::{DEFAULT_SCAN_STRIDE, DEFAULT_SEED_IMMIGRANTS};

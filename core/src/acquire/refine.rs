@@ -5,7 +5,7 @@
 
 use nalgebra::{Matrix3, Point2, Vector3};
 
-use super::{HueBlobs, Seed, seed_pose_from};
+use super::{HueBlobs, Seed, column, linalg, seed_pose_from};
 use crate::camera::{Pinhole, StereoRig};
 use crate::math;
 use crate::quat;
@@ -98,15 +98,6 @@ fn residuals(
 
 fn cost(r: &[f32; RESIDUALS]) -> f32 {
     r.iter().map(|x| x * x).sum()
-}
-
-/// Column `i` of `r` (the last one for `i ≥ 2`), without nalgebra's bounds assertion.
-fn column(r: &Matrix3<f32>, i: usize) -> Vector3<f32> {
-    match i {
-        0 => r.column(0).into_owned(),
-        1 => r.column(1).into_owned(),
-        _ => r.column(2).into_owned(),
-    }
 }
 
 /// The pose `(r, t)` moved by `d = [δt; δθ]` (`δθ` a rotation vector applied on the left).
@@ -203,20 +194,18 @@ impl Refinement {
         }
         let rv = nalgebra::SVector::<f32, RESIDUALS>::from(self.res);
         let jtj = jac.transpose() * jac;
-        let jtr = jac.transpose() * rv;
-        let mut a = jtj;
-        for k in 0..6 {
-            let diagonal = jtj.get((k, k)).copied().unwrap_or(0.0);
-            if let Some(x) = a.get_mut((k, k)) {
-                *x += self.lambda * (diagonal + 1e-6);
+        let jtr: [f32; 6] = (jac.transpose() * rv).into();
+        // Rows of `JᵀJ + λ·(diag JᵀJ + 10⁻⁶)`.
+        let mut a: [[f32; 6]; 6] = jtj.transpose().into();
+        for (k, row) in a.iter_mut().enumerate() {
+            if let Some(x) = row.get_mut(k) {
+                *x += self.lambda * (*x + 1e-6);
             }
         }
-        let Some(inv) = a.try_inverse() else {
+        let Some(d) = linalg::gauss_newton_step(a, &jtr) else {
             self.lambda *= 10.0;
             return;
         };
-        let step = -(inv * jtr);
-        let d: [f32; 6] = step.into();
         let (rn, tn) = moved(&self.r, &self.t, &d);
         match m.residuals(&rn, &tn) {
             Some(new) if cost(&new) < cost(&self.res) && d.iter().all(|x| x.is_finite()) => {

@@ -48,7 +48,7 @@ pub fn seed_immigrant<R: Rng + ?Sized>(seed: &Seed, index: usize, config: &Acqui
     if let Some(a) = seed.free_axis
         && !exact
     {
-        let axis = seed.rotation.column(a).into_owned();
+        let axis = super::column(&seed.rotation, a);
         let spin = quat::from_angle_axis(core::f32::consts::TAU * u[7], &axis).ok()?;
         r = quat::to_rotation_matrix(&spin) * r;
     }

@@ -6,7 +6,7 @@
 
 use nalgebra::{Matrix3, Point2, Vector3};
 
-use super::HueBlobs;
+use super::{HueBlobs, linalg};
 use crate::camera::StereoRig;
 use crate::math;
 use crate::pose::Psi;
@@ -167,13 +167,18 @@ pub fn seed_pose_from(
     {
         n2 = -n2;
     }
-    let mut rotation = Matrix3::zeros();
+    let mut columns = [Vector3::zeros(); 3];
     for (a, n) in [(a0, n0), (a1, n1), (a2, n2)] {
-        rotation.set_column(a, &n);
+        if let Some(c) = columns.get_mut(a) {
+            *c = n;
+        }
     }
+    let mut rotation = linalg::from_columns(&columns);
     if rotation.determinant() < 0.0 {
-        let flip = -rotation.column(a2);
-        rotation.set_column(a2, &flip);
+        if let Some(c) = columns.get_mut(a2) {
+            *c = -*c;
+        }
+        rotation = linalg::from_columns(&columns);
     }
     if !centre.iter().all(|c| c.is_finite()) {
         return None;

@@ -298,6 +298,36 @@ where
     W: ByteSink<Error = E>,
     E: core::fmt::Debug,
 {
+    let (tracker, feedforward) = configure(board, slot, left, right)?;
+    let stats = board::run(board, tracker, feedforward, left, right, u32::MAX)?;
+    board.answer_pending()?;
+    let s = stack();
+    board.send(&Envelope::bare(Message::Done(Done {
+        frames: stats.frames,
+        published: stats.published,
+        rejected: stats.rejected,
+        stack_used_bytes: s.used_bytes,
+        stack_size_bytes: s.size_bytes,
+        drops: board.drops,
+    })))?;
+    Ok(stats)
+}
+
+/// Waits for `CONFIG`, builds the tracker into `slot` and answers `ACK`. Out of line, so that
+/// the configuration, the tracker's construction and their log lines are off the stack while
+/// the frames are tracked (the link path's stack high-water mark).
+#[inline(never)]
+fn configure<'s, R, W, E, const P: usize, const G: usize>(
+    board: &mut LinkBoard<R, W>,
+    slot: &'s mut Option<Tracker<DOF, P, G>>,
+    left: &mut [u8],
+    right: &mut [u8],
+) -> Result<(&'s mut Tracker<DOF, P, G>, evorec_core::tracker::Feedforward), ServeError<E>>
+where
+    R: ByteSource<Error = E>,
+    W: ByteSink<Error = E>,
+    E: core::fmt::Debug,
+{
     let drops = &mut board.drops;
     let env = read_valid_message(&mut board.rx, left, right, |e| drops.count(&e)).map_err(LinkError::Link)?;
     let setup = match env.message {
@@ -319,18 +349,7 @@ where
         setup.height,
         setup.feedforward
     );
-    let stats = board::run(board, tracker, setup.feedforward, left, right, u32::MAX)?;
-    board.answer_pending()?;
-    let s = stack();
-    board.send(&Envelope::bare(Message::Done(Done {
-        frames: stats.frames,
-        published: stats.published,
-        rejected: stats.rejected,
-        stack_used_bytes: s.used_bytes,
-        stack_size_bytes: s.size_bytes,
-        drops: board.drops,
-    })))?;
-    Ok(stats)
+    Ok((tracker, setup.feedforward))
 }
 
 #[cfg(test)]

@@ -52,6 +52,24 @@ fn eliminate(row: &mut [f32; 6], pivot: &[f32; 6], f: f32, mask: impl Fn(usize) 
     }
 }
 
+/// `Σ_k a[k]·b[k]`, summed from `k = 0` on, starting with the first product (the order of
+/// nalgebra's `gemv`).
+fn dot_in_order<const N: usize>(a: &[f32; N], b: &[f32; N]) -> f32 {
+    let mut terms = a.iter().zip(b).map(|(x, y)| x * y);
+    let first = terms.next().unwrap_or(0.0);
+    terms.fold(first, |s, t| t + s)
+}
+
+/// The normal equations `(JᵀJ, Jᵀr)` of the Jacobian with columns `cols` and the residuals
+/// `r`, as nalgebra's `jac.transpose() * jac` and `jac.transpose() * r` compute them (every
+/// entry a dot product in residual order), without the two transposed copies of `J` on the
+/// stack.
+pub(super) fn normal_equations<const N: usize>(cols: &[[f32; N]; 6], r: &[f32; N]) -> (Rows6, [f32; 6]) {
+    let jtj = cols.each_ref().map(|a| cols.each_ref().map(|b| dot_in_order(a, b)));
+    let jtr = cols.each_ref().map(|a| dot_in_order(a, r));
+    (jtj, jtr)
+}
+
 /// `-(a⁻¹·b)` for the 6×6 matrix with rows `a`, or `None` when `a` is singular: LU
 /// decomposition with partial pivoting, forward and back substitution on the identity
 /// (nalgebra's `lu::try_invert_to`), then the product with `b` (nalgebra's `gemv`).
@@ -146,6 +164,19 @@ mod tests {
                 }
             }
             prop_assert_eq!(bits(gauss_newton_step(m, &b)), bits(nalgebra_step(&m, &b)));
+        }
+
+        #[test]
+        fn normal_equations_equal_nalgebra(
+            cols in proptest::array::uniform6(proptest::array::uniform18(-1e3f32..1e3)),
+            r in proptest::array::uniform18(-1e3f32..1e3),
+        ) {
+            let jac = SMatrix::<f32, 18, 6>::from_fn(|i, j| cols[j][i]);
+            let want_jtj: Rows6 = (jac.transpose() * jac).transpose().into();
+            let want_jtr: [f32; 6] = (jac.transpose() * SVector::<f32, 18>::from(r)).into();
+            let (jtj, jtr) = normal_equations(&cols, &r);
+            prop_assert_eq!(jtj.map(|row| row.map(f32::to_bits)), want_jtj.map(|row| row.map(f32::to_bits)));
+            prop_assert_eq!(jtr.map(f32::to_bits), want_jtr.map(f32::to_bits));
         }
 
         #[test]

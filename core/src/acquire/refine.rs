@@ -175,8 +175,9 @@ impl Refinement {
         if self.stuck {
             return;
         }
-        let mut jac = nalgebra::SMatrix::<f32, RESIDUALS, 6>::zeros();
-        for (j, h) in STEP.iter().enumerate() {
+        // Columns of the forward-difference Jacobian.
+        let mut jac = [[0.0f32; RESIDUALS]; 6];
+        for ((j, h), col) in STEP.iter().enumerate().zip(jac.iter_mut()) {
             let mut d = [0.0f32; 6];
             if let Some(x) = d.get_mut(j) {
                 *x = *h;
@@ -186,17 +187,12 @@ impl Refinement {
                 self.stuck = true;
                 return;
             };
-            for (i, (a, b)) in rp.iter().zip(self.res.iter()).enumerate() {
-                if let Some(x) = jac.get_mut((i, j)) {
-                    *x = (a - b) / h;
-                }
+            for (x, (a, b)) in col.iter_mut().zip(rp.iter().zip(self.res.iter())) {
+                *x = (a - b) / h;
             }
         }
-        let rv = nalgebra::SVector::<f32, RESIDUALS>::from(self.res);
-        let jtj = jac.transpose() * jac;
-        let jtr: [f32; 6] = (jac.transpose() * rv).into();
-        // Rows of `JᵀJ + λ·(diag JᵀJ + 10⁻⁶)`.
-        let mut a: [[f32; 6]; 6] = jtj.transpose().into();
+        // `JᵀJ + λ·(diag JᵀJ + 10⁻⁶)` and `Jᵀr`.
+        let (mut a, jtr) = linalg::normal_equations(&jac, &self.res);
         for (k, row) in a.iter_mut().enumerate() {
             if let Some(x) = row.get_mut(k) {
                 *x += self.lambda * (*x + 1e-6);

@@ -35,14 +35,15 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result, anyhow, bail};
 use evorec_firmware::timing::ICOUNT_SHIFT;
 
 pub use cycles::{CycleEstimate, Mix, MixAnalysis};
 pub use elf::MemoryUse;
 pub use flash::{HotLoop, Waits};
 pub use qemu::{
-    Measurement, Run, find_image, find_llvm_tool, find_qemu, find_stack_sizes_image, measure, parse_output, run_qemu,
+    DeadlineSummary, Measurement, Run, find_image, find_llvm_tool, find_qemu, find_stack_sizes_image, measure,
+    parse_output, run_qemu,
 };
 pub use stack::{StackAnalysis, StackPath};
 pub use stats::{Range, RunStats};
@@ -111,6 +112,10 @@ struct Results {
     timing_mem: MemoryUse,
     /// The firmware demo's painted stack (used, region size).
     demo_stack: Option<(u32, u32)>,
+    /// The firmware's per-generation deadline checks of the default configuration.
+    deadline: DeadlineSummary,
+    /// The same for the sweep's configurations (informational: some are over budget).
+    deadline_sweep: DeadlineSummary,
     /// The timing image measured.
     timing_elf: PathBuf,
     /// The firmware image measured.
@@ -200,6 +205,8 @@ pub fn run(out: &Path) -> Result<()> {
         fw_mem,
         timing_mem,
         demo_stack,
+        deadline: m.deadlines("full"),
+        deadline_sweep: m.deadlines("sweep"),
         timing_elf,
         firmware_elf,
     };
@@ -209,5 +216,16 @@ pub fn run(out: &Path) -> Result<()> {
     crate::io::write_bytes(&md_path, report::markdown(&r).as_bytes())?;
     println!("{}", report::summary(&r));
     println!("wrote {} and {}", json_path.display(), md_path.display());
+    if r.deadline.missed > 0 {
+        bail!(
+            "{} of {} generations of the default configuration missed the deadline of {:.0} instructions \
+             (worst {:.0}): {}",
+            r.deadline.missed,
+            r.deadline.checked,
+            r.deadline.limit_instructions,
+            r.deadline.worst_instructions,
+            m.missed_lines.join("; ")
+        );
+    }
     Ok(())
 }

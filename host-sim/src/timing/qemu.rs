@@ -6,7 +6,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow, bail};
-use evorec_firmware::timing::{BANNER, GenLine, ICOUNT_SHIFT};
+use evorec_firmware::timing::{BANNER, DEADLINE_TICKS, DeadlineReport, GenLine, ICOUNT_SHIFT, ticks_to_instructions};
 
 use super::{BUILD_HINT, LLVM_HINT, QEMU_HINT, QEMU_TIMEOUT, TARGET, TIMING_ELF_ENV, TIMING_IMAGE};
 
@@ -156,6 +156,8 @@ pub struct Run {
     pub points_per_camera: u32,
     /// Every measured generation.
     pub generations: Vec<GenLine>,
+    /// The firmware's deadline check of this run (its `DEADLINE` line).
+    pub deadline: DeadlineReport,
 }
 
 /// Everything the timing firmware printed.
@@ -165,6 +167,38 @@ pub struct Measurement {
     pub read_pair_ticks: u32,
     /// The runs in order.
     pub runs: Vec<Run>,
+    /// The firmware's `DEADLINE-MISSED k=… call=…` lines, as printed.
+    pub missed_lines: Vec<String>,
+}
+
+/// The deadline checks of some runs: the watchdog-style limit of one generation
+/// ([`DEADLINE_TICKS`], 10⁶ instructions) against every measured generation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DeadlineSummary {
+    /// Generations checked by the firmware.
+    pub checked: u32,
+    /// Generations over the limit.
+    pub missed: u32,
+    /// The limit (instructions).
+    pub limit_instructions: f64,
+    /// The longest generation of any run (instructions).
+    pub worst_instructions: f64,
+}
+
+impl Measurement {
+    /// The deadline checks of the runs called `name` (`full`: the default configuration, whose
+    /// budget the deadline is; `sweep`: the other configurations, some over budget on purpose).
+    pub fn deadlines(&self, name: &str) -> DeadlineSummary {
+        let runs = || self.runs.iter().filter(|r| r.name == name);
+        let sum = |f: fn(&DeadlineReport) -> u32| runs().map(|r| f(&r.deadline)).sum();
+        let worst = runs().map(|r| r.deadline.worst).max().unwrap_or(0);
+        DeadlineSummary {
+            checked: sum(|d| d.checked),
+            missed: sum(|d| d.missed),
+            limit_instructions: ticks_to_instructions(u64::from(DEADLINE_TICKS)),
+            worst_instructions: ticks_to_instructions(u64::from(worst)),
+        }
+    }
 }
 
 /// Parses the timing firmware's output.
@@ -175,7 +209,9 @@ pub fn parse_output(text: &str) -> Result<Measurement> {
     if !text.lines().any(|l| l.trim() == BANNER) {
         bail!("not the output of the timing firmware (no `{BANNER}` line)");
     }
-    let mut m = Measurement { read_pair_ticks: 0, runs: Vec::new() };
+    let mut m = Measurement { read_pair_ticks: 0, runs: Vec::new(), missed_lines: Vec::new() };
+    // Runs whose `DEADLINE` line has been read.
+    let mut checked_runs = 0;
     let mut ended = false;
     for line in text.lines() {
         let line = line.trim();
@@ -195,10 +231,21 @@ pub fn parse_output(text: &str) -> Result<Measurement> {
                 grid: num("g")?,
                 points_per_camera: num("points_per_camera")?,
                 generations: Vec::new(),
+                deadline: DeadlineReport::default(),
             });
         } else if line.starts_with("GEN ") {
             let g = GenLine::parse(line).ok_or_else(|| anyhow!("malformed line `{line}`"))?;
             m.runs.last_mut().ok_or_else(|| anyhow!("GEN before RUN"))?.generations.push(g);
+        } else if line.starts_with("DEADLINE-MISSED") {
+            m.missed_lines.push(line.to_owned());
+        } else if line.starts_with("DEADLINE ") {
+            let d = DeadlineReport::parse(line).ok_or_else(|| anyhow!("malformed line `{line}`"))?;
+            let run = m.runs.last_mut().ok_or_else(|| anyhow!("DEADLINE before RUN"))?;
+            if d.checked as usize != run.generations.len() {
+                bail!("`{line}` checked {} generations, the run printed {}", d.checked, run.generations.len());
+            }
+            run.deadline = d;
+            checked_runs += 1;
         } else if line.starts_with("END ") {
             if line != "END ok" {
                 bail!("the timing firmware failed: `{line}`");
@@ -210,6 +257,14 @@ pub fn parse_output(text: &str) -> Result<Measurement> {
     }
     if !ended {
         bail!("the timing firmware's output has no `END ok` line");
+    }
+    if checked_runs != m.runs.len() {
+        bail!(
+            "the timing firmware printed {} `DEADLINE` lines for {} runs (rebuild it: `{}`)",
+            checked_runs,
+            m.runs.len(),
+            super::BUILD_HINT
+        );
     }
     Ok(m)
 }
@@ -239,7 +294,8 @@ mod tests {
     #[test]
     fn output_is_parsed() {
         let text = "EVOREC-TIMING v1\nCALIBRATION read_pair=25\nRUN name=full p=40 g=8 frames=1 points_per_camera=480 width=160 height=120\n\
-                    GEN p=40 g=8 k=0 kind=blank status=lost call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0\nEND ok\n";
+                    GEN p=40 g=8 k=0 kind=blank status=lost call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0\n\
+                    DEADLINE limit=25600000 checked=1 missed=0 worst=2048\nEND ok\n";
         let m = parse_output(text).unwrap();
         assert_eq!(m.read_pair_ticks, 25);
         let s = m.runs[0].stats();
@@ -250,6 +306,25 @@ mod tests {
         assert_eq!(parse_output(&with_cap).unwrap().runs[0].stats().capacity, 64);
         assert!(parse_output("EVOREC-TIMING v1\nEND failed\n").is_err());
         assert!(parse_output("hello\n").is_err());
+        let d = m.deadlines("full");
+        assert_eq!((d.checked, d.missed, d.worst_instructions, d.limit_instructions), (1, 0, 80.0, 1.0e6));
+        // A run without its deadline check, or a check of another number of generations.
+        assert!(parse_output(&text.replace("DEADLINE limit=25600000 checked=1 missed=0 worst=2048\n", "")).is_err());
+        assert!(parse_output(&text.replace("checked=1", "checked=2")).is_err());
         assert_eq!(painted_stack("[INFO ] stack high-water mark: 13892 of 90000 bytes"), Some((13892, 90000)));
+    }
+
+    #[test]
+    fn missed_deadlines_are_counted() {
+        let text = "EVOREC-TIMING v1\nCALIBRATION read_pair=25\nRUN name=full p=40 g=8 frames=2 points_per_camera=480\n\
+                    GEN p=40 g=8 k=0 kind=blank status=lost call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0\n\
+                    DEADLINE-MISSED k=1 call=25600001\n\
+                    GEN p=40 g=8 k=1 kind=blank status=lost call=25600001 ff=1024 eval=512 breed=256 stack=4000 fitness=0\n\
+                    DEADLINE limit=25600000 checked=2 missed=1 worst=25600001\nEND ok\n";
+        let m = parse_output(text).unwrap();
+        assert_eq!(m.deadlines("full").missed, 1);
+        assert!(m.deadlines("full").worst_instructions > 1.0e6);
+        assert_eq!(m.deadlines("sweep").checked, 0);
+        assert_eq!(m.missed_lines, ["DEADLINE-MISSED k=1 call=25600001"]);
     }
 }

@@ -92,6 +92,14 @@ pub(super) fn json(r: &Results) -> Value {
             "firmware_painted_bytes": r.demo_stack.map(|(u, _)| u),
             "firmware_stack_region_bytes": r.demo_stack.map(|(_, s)| s),
         },
+        "deadline": {
+            "limit_instructions": r.deadline.limit_instructions.round(),
+            "generations_checked": r.deadline.checked,
+            "missed": r.deadline.missed,
+            "worst_instructions": r.deadline.worst_instructions.round(),
+            "sweep_generations_checked": r.deadline_sweep.checked,
+            "sweep_missed": r.deadline_sweep.missed,
+        },
         "static_ram_bytes": r.fw_mem.static_ram_bytes,
         "flash_bytes": r.fw_mem.flash_bytes,
         "ram_bytes": RAM_BYTES,
@@ -141,7 +149,8 @@ pub(super) fn summary(r: &Results) -> String {
     let f = &r.full;
     format!(
         "instructions per generation (P = {}, G = {}): min {:.0}, max {:.0} (max/min {:.4}); {:.2} per point; stack {} B; \
-         flash {} B; static RAM {} B; ESTIMATE {:.0} cycles = {:.0} µs at 168 MHz",
+         flash {} B; static RAM {} B; ESTIMATE {:.0} cycles = {:.0} µs at 168 MHz; \
+         deadline {:.0}: {} of {} generations missed (worst {:.0})",
         f.population,
         f.grid,
         f.call.min,
@@ -152,7 +161,11 @@ pub(super) fn summary(r: &Results) -> String {
         r.fw_mem.flash_bytes,
         r.fw_mem.static_ram_bytes,
         r.cyc.cycles,
-        r.cyc.microseconds
+        r.cyc.microseconds,
+        r.deadline.limit_instructions,
+        r.deadline.missed,
+        r.deadline.checked,
+        r.deadline.worst_instructions
     )
 }
 
@@ -211,6 +224,18 @@ pub(super) fn markdown(r: &Results) -> String {
         let _ = writeln!(s, "| {name} | {:.0} | {:.0} | {:.0} | {target} |", r.min, r.max, r.mean);
     };
     row(&mut s, "instructions per generation", &full.call, &format!("≤ {GENERATION_BUDGET:.0}"));
+    let d = &r.deadline;
+    let _ = writeln!(
+        s,
+        "| generations over the firmware's deadline ({:.0} instructions) | | {} of {} | worst {:.0} | 0 {} (sweep: {} of {}, not budgeted) |",
+        d.limit_instructions,
+        d.missed,
+        d.checked,
+        d.worst_instructions,
+        if d.missed == 0 { "✔" } else { "✘" },
+        r.deadline_sweep.missed,
+        r.deadline_sweep.checked
+    );
     row(&mut s, "— feedforward", &full.feedforward, "");
     row(&mut s, "— projection + fitness (Evaluate)", &full.evaluate, "");
     row(&mut s, "— selection/crossover/mutation (Breed)", &full.breed, "");

@@ -18,7 +18,7 @@
 //! [`ErrorKind`] generic code can act on ([`ErrorKind::EndOfStream`] ends [`run`] normally).
 
 use crate::image::{Image, PixelFormat};
-use crate::tracker::{Estimate, Feedforward, JointSample, NoProbe, PhaseProbe, StereoFrame, Tracker};
+use crate::tracker::{Estimate, Feedforward, JointSample, NoProbe, PhaseProbe, StepError, StereoFrame, Tracker};
 
 /// What went wrong on a board, for generic code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -132,7 +132,11 @@ pub struct LoopStats {
 /// [`ErrorKind::EndOfStream`]: frame → joint sample → one generation → publish.
 ///
 /// `dt` is the capture-time difference to the last accepted frame (0 for the first). A frame
-/// the tracker refuses is counted, logged and skipped; the tracker is unchanged by it.
+/// the tracker refuses is counted, logged and skipped; the tracker is unchanged by it. A frame
+/// refused because the gap since the last accepted one is longer than
+/// [`TrackerConfig::max_dt_s`](crate::tracker::TrackerConfig::max_dt_s) (frames dropped under
+/// overload, a stalled camera) becomes the new time base, so the next frame is tracked again
+/// instead of every later frame being refused for an ever longer gap.
 ///
 /// # Errors
 /// Any board error other than `EndOfStream`.
@@ -200,6 +204,9 @@ where
             Err(e) => {
                 log::warn!("frame {} refused: {}", info.sequence, e);
                 stats.rejected += 1;
+                if matches!(e, StepError::BadDt(_)) {
+                    last_time = Some(info.capture_time_us);
+                }
             }
         }
     }

@@ -530,6 +530,36 @@ mod tests {
     }
 
     #[test]
+    fn a_gap_longer_than_max_dt_refuses_one_frame_then_tracking_resumes() {
+        // Frames 2..=20 dropped (say, superseded under overload): frame 21 comes 0.67 s after
+        // frame 1, more than max_dt_s = 0.5 s. It is refused and becomes the time base; frame
+        // 22 is tracked again (before, every later frame was refused for an ever longer gap).
+        let setup = sample_setup();
+        assert_eq!(setup.max_dt_s, 0.5);
+        let n = usize::from(setup.width) * usize::from(setup.height) * BYTES_PER_PIXEL;
+        let l = vec![0u8; n];
+        let mut input = encode(&Envelope::bare(Message::Config(setup)));
+        for k in [1u32, 21, 22, 23] {
+            input.extend(encode(&frame_env(k, setup.width, setup.height, &l, &l)));
+        }
+        input.extend(encode(&Envelope::bare(Message::End)));
+        let (r, got) = serve_bytes(&input);
+        assert_eq!(r.unwrap(), LoopStats { frames: 4, published: 3, rejected: 1 });
+        let kinds: Vec<(MsgType, u32)> = got.iter().map(|e| (e.message.kind(), e.sequence)).collect();
+        assert_eq!(
+            kinds,
+            [
+                (MsgType::Ack, 0),
+                (MsgType::Estimate, 1),
+                (MsgType::Rejected, 21),
+                (MsgType::Estimate, 22),
+                (MsgType::Estimate, 23),
+                (MsgType::Done, 0)
+            ]
+        );
+    }
+
+    #[test]
     fn a_newer_frame_behind_supersedes_older_ones_so_latency_stays_one_frame() {
         // Overload: frames offered at twice the rate the board works them off (two per
         // generation, the older one flagged). The board answers only the newest of each pair.

@@ -59,6 +59,12 @@ fn default_generation_stays_within_the_instruction_budget() -> Result<(), Failur
         "the full run is not the default configuration"
     );
     assert!(s.generations >= 100, "only {} generations measured", s.generations);
+    // The firmware's own watchdog-style deadline check agrees: every generation checked, none
+    // over the deadline (= the budget).
+    let d = m.deadlines("full");
+    assert_eq!(d.checked as usize, s.generations, "{d:?}");
+    assert_eq!(d.missed, 0, "{d:?} {:?}", m.missed_lines);
+    assert!((d.worst_instructions - s.call.max).abs() < 1.0, "{d:?} against {}", s.call.max);
     // Data independence. On frames of a scene (the target tracked, at random poses, filling the
     // image, behind noise, under a fast arm; or no target at all) the work stays within
     // RATIO_TARGET of the worst case. The adversarial frames (every pixel one face's hue, or

@@ -1,0 +1,184 @@
+//! Overload under QEMU (#11.4): frames offered at twice the rate the firmware works them off.
+//!
+//! 1. The sustainable period is measured first: lock-step, one frame per answer (the median
+//!    round trip, link included).
+//! 2. Then a camera clock produces a new frame every half of that period. Whenever the
+//!    firmware's answer to the last frame arrives, the host sends every frame produced since,
+//!    all but the newest flagged `FLAG_NEWER_FOLLOWS` (what a camera interface's "next frame
+//!    ready" tells a board), and waits for the answer to the newest (`HilSession::step_burst`).
+//!
+//! Checked: every answer is to the newest frame produced when it was sent (an estimate, or a
+//! refusal when a stall made the gap in capture time longer than `max_dt_s`); the
+//! latency from a frame's production to its answer stays bounded (with a queue it would grow
+//! by half a period per frame: about 50 periods by the end); the firmware counts exactly the
+//! flagged frames as superseded and works only on the others.
+//!
+//! Builds the firmware first and needs qemu-system-arm; `EVOREC_SKIP_HIL=1` skips.
+//!
+//! **Ignored: it fails today** (`cargo test -p evorec-tests --test hil_overload -- --ignored
+//! --nocapture`, branch rel4, load ≈ 10 on 2 cores): sustainable period 13.5 ms, 110 frames
+//! offered every 6.8 ms, only 8 worked on and 102 superseded (all counted by the firmware),
+//! but the latency grew to 1.85 s (137 periods). Under QEMU a superseded frame still crosses
+//! the link byte by byte (semihosting reads through the 32-byte `LinkReader` buffer, COBS
+//! decoding, CRC) before the board can see the newer one behind it, and that transfer costs
+//! about as much as a lock-step frame with its generation. So at twice the rate the link, not
+//! the generation, falls behind: dropping superseded frames bounds latency only where a frame
+//! costs the board nothing until it is taken (a camera interface's DMA buffer), or when the
+//! board skips a flagged frame's bytes to the next delimiter without decoding them. Open.
+
+use std::time::{Duration, Instant};
+
+use evorec_core::board::CameraController;
+use evorec_core::tracker::JointSample;
+use evorec_firmware::BoardProfile;
+use evorec_firmware::host::{HilOptions, HilSession, Reply, build_firmware};
+use evorec_firmware::protocol::{DOF, Frame, Setup};
+use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, IMAGE_BYTES};
+use evorec_sim::experiment::{self, INITIAL_SPREAD};
+use evorec_sim::scenario::Scenario;
+use evorec_sim::sim::{SimBoard, World};
+
+/// Frames tracked in lock-step to measure the sustainable period.
+const WARMUP: usize = 12;
+/// The largest latency accepted, in sustainable periods: the newest frame waits at most for
+/// the generation in flight and then its own (2 periods), plus scheduling noise on a shared
+/// machine. A queue would reach about 50 periods.
+const LATENCY_BOUND_PERIODS: f64 = 6.0;
+
+/// One pre-rendered frame of the simulated scene.
+struct Recorded {
+    sequence: u32,
+    capture_time_us: u64,
+    joints: JointSample<DOF>,
+    left: Vec<u8>,
+    right: Vec<u8>,
+}
+
+impl Recorded {
+    fn message(&self) -> (u32, u64, Frame<'_>) {
+        let frame = Frame {
+            width: FRAME_WIDTH,
+            height: FRAME_HEIGHT,
+            joints: self.joints,
+            left: &self.left,
+            right: &self.right,
+        };
+        (self.sequence, self.capture_time_us, frame)
+    }
+}
+
+/// `hil_motion_a_ff` cut to `seconds`: its firmware setup and every frame, rendered up front
+/// so that rendering takes no time from the camera clock.
+fn scene(seconds: f64) -> (Setup, Vec<Recorded>) {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
+    let text = std::fs::read_to_string(path).expect("scenario");
+    let mut s = Scenario::from_toml_str(&text).expect("valid scenario");
+    s.duration_s = seconds;
+    let world = World::new(&s).expect("world");
+    let config = experiment::tracker_config(&s).expect("tracker config");
+    let setup = Setup::from_tracker_config(&config, experiment::feedforward(s.method), &world.truth(), &INITIAL_SPREAD)
+        .expect("firmware setup");
+    let mut board = SimBoard::new(world);
+    let (mut left, mut right) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
+    let mut frames = Vec::new();
+    while let Ok(info) = board.next_frame(&mut left, &mut right) {
+        let joints = board.joint_sample().expect("joints");
+        frames.push(Recorded {
+            sequence: info.sequence,
+            capture_time_us: info.capture_time_us,
+            joints,
+            left: left.clone(),
+            right: right.clone(),
+        });
+    }
+    (setup, frames)
+}
+
+#[test]
+#[ignore = "fails: superseded frames still cost their full link transfer under QEMU (see the module docs)"]
+fn frames_at_twice_the_sustainable_rate_keep_latency_bounded_and_drops_counted() {
+    if std::env::var_os("EVOREC_SKIP_HIL").is_some() {
+        println!("EVOREC_SKIP_HIL is set: skipped");
+        return;
+    }
+    let (setup, frames) = scene(4.0);
+    assert!(frames.len() > WARMUP + 60, "{} frames", frames.len());
+    let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));
+    let work = std::env::temp_dir().join(format!("evorec-hil-overload-{}", std::process::id()));
+    let mut hil =
+        HilSession::start_with(&firmware, &work, &setup, &HilOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+
+    // 1. The sustainable period: lock-step round trips.
+    let (warmup, rest) = frames.split_at(WARMUP);
+    let mut round_trips = Vec::new();
+    for f in warmup {
+        let (sequence, capture_time_us, frame) = f.message();
+        let sent = Instant::now();
+        let reply = hil.step(sequence, capture_time_us, &frame).unwrap_or_else(|e| panic!("{e}"));
+        round_trips.push(sent.elapsed());
+        assert!(matches!(reply, Reply::Estimate(_)), "frame {sequence}: {reply:?}");
+    }
+    round_trips.sort();
+    let period = round_trips[WARMUP / 2];
+
+    // 2. Frame k of the rest is produced at t0 + k·period/2.
+    let interval = period / 2;
+    let t0 = Instant::now();
+    let produced_at = |k: usize| t0 + interval * u32::try_from(k).expect("few frames");
+    let (mut next, mut flagged, mut refused) = (0usize, 0u32, 0u32);
+    let mut latencies: Vec<Duration> = Vec::new();
+    while next < rest.len() {
+        // Frames produced by now: k < ready.
+        let elapsed = t0.elapsed().as_nanos();
+        let ready = usize::try_from(elapsed / interval.as_nanos().max(1) + 1).unwrap_or(usize::MAX).min(rest.len());
+        if ready <= next {
+            std::thread::sleep(produced_at(next).saturating_duration_since(Instant::now()));
+            continue;
+        }
+        let burst: Vec<(u32, u64, Frame<'_>)> = rest[next..ready].iter().map(Recorded::message).collect();
+        flagged += u32::try_from(burst.len() - 1).expect("short burst");
+        let (answered, reply) = hil.step_burst(&burst).unwrap_or_else(|e| panic!("{e}")).expect("non-empty burst");
+        let newest = ready - 1;
+        latencies.push(produced_at(newest).elapsed());
+        assert_eq!(answered, rest[newest].sequence, "the answer is to the newest frame");
+        // A refusal is an answer too: a burst longer than max_dt_s of capture time (the machine
+        // stalled) makes the tracker refuse its newest frame, which becomes the time base.
+        match reply {
+            Reply::Estimate(_) => {}
+            Reply::Rejected => refused += 1,
+            Reply::Lost => panic!("frame {answered} lost without fault injection"),
+        }
+        next = ready;
+    }
+    let summary = hil.finish().unwrap_or_else(|e| panic!("{e}"));
+
+    let worked = latencies.len();
+    let worst = latencies.iter().max().copied().unwrap_or_default();
+    let last_quarter = &latencies[worked * 3 / 4..];
+    let late_mean = last_quarter.iter().sum::<Duration>() / u32::try_from(last_quarter.len().max(1)).unwrap_or(1);
+    println!(
+        "overload: sustainable period {:.1} ms (median of {WARMUP} lock-step round trips); {} frames offered every \
+         {:.1} ms, {worked} worked on ({refused} refused), {flagged} superseded; latency worst {:.1} ms = {:.2} periods, mean of the \
+         last quarter {:.1} ms; firmware DONE {:?}",
+        period.as_secs_f64() * 1e3,
+        rest.len(),
+        interval.as_secs_f64() * 1e3,
+        worst.as_secs_f64() * 1e3,
+        worst.as_secs_f64() / period.as_secs_f64(),
+        late_mean.as_secs_f64() * 1e3,
+        summary.done
+    );
+    // Overload happened: a good part of the frames arrived while the board was busy.
+    assert!(flagged as usize * 4 >= rest.len(), "only {flagged} of {} frames superseded", rest.len());
+    // The firmware dropped exactly the flagged frames, counted them, and worked on the rest.
+    let d = summary.done;
+    assert_eq!(d.drops.superseded, flagged, "{d:?}");
+    assert_eq!(d.frames as usize, WARMUP + worked, "{d:?}");
+    assert_eq!((d.published + d.rejected, d.rejected), (d.frames, refused), "{d:?}");
+    assert!(refused * 5 <= d.frames, "{refused} of {} frames refused", d.frames);
+    assert_eq!(d.drops.damaged() + d.drops.sequence + d.drops.unexpected, 0, "{d:?}");
+    // Latency stays bounded (a queue would grow it by half a period per frame).
+    let bound = period.mul_f64(LATENCY_BOUND_PERIODS);
+    assert!(worst <= bound, "worst latency {worst:?} above {bound:?} (period {period:?})");
+    let _ = std::fs::remove_dir_all(&work);
+}

@@ -19,9 +19,9 @@
 //! --nocapture`, branch rel4, load ≈ 10 on 2 cores): sustainable period 13.5 ms, 110 frames
 //! offered every 6.8 ms, only 8 worked on and 102 superseded (all counted by the firmware),
 //! but the latency grew to 1.85 s (137 periods). Under QEMU a superseded frame still crosses
-//! the link byte by byte (semihosting reads through the 32-byte `LinkReader` buffer, COBS
-//! decoding, CRC) before the board can see the newer one behind it, and that transfer costs
-//! about as much as a lock-step frame with its generation. So at twice the rate the link, not
+//! the link in full (host encoding, the FIFO, semihosting reads through the 32-byte
+//! `LinkReader` buffer, COBS decoding, CRC; the split is not measured) before the board can
+//! see the newer one behind it, and that transfer evidently costs more than half a period. So at twice the rate the link, not
 //! the generation, falls behind: dropping superseded frames bounds latency only where a frame
 //! costs the board nothing until it is taken (a camera interface's DMA buffer), or when the
 //! board skips a flagged frame's bytes to the next delimiter without decoding them. Open.

@@ -15,10 +15,14 @@
 //! camera.
 //!
 //! **Bounded work.** Of each pair of opposite faces exactly one can face a camera, so each
-//! camera evaluates three faces (the one of each pair on the camera's side),
-//! [`SurfaceStrips::POINTS_PER_CAMERA`] points, whether or not a face is visible or a strip
-//! is on the silhouette: the visibility only masks the counts. Points outside the image read as "no hue"; nothing is ever read
-//! out of bounds.
+//! camera evaluates three faces (the one of each pair on the camera's side): their inner rows
+//! always, whether or not a face is visible (the visibility only masks the counts), and the
+//! outer rows only where they count, on the silhouette edges of visible faces. Those are at
+//! most [`MAX_OUTER_EDGES`] = 6 edges per camera, and the walk is padded to that many, so every
+//! pose walks [`SurfaceStrips::WALKED_PER_CAMERA`] points per camera (48·G, 80 % of
+//! [`SurfaceStrips::POINTS_PER_CAMERA`]; the outer rows of the other edges used to be walked
+//! and discarded). Points outside the image read as "no hue"; nothing is ever read out of
+//! bounds.
 //!
 //! **Per row** (plain pinhole): the perspective division of its two end points, and the step
 //! between its points in 16.16 fixed point (see `Affine` for why the affine walk between
@@ -43,7 +47,7 @@ use crate::camera::{Pinhole, StereoRig};
 use crate::config::{INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX, MIN_VISIBLE_COS, NO_HUE, OUTER_OFFSETS_M};
 use crate::hue::HueLut;
 use crate::image::{Image, PixelFormat};
-use crate::model::{FACES, SurfaceStrips};
+use crate::model::{FACES, MAX_OUTER_EDGES, SurfaceStrips};
 use crate::pose::Psi;
 
 /// Match counts of one camera.
@@ -439,15 +443,6 @@ struct FacePlan {
     visible_mask: u8,
     front: [bool; FACES],
 }
-
-/// The most edges whose outer rows count in one camera: those of visible faces whose
-/// neighbour across the edge does not face the camera (silhouette edges).
-///
-/// With `F` the faces that face the camera (at most one of each opposite pair, so `|F| ≤ 3`)
-/// and `V ⊆ F` the visible ones, a visible face's four neighbours are the faces of the two
-/// other axes, of which exactly `|F| − 1` face the camera: it has `5 − |F|` silhouette edges,
-/// and the counting edges number `|V|·(5 − |F|) ≤ |F|·(5 − |F|) ≤ 6` (at `|F|` = 2 or 3).
-pub const MAX_OUTER_EDGES: usize = 6;
 
 /// The counts of the planned faces, with `walk` counting the rows.
 #[inline(always)]

@@ -15,10 +15,14 @@
 //! camera.
 //!
 //! **Bounded work.** Of each pair of opposite faces exactly one can face a camera, so each
-//! camera evaluates three faces (the one of each pair on the camera's side),
-//! [`SurfaceStrips::POINTS_PER_CAMERA`] points, whether or not a face is visible or a strip
-//! is on the silhouette: the visibility only masks the counts. Points outside the image read as "no hue"; nothing is ever read
-//! out of bounds.
+//! camera evaluates three faces (the one of each pair on the camera's side): their inner rows
+//! always, whether or not a face is visible (the visibility only masks the counts), and the
+//! outer rows only where they count, on the silhouette edges of visible faces. Those are at
+//! most [`MAX_OUTER_EDGES`] = 6 edges per camera, and the walk is padded to that many, so every
+//! pose walks [`SurfaceStrips::WALKED_PER_CAMERA`] points per camera (48·G, 80 % of
+//! [`SurfaceStrips::POINTS_PER_CAMERA`]; the outer rows of the other edges used to be walked
+//! and discarded). Points outside the image read as "no hue"; nothing is ever read out of
+//! bounds.
 //!
 //! **Per row** (plain pinhole): the perspective division of its two end points, and the step
 //! between its points in 16.16 fixed point (see `Affine` for why the affine walk between
@@ -40,12 +44,10 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::camera::{Pinhole, StereoRig};
-use crate::config::{
-    INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX, MIN_VISIBLE_COS, NO_HUE, OUTER_OFFSETS_M, ROWS_PER_EDGE,
-};
+use crate::config::{INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX, MIN_VISIBLE_COS, NO_HUE, OUTER_OFFSETS_M};
 use crate::hue::HueLut;
 use crate::image::{Image, PixelFormat};
-use crate::model::{FACES, ROW_DISTANCES_M, SurfaceStrips};
+use crate::model::{FACES, MAX_OUTER_EDGES, SurfaceStrips};
 use crate::pose::Psi;
 
 /// Match counts of one camera.
@@ -162,11 +164,12 @@ const FIX_ONE: f32 = (1u32 << FIX_BITS) as f32;
 /// walk stays within `±2³⁰` and no addition wraps.
 pub const MAX_PIXEL_REACH: f32 = 16384.0;
 
-/// The rows of one edge's strip in homogeneous image coordinates: every row's first point,
-/// the step between points and the whole row `(G − 1)·step`.
-struct EdgeRows {
-    /// First points: the inner rows, then the outer rows (as [`ROW_DISTANCES_M`]).
-    starts: [[f32; 3]; ROWS_PER_EDGE],
+/// The rows of one edge's strip in homogeneous image coordinates: the first points of its
+/// inner rows, the step between points and the whole row `(G − 1)·step`.
+struct EdgeRows<const N: usize> {
+    /// First points of the rows (the inner rows as [`INNER_INSETS_M`], or the outer rows as
+    /// [`OUTER_OFFSETS_M`]).
+    starts: [[f32; 3]; N],
     /// Step between the points of a row.
     step: [f32; 3],
     /// `(G − 1)·step`.
@@ -185,39 +188,8 @@ struct Scores<'l> {
 /// How a camera walks the rows of an edge's strip (`G` points each): the pinhole kernel's
 /// [`Affine`] walk or the distorted kernel's [`Lens`].
 trait RowWalk {
-    /// One row, ready to walk.
-    type Row;
-
-    /// The rows of one edge's strip, ready to walk.
-    fn rows<const G: usize>(&self, edge: &EdgeRows) -> [Self::Row; ROWS_PER_EDGE];
-
-    /// `Σ plane[hue]` over the `G` points of `row`.
-    fn walk<const G: usize>(&self, row: &Self::Row, plane: &[u8; 256]) -> u32;
-
-    /// `(Σ inner, Σ outer)` over the rows of one edge.
-    #[inline(always)]
-    fn count_edge<const G: usize>(&self, edge: &EdgeRows, scores: &Scores<'_>) -> (u32, u32) {
-        sum_rows::<G, Self>(self, &self.rows::<G>(edge), scores)
-    }
-}
-
-/// `(Σ inner, Σ outer)` over the rows of one edge ([`ROW_DISTANCES_M`] order: the inner rows,
-/// then the outer rows): the row bookkeeping of both kernels.
-#[inline(always)]
-fn sum_rows<const G: usize, W: RowWalk + ?Sized>(
-    walk: &W,
-    rows: &[W::Row; ROWS_PER_EDGE],
-    scores: &Scores<'_>,
-) -> (u32, u32) {
-    let (ins, outs) = rows.split_at(INNER_INSETS_M.len());
-    let (mut hits_in, mut hits_out) = (0u32, 0u32);
-    for row in ins {
-        hits_in += walk.walk::<G>(row, scores.inner);
-    }
-    for row in outs {
-        hits_out += walk.walk::<G>(row, scores.outer);
-    }
-    (hits_in, hits_out)
+    /// `Σ plane[hue]` over the `G` points of each of the `N` rows of `edge`.
+    fn count_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, plane: &[u8; 256]) -> u32;
 }
 
 /// One row of the pinhole kernel in 16.16 fixed point: its first point (pixel coordinates,
@@ -271,38 +243,27 @@ struct Affine<'v, 'p, F: PixelFormat> {
 }
 
 impl<F: PixelFormat> RowWalk for Affine<'_, '_, F> {
-    type Row = FixedRow;
-
     #[inline(always)]
-    fn rows<const G: usize>(&self, edge: &EdgeRows) -> [FixedRow; ROWS_PER_EDGE] {
-        edge.starts.map(|start| FixedRow::new::<G>(start, edge.span))
-    }
-
-    #[inline(always)]
-    fn walk<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
-        self.view.walk::<G>(row, plane)
-    }
-
-    #[inline(always)]
-    fn count_edge<const G: usize>(&self, edge: &EdgeRows, scores: &Scores<'_>) -> (u32, u32) {
-        walk_edge::<G, F>(self, &self.rows::<G>(edge), scores)
+    fn count_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, plane: &[u8; 256]) -> u32 {
+        walk_edge::<G, N, F>(self.view, &edge.starts.map(|start| FixedRow::new::<G>(start, edge.span)), plane)
     }
 }
 
-/// The integer part of [`Affine`]: the fixed-point rows of one edge walked, out of line so
-/// that its registers hold only the walk.
+/// The integer part of [`Affine`]: `Σ plane[hue]` over the fixed-point rows of one edge,
+/// out of line so that its registers hold only the walk (and its code, hence its
+/// instruction count, does not move with the code around it).
 #[inline(never)]
-fn walk_edge<const G: usize, F: PixelFormat>(
-    walk: &Affine<'_, '_, F>,
-    rows: &[FixedRow; ROWS_PER_EDGE],
-    scores: &Scores<'_>,
-) -> (u32, u32) {
+fn walk_edge<const G: usize, const N: usize, F: PixelFormat>(
+    view: &View<'_, F>,
+    rows: &[FixedRow; N],
+    plane: &[u8; 256],
+) -> u32 {
     // Never taken (an image has at least one pixel); it lets the walk read pixel 0 for the
     // points outside the image without a bounds check.
-    if walk.view.pixels.is_empty() {
-        return (0, 0);
+    if view.pixels.is_empty() {
+        return 0;
     }
-    sum_rows::<G, _>(walk, rows, scores)
+    rows.iter().map(|row| view.walk::<G>(row, plane)).sum()
 }
 
 /// The lens walk: every point is walked in normalised homogeneous coordinates (three
@@ -312,30 +273,19 @@ struct Lens<'v, 'p, F: PixelFormat, P: Fn(f32, f32, f32) -> (f32, f32)> {
     to_pixel: P,
 }
 
-/// A row of the [`Lens`] walk: its first point and the step, homogeneous, normalised.
-struct LensRow {
-    start: [f32; 3],
-    step: [f32; 3],
-}
-
 impl<F: PixelFormat, P: Fn(f32, f32, f32) -> (f32, f32)> RowWalk for Lens<'_, '_, F, P> {
-    type Row = LensRow;
-
     #[inline(always)]
-    fn rows<const G: usize>(&self, edge: &EdgeRows) -> [LensRow; ROWS_PER_EDGE] {
-        edge.starts.map(|start| LensRow { start, step: edge.step })
-    }
-
-    #[inline(always)]
-    fn walk<const G: usize>(&self, row: &LensRow, plane: &[u8; 256]) -> u32 {
-        let ([mut x, mut y, mut w], step) = (row.start, row.step);
+    fn count_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, plane: &[u8; 256]) -> u32 {
         let mut hits = 0u32;
-        for _ in 0..G {
-            let (u1, v1) = (self.to_pixel)(x, y, w);
-            hits += u32::from(plane[usize::from(self.view.hue(u1, v1))]);
-            x += step[0];
-            y += step[1];
-            w += step[2];
+        for start in &edge.starts {
+            let ([mut x, mut y, mut w], step) = (*start, edge.step);
+            for _ in 0..G {
+                let (u1, v1) = (self.to_pixel)(x, y, w);
+                hits += u32::from(plane[usize::from(self.view.hue(u1, v1))]);
+                x += step[0];
+                y += step[1];
+                w += step[2];
+            }
         }
         hits
     }
@@ -510,8 +460,9 @@ fn count_faces<const G: usize>(
     let visible_mask = faces.visible_mask;
 
     let mut counts = Counts { visible: visible_mask, ..Counts::default() };
+    let mut outer_edges = 0usize;
     for &k in &faces.chosen {
-        let bit = 1u8 << k;
+        let visible = visible_mask & (1u8 << k) != 0;
         // The face's axis `a` and the two others in cyclic order, `b = a + 1`, `c = a + 2`
         // (matched, not indexed: no bounds check).
         let [x, y, z] = &axes;
@@ -532,21 +483,30 @@ fn count_faces<const G: usize>(
                     (add(sub(centre, s.half), l.start), side + 3)
                 };
                 // The inward direction is −side on the + side, +side on the − side.
-                let starts = s.rows.map(|d| if positive { sub(base, d) } else { add(base, d) });
-                let rows = EdgeRows { starts, step: l.step, span: l.span };
-                let (hits_in, hits_out) = walk.count_edge::<G>(&rows, &scores);
-                inner += hits_in;
-                // Outer rows count only on silhouette edges (the face across is hidden).
-                if !faces.front.get(neighbour).copied().unwrap_or(false) {
-                    outer += hits_out;
+                let at = |d: &[f32; 3]| if positive { sub(base, *d) } else { add(base, *d) };
+                let rows = EdgeRows { starts: s.inner.each_ref().map(at), step: l.step, span: l.span };
+                inner += walk.count_rows::<G, { INNER_INSETS_M.len() }>(&rows, scores.inner);
+                // Outer rows count only on silhouette edges (the face across is hidden) of
+                // visible faces: the others are not walked.
+                if visible && !faces.front.get(neighbour).copied().unwrap_or(false) {
+                    let rows = EdgeRows { starts: s.outer.each_ref().map(at), step: l.step, span: l.span };
+                    outer += walk.count_rows::<G, { OUTER_OFFSETS_M.len() }>(&rows, scores.outer);
+                    outer_edges += 1;
                 }
             }
         }
-        if visible_mask & bit != 0 {
+        if visible {
             counts.inner_matched += inner;
             counts.inner_total += SurfaceStrips::<G>::INNER_PER_FACE as u32;
             counts.strip_matched += outer;
         }
+    }
+    // Constant work: the outer rows of the edges that did not count are walked on a fixed row
+    // (and discarded), so every pose walks `MAX_OUTER_EDGES` edges' outer rows.
+    let [x, ..] = &axes;
+    let pad = EdgeRows { starts: x.outer.map(|d| add(proj.c, d)), step: x.step, span: x.span };
+    for _ in outer_edges..MAX_OUTER_EDGES {
+        core::hint::black_box(walk.count_rows::<G, { OUTER_OFFSETS_M.len() }>(&pad, lut.any(visible_mask)));
     }
     counts
 }
@@ -562,8 +522,10 @@ struct AxisRows {
     step: [f32; 3],
     /// `2·reach_x · m·e_x = (G − 1)·step`: from the first point of a row along `x` to its last.
     span: [f32; 3],
-    /// `d_r · m·e_x` for every row distance `d_r` of [`ROW_DISTANCES_M`].
-    rows: [[f32; 3]; ROWS_PER_EDGE],
+    /// `d_r · m·e_x` for the inner rows' distances `d_r` ([`INNER_INSETS_M`]).
+    inner: [[f32; 3]; INNER_INSETS_M.len()],
+    /// `−d_r · m·e_x` for the outer rows' distances `d_r` ([`OUTER_OFFSETS_M`]).
+    outer: [[f32; 3]; OUTER_OFFSETS_M.len()],
 }
 
 impl AxisRows {
@@ -576,7 +538,8 @@ impl AxisRows {
             start: scale(-reach),
             step: scale(step),
             span: scale(2.0 * reach),
-            rows: ROW_DISTANCES_M.map(scale),
+            inner: INNER_INSETS_M.map(scale),
+            outer: OUTER_OFFSETS_M.map(|d| scale(-d)),
         }
     }
 }
@@ -629,7 +592,7 @@ mod tests {
     use crate::camera::Pinhole;
     use crate::config::DEFAULT_HUE_TOLERANCE;
     use crate::hue::HueImage;
-    use crate::model::Block;
+    use crate::model::{Block, ROW_DISTANCES_M};
     use crate::synth;
     use std::vec;
 

@@ -17,11 +17,13 @@
 //! and the generator's state after a generation do not depend on the data. Randomness comes
 //! from any [`rand_core::Rng`]; the tracker uses a seeded `Xoshiro128PlusPlus`.
 
+use nalgebra::Vector3;
 use rand_core::Rng;
 
 use crate::config::DEFAULT_POPULATION;
 use crate::math;
 use crate::pose::Psi;
+use crate::quat;
 
 /// Why GA settings were rejected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -282,23 +284,12 @@ fn mutate(c: &mut Psi, scale: &[f32; 6], noise: &[f32; 6]) {
 /// mutation scales lose their meaning; a turn composed on the left is the same turn at every
 /// orientation, and at `η = 1` it changes ε by `h` (to first order), as the paper's operator.
 fn turn(c: &mut Psi, h: [f32; 3]) {
-    let e = c.eps();
-    let eta = c.eta();
-    let [hx, hy, hz] = h;
-    // (1, h) ⊗ (η, ε) = (η − h·ε, ε + η h + h × ε); normalised below.
-    let w = eta - (hx * e.x + hy * e.y + hz * e.z);
-    let x = e.x + eta * hx + (hy * e.z - hz * e.y);
-    let y = e.y + eta * hy + (hz * e.x - hx * e.z);
-    let z = e.z + eta * hz + (hx * e.y - hy * e.x);
-    let n2 = w * w + x * x + y * y + z * z;
-    if !n2.is_finite() || n2 <= 0.0 {
-        return;
+    let q = quat::canonical(&quat::compose(&quat::normalized(1.0, Vector3::from(h)), &c.quaternion_unchecked()));
+    let e = q.imag();
+    if e.iter().all(|v| v.is_finite()) {
+        let [.., a, b, d] = &mut c.0;
+        (*a, *b, *d) = (e.x, e.y, e.z);
     }
-    let s = (if w < 0.0 { -1.0 } else { 1.0 }) / math::sqrt(n2);
-    let [.., a, b, d] = &mut c.0;
-    *a = x * s;
-    *b = y * s;
-    *d = z * s;
 }
 
 /// A population of up to `P` poses and their last fitness values.

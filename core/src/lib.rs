@@ -26,9 +26,9 @@
 //!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.
 //!
 //! ## Work per generation
-//! Per individual and camera the fitness evaluates exactly
-//! [`SurfaceStrips::POINTS_PER_CAMERA`](model::SurfaceStrips::POINTS_PER_CAMERA)
-//! `= 3·(G² + 4G)` sample points, visible or not; a generation evaluates `P` individuals in
+//! Per individual and camera the fitness walks exactly
+//! [`SurfaceStrips::WALKED_PER_CAMERA`](model::SurfaceStrips::WALKED_PER_CAMERA)
+//! `= 48·G` sample points, visible or not; a generation evaluates `P` individuals in
 //! two cameras and breeds `P − 1` children with a fixed number of random draws each. No loop
 //! depends on the data, so the worst case is the typical case.
 //!

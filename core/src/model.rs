@@ -174,6 +174,15 @@ pub struct FaceSamples {
     pub hue: u8,
 }
 
+/// The most edges whose outer rows count in one camera: those of visible faces whose
+/// neighbour across the edge does not face the camera (silhouette edges).
+///
+/// With `F` the faces that face the camera (at most one of each opposite pair, so `|F| ≤ 3`)
+/// and `V ⊆ F` the visible ones, a visible face's four neighbours are the faces of the two
+/// other axes, of which exactly `|F| − 1` face the camera: it has `5 − |F|` silhouette edges,
+/// and the counting edges number `|V|·(5 − |F|) ≤ |F|·(5 − |F|) ≤ 6` (at `|F|` = 2 or 3).
+pub const MAX_OUTER_EDGES: usize = 6;
+
 /// Signed distances of the rows of a strip from its edge (inner positive, outer negative).
 pub const ROW_DISTANCES_M: [f32; crate::config::ROWS_PER_EDGE] = {
     let mut d = [0.0; crate::config::ROWS_PER_EDGE];
@@ -205,9 +214,13 @@ impl<const G: usize> SurfaceStrips<G> {
     pub const INNER_PER_FACE: usize = 4 * INNER_INSETS_M.len() * G;
     /// Contour-strip points per face.
     pub const OUTER_PER_FACE: usize = 4 * OUTER_OFFSETS_M.len() * G;
-    /// Sample points evaluated per camera for one pose: always three faces (one of each
-    /// opposite pair), visible or not, so the work does not depend on the pose.
+    /// Sample points of the three faces a camera evaluates (one of each opposite pair), every
+    /// row of every edge.
     pub const POINTS_PER_CAMERA: usize = 3 * (Self::INNER_PER_FACE + Self::OUTER_PER_FACE);
+    /// Sample points the fitness walks per camera for one pose, whatever the pose: the inner
+    /// rows of the three faces and the outer rows of [`MAX_OUTER_EDGES`] edges (see
+    /// `crate::fitness`).
+    pub const WALKED_PER_CAMERA: usize = 3 * Self::INNER_PER_FACE + MAX_OUTER_EDGES * OUTER_OFFSETS_M.len() * G;
 
     /// The model of nothing (every sample at the block's centre, size 0), to be
     /// [`SurfaceStrips::rebuild`]t where it lives.
@@ -353,6 +366,7 @@ mod tests {
             }
         }
         assert_eq!(SurfaceStrips::<8>::POINTS_PER_CAMERA, 3 * 4 * 5 * 8);
+        assert_eq!(SurfaceStrips::<8>::WALKED_PER_CAMERA, 48 * 8);
     }
 
     #[test]

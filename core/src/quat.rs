@@ -46,7 +46,7 @@ pub fn skew(v: &Vector3<f32>) -> Matrix3<f32> {
 }
 
 /// Builds `{η, ε}` from its parts, normalised with libm's `sqrt`.
-fn normalized(eta: f32, eps: Vector3<f32>) -> UnitQuaternion<f32> {
+pub(crate) fn normalized(eta: f32, eps: Vector3<f32>) -> UnitQuaternion<f32> {
     let n = math::sqrt(eta * eta + eps.dot(&eps));
     UnitQuaternion::new_unchecked(Quaternion::new(eta / n, eps.x / n, eps.y / n, eps.z / n))
 }

@@ -193,10 +193,7 @@ fn wrong_tracking(rows: &[TraceRow]) -> (usize, usize) {
 /// # Errors
 /// A run's error.
 pub fn run_trial(seed: u64, case: Case, points: usize, on_frame: &(impl Fn() + Sync)) -> Result<Trial> {
-    let go = |s: &Scenario| match points {
-        5 => experiment::run_with_rows::<5>(s, on_frame),
-        _ => experiment::run_with_rows::<8>(s, on_frame),
-    };
+    let go = |s: &Scenario| crate::with_rows!("--points", points, G => experiment::run_with_rows::<G>(s, on_frame));
     let a = go(&scenario(seed, case, false))?;
     let b = go(&scenario(seed, case, true))?;
     let reappear = b.rows.iter().rposition(|r| r.hidden).map_or(b.rows.len(), |i| i + 1);
@@ -292,13 +289,13 @@ pub struct Report {
 }
 
 /// Runs `trials` trials from seed `first_seed` in parallel with a progress bar, with a
-/// tracker of `points` (5 or 8) points per sample row, and writes `acquire.json`,
+/// tracker of `points` points per sample row (one of [`crate::rows::SUPPORTED`]), and writes `acquire.json`,
 /// `acquire.md` and `acquire_cdf.png` into `out`.
 ///
 /// # Errors
-/// Any run's or file's error; `points` other than 5 or 8.
+/// Any run's or file's error; `points` not in [`crate::rows::SUPPORTED`].
 pub fn run(trials: usize, first_seed: u64, points: usize, out: &Path, show_progress: bool) -> Result<Report> {
-    anyhow::ensure!(points == 5 || points == 8, "--points must be 5 or 8, got {points}");
+    crate::rows::check("--points", points)?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let jobs: Vec<(u64, Case)> = (0..trials as u64).flat_map(|i| Case::ALL.map(|c| (first_seed + i, c))).collect();
     let frames: u64 = jobs

@@ -27,6 +27,7 @@ pub mod paper;
 pub mod plot;
 pub mod render;
 pub mod robot;
+pub mod rows;
 pub mod scenario;
 pub mod sequence;
 pub mod servo;

@@ -173,7 +173,8 @@ enum Command {
         /// GA population size (16 up to the compiled capacity, 64: room for the acquisition's seeded and idle individuals).
         #[arg(long)]
         population: Option<usize>,
-        /// Sample points per row of the surface-strips model.
+        /// Sample points per row of the surface-strips model (5, 6, 7 or 8; default the core's
+        /// `DEFAULT_GRID`).
         #[arg(long)]
         points_per_row: Option<usize>,
         /// Track only the first N frames.
@@ -213,7 +214,7 @@ enum Command {
         /// First seed.
         #[arg(long, default_value_t = 1)]
         first_seed: u64,
-        /// Points per sample row of the tracker (5 or 8).
+        /// Points per sample row of the tracker (5, 6, 7 or 8).
         #[arg(long, default_value_t = evorec_sim::acquire::DEFAULT_POINTS)]
         points: usize,
         /// Output directory.

@@ -5,7 +5,7 @@
 //! Runs, in order: the default configuration (population 40, 5 points per row) on
 //! `timing::FULL_FRAMES` RGB565 frames of every kind (the hue of every sampled pixel is
 //! looked up in the core's `RGB565_HUE` table inside the measured window), then the sweep (populations 20/40/60 × rows of
-//! 4/8/12 points, `Tracker<7, P, G>` monomorphised for each) on `timing::SWEEP_FRAMES` frames
+//! 4/8/12 points, and population 40 with rows of 5, 6 and 7, `Tracker<7, P, G>` monomorphised for each) on `timing::SWEEP_FRAMES` frames
 //! each. Every frame is made on the board before its generation, so the measured window
 //! holds only `Tracker::step_probed` (feedforward on). Before each generation the tracker is
 //! put in the status of its frame kind (`CaseKind::forced_status`: searching or lost for those
@@ -106,7 +106,7 @@ mod firmware {
 
     configs!(
         P20G4: 20 x 4, P20G8: 20 x 8, P20G12: 20 x 12,
-        P40G4: 40 x 4, P40G5: 40 x 5, P40G8: 40 x 8, P40G12: 40 x 12,
+        P40G4: 40 x 4, P40G5: 40 x 5, P40G6: 40 x 6, P40G7: 40 x 7, P40G8: 40 x 8, P40G12: 40 x 12,
         P60G4: 60 x 4, P60G8: 60 x 8, P60G12: 60 x 12,
     );
 
@@ -219,6 +219,8 @@ mod firmware {
             && run_config::<P20G12, 20, 12>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
             && run_config::<P40G4, 40, 4>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
             && run_config::<P40G5, 40, 5>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G6, 40, 6>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
+            && run_config::<P40G7, 40, 7>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
             && run_config::<P40G8, 40, 8>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
             && run_config::<P40G12, 40, 12>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
             && run_config::<P60G4, 60, 4>("sweep", slot, SWEEP_FRAMES, &timer, left, right)

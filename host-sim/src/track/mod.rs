@@ -135,14 +135,10 @@ pub fn ga_params(opts: &TrackOptions) -> Result<GaParams> {
     Ok(ga)
 }
 
-/// TODO(lead): runtime row size. `--points-per-row` is checked here: the core is compiled for
-/// one row size, so only that one is accepted until it can be chosen at run time.
 fn check_sizes(opts: &TrackOptions) -> Result<()> {
     ga_params(opts)?;
-    if let Some(g) = opts.points_per_row
-        && g != DEFAULT_GRID
-    {
-        bail!("--points-per-row {g}: only {DEFAULT_GRID} is supported yet (the size is compiled into the core)");
+    if let Some(g) = opts.points_per_row {
+        crate::rows::check("--points-per-row", g)?;
     }
     Ok(())
 }
@@ -197,21 +193,27 @@ pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, opts: &TrackOpt
     })
 }
 
-/// The tracker over `seq` with `DOF` joints: dispatches on the pixel format.
+/// The tracker over `seq` with `DOF` joints: dispatches on the pixel format and the row size.
 fn run_dof<const DOF: usize>(seq: &Sequence, opts: &TrackOptions, arm: Chain<DOF>) -> Result<TrackOutput> {
+    let rows = opts.points_per_row.unwrap_or(DEFAULT_GRID);
     match opts.pixels {
-        Pixels::Rgb888 => run_format::<DOF, Rgb888>(seq, opts, arm),
-        Pixels::Rgb565 => run_format::<DOF, Rgb565>(seq, opts, arm),
+        Pixels::Rgb888 => {
+            crate::with_rows!("--points-per-row", rows, G => run_format::<DOF, Rgb888, G>(seq, opts, arm))
+        }
+        Pixels::Rgb565 => {
+            crate::with_rows!("--points-per-row", rows, G => run_format::<DOF, Rgb565, G>(seq, opts, arm))
+        }
     }
 }
 
-/// The tracker over `seq` with `DOF` joints, reading frames in pixel format `F`.
-fn run_format<const DOF: usize, F: SensorPixels>(
+/// The tracker over `seq` with `DOF` joints and `G` points per sample row, reading frames in
+/// pixel format `F`.
+fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
     seq: &Sequence,
     opts: &TrackOptions,
     arm: Chain<DOF>,
 ) -> Result<TrackOutput> {
-    let mut tracker: Tracker<DOF, HOST_POPULATION_CAPACITY, DEFAULT_GRID> =
+    let mut tracker: Tracker<DOF, HOST_POPULATION_CAPACITY, G> =
         Tracker::new(config(seq, arm, opts)?).map_err(|e| anyhow!("tracker: {e}"))?;
     match &seq.manifest.initial_pose {
         Some(pose) => {

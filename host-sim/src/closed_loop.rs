@@ -38,61 +38,7 @@ use crate::motion::flange_to_camera_f64;
 use crate::render;
 use crate::scenario::{Scenario, ServoSection};
 use crate::sim::{TraceRow, World, frame_total};
-
-/// A conveyor carrying the block along world `y`: it starts at the block's scripted centre
-/// moving at `speed` towards `+y` and reverses at `±travel/2` with deceleration `accel`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Conveyor {
-    /// Belt speed (m/s).
-    pub speed_m_s: f64,
-    /// Length of the shuttle (m).
-    pub travel_m: f64,
-    /// Acceleration of the reversals (m/s²).
-    pub accel_m_s2: f64,
-}
-
-/// The state of a [`Conveyor`] (integrated at the joint-control period).
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Belt {
-    conveyor: Conveyor,
-    y: f64,
-    v: f64,
-    dir: f64,
-    t: f64,
-    /// Since when the belt runs at constant speed (∞ while it accelerates).
-    constant_since: f64,
-}
-
-impl Belt {
-    fn new(conveyor: Conveyor) -> Self {
-        Self { conveyor, y: 0.0, v: conveyor.speed_m_s, dir: 1.0, t: 0.0, constant_since: 0.0 }
-    }
-
-    fn advance_to(&mut self, t: f64) {
-        let (c, h) = (self.conveyor, CONTROL_PERIOD_S);
-        while self.t + 0.5 * h < t {
-            let stop = c.speed_m_s * c.speed_m_s / (2.0 * c.accel_m_s2);
-            if self.dir * self.y >= 0.5 * c.travel_m - stop && self.dir * self.v > 0.0 {
-                self.dir = -self.dir;
-            }
-            let want = self.dir * c.speed_m_s;
-            let dv = (want - self.v).clamp(-c.accel_m_s2 * h, c.accel_m_s2 * h);
-            if dv != 0.0 {
-                self.constant_since = f64::INFINITY;
-            } else if self.constant_since == f64::INFINITY {
-                self.constant_since = self.t;
-            }
-            self.v += dv;
-            self.y += self.v * h;
-            self.t += h;
-        }
-    }
-
-    /// Seconds the belt has run at constant speed (0 while it accelerates).
-    fn steady_for(&self) -> f64 {
-        if self.constant_since.is_finite() { self.t - self.constant_since } else { 0.0 }
-    }
-}
+use crate::target_path::{Conveyor, TargetPath};
 
 /// A frame counts towards the steady state only after the conveyor ran at constant speed for
 /// this long (s).
@@ -103,7 +49,8 @@ pub const STEADY_AFTER_REVERSAL_S: f64 = 1.0;
 pub struct LoopOptions {
     /// Hide the block from `start` for `duration` seconds.
     pub occlusion: Option<(f64, f64)>,
-    /// A conveyor under the block.
+    /// A conveyor under the block; it starts in the middle of its travel at full speed
+    /// ([`Conveyor::middle_time`]).
     pub conveyor: Option<Conveyor>,
     /// The tracker's feedforward, overriding the scenario's method (`None`: the method's).
     pub feedforward: Option<Feedforward>,
@@ -460,16 +407,13 @@ pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Resu
     let (mut rows, mut servo_rows) = (Vec::with_capacity(frames as usize), Vec::with_capacity(frames as usize));
     let (mut rejected, mut last_us) = (0u32, None::<u64>);
     let delay = f64::from(sec.delay_frames) * s.frame_period_s;
-    let mut belt = opts.conveyor.map(Belt::new);
+    if let Some(conveyor) = opts.conveyor {
+        world.set_target_path(TargetPath::Conveyor { conveyor, start_s: conveyor.middle_time() });
+    }
     for k in 0..frames {
         let t = f64::from(k) * s.frame_period_s;
         world.advance_with(t, |arm| ctl.control(arm));
-        let mut steady = true;
-        if let Some(b) = belt.as_mut() {
-            b.advance_to(t);
-            world.set_target_offset(Vector3::new(0.0, b.y, 0.0));
-            steady = b.steady_for() >= STEADY_AFTER_REVERSAL_S;
-        }
+        let steady = opts.conveyor.is_none() || world.target_path().steady_for(t) >= STEADY_AFTER_REVERSAL_S;
         let occluded = opts.occlusion.is_some_and(|(a, d)| t >= a && t < a + d);
         world.set_target_hidden(occluded);
         let images = world.render();
@@ -608,17 +552,5 @@ mod tests {
             sec.max_speed_m_s,
             last * 1e3
         );
-    }
-
-    #[test]
-    fn conveyor_reverses_within_its_travel() {
-        let mut b = Belt::new(Conveyor { speed_m_s: 0.2, travel_m: 0.4, accel_m_s2: 0.5 });
-        let mut max_y: f64 = 0.0;
-        for k in 1..=400 {
-            b.advance_to(f64::from(k) * 0.01);
-            max_y = max_y.max(b.y.abs());
-            assert!(b.v.abs() <= 0.2 + 1e-12);
-        }
-        assert!(max_y <= 0.2 + 1e-3 && max_y > 0.19, "{max_y}");
     }
 }

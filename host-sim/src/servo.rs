@@ -7,14 +7,14 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use evorec_core::tracker::Feedforward;
 use plotters::prelude::*;
 use serde::Serialize;
 
-use crate::closed_loop::{self, Conveyor, LoopOptions, Outcome, ServoSummary};
+use crate::closed_loop::{self, LoopOptions, Outcome, ServoSummary};
 use crate::plot::{FONT, draw_err, ensure_font, render_png};
 use crate::scenario::{Method, Scenario, ServoSection};
 use crate::sim::frame_total;
+use crate::target_path::Conveyor;
 
 /// What the block does.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -45,43 +45,6 @@ impl TargetCase {
         match self {
             Self::Conveyor { speed_m_s } => format!("conveyor_{speed_m_s}"),
             Self::Rotating { omega_rad_s } => format!("rotating_{omega_rad_s}"),
-        }
-    }
-}
-
-/// The recognition method of the loop.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum LoopMethod {
-    /// Plain 1-step GA; the servo's hand-over accounts for the camera's motion only.
-    #[serde(rename = "ga")]
-    Ga,
-    /// 1-step GA + motion feedforward of the arm.
-    #[serde(rename = "ff")]
-    Ff,
-    /// Feedforward of the arm's and the target's own motion in the tracker, hand-over with
-    /// the target filter's velocity and that velocity fed forward in the servo law.
-    #[serde(rename = "ff+target")]
-    FfTarget,
-}
-
-impl LoopMethod {
-    /// All three.
-    pub const ALL: [LoopMethod; 3] = [Self::Ga, Self::Ff, Self::FfTarget];
-
-    /// The spelling of scenario files.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Ga => "ga",
-            Self::Ff => "ff",
-            Self::FfTarget => "ff+target",
-        }
-    }
-
-    fn feedforward(self) -> Feedforward {
-        match self {
-            Self::Ga => Feedforward::Off,
-            Self::Ff => Feedforward::On,
-            Self::FfTarget => Feedforward::OnWithTarget,
         }
     }
 }
@@ -139,7 +102,7 @@ pub struct Cell {
     /// The block's motion.
     pub target: TargetCase,
     /// Recognition method.
-    pub method: LoopMethod,
+    pub method: Method,
     /// Servo gain (1/s).
     pub gain: f64,
     /// Processing delay (frame periods).
@@ -162,7 +125,7 @@ impl Cell {
 pub fn cells(g: &GridSettings) -> Vec<Cell> {
     let mut out = Vec::new();
     for &target in &g.targets {
-        for method in LoopMethod::ALL {
+        for method in Method::ALL {
             for &gain in &g.gains {
                 for &delay_frames in &g.delays {
                     out.push(Cell { target, method, gain, delay_frames });
@@ -175,12 +138,7 @@ pub fn cells(g: &GridSettings) -> Vec<Cell> {
 
 /// The scenario and loop options of a cell.
 pub fn scenario_of(g: &GridSettings, cell: &Cell) -> (Scenario, LoopOptions) {
-    let method = match cell.method {
-        LoopMethod::Ga => Method::Ga,
-        LoopMethod::Ff => Method::Ff,
-        LoopMethod::FfTarget => Method::FfTarget,
-    };
-    let mut s = Scenario::new(g.seed, g.duration_s, method);
+    let mut s = Scenario::new(g.seed, g.duration_s, cell.method);
     let w = g.width;
     s.camera.width = w;
     s.camera.height = w / 4 * 3;
@@ -192,8 +150,8 @@ pub fn scenario_of(g: &GridSettings, cell: &Cell) -> (Scenario, LoopOptions) {
     let mut opts = LoopOptions {
         occlusion: None,
         conveyor: None,
-        feedforward: Some(cell.method.feedforward()),
-        target_velocity: cell.method == LoopMethod::FfTarget,
+        feedforward: Some(crate::experiment::feedforward(cell.method)),
+        target_velocity: cell.method == Method::FfTarget,
     };
     match cell.target {
         TargetCase::Conveyor { speed_m_s } => {
@@ -314,7 +272,7 @@ pub fn markdown(results: &[(Cell, ServoSummary)]) -> String {
         }
     }
     for t in &targets {
-        for m in LoopMethod::ALL {
+        for m in Method::ALL {
             let count =
                 |o: Outcome| results.iter().filter(|(c, s)| c.target == *t && c.method == m && s.outcome == o).count();
             let _ = writeln!(
@@ -366,7 +324,7 @@ pub fn stability_map(
         let title =
             format!("stability map, {} (green converged, yellow oscillating, red diverged, grey lost)", target.name());
         let body = root.titled(&title, (FONT, 20)).map_err(draw_err)?;
-        for (area, m) in body.split_evenly((1, 3)).iter().zip(LoopMethod::ALL) {
+        for (area, m) in body.split_evenly((1, 3)).iter().zip(Method::ALL) {
             let mut chart = ChartBuilder::on(area)
                 .caption(m.as_str(), (FONT, 18))
                 .margin(10)

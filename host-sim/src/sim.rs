@@ -63,7 +63,6 @@ pub struct World {
     render: RenderOptions,
     rng: Xoshiro256PlusPlus,
     hidden: bool,
-    target_offset: nalgebra::Vector3<f64>,
 }
 
 impl World {
@@ -88,7 +87,6 @@ impl World {
             render: RenderOptions::default().with_antialias(antialias).with_noise(scenario.camera.noise_std as f32),
             rng: Xoshiro256PlusPlus::seed_from_u64(scenario.seed ^ 0x5EED_0FF4_A3E5),
             hidden: false,
-            target_offset: nalgebra::Vector3::zeros(),
         })
     }
 
@@ -139,10 +137,15 @@ impl World {
         self.hidden = hidden;
     }
 
-    /// Shifts the block by `offset` (world, m) from its scripted pose (a conveyor driven by
-    /// the caller).
-    pub fn set_target_offset(&mut self, offset: nalgebra::Vector3<f64>) {
-        self.target_offset = offset;
+    /// Replaces the block's own path (e.g. a conveyor of a closed-loop experiment that the
+    /// scenario file does not describe).
+    pub fn set_target_path(&mut self, path: TargetPath) {
+        self.path = path;
+    }
+
+    /// The block's own path.
+    pub fn target_path(&self) -> &TargetPath {
+        &self.path
     }
 
     /// `^W T_CR`: the right camera's pose from the arm's forward kinematics.
@@ -156,13 +159,10 @@ impl World {
     }
 
     fn target_pose_at(&self, t: f64) -> Isometry3<f64> {
-        let mut pose = target_path::target_pose(&self.target, &self.path, t);
-        pose.translation.vector += self.target_offset;
-        pose
+        target_path::target_pose(&self.target, &self.path, t)
     }
 
-    /// The block's true twist in the world at the current time (scripted motion and path; the
-    /// caller's [`World::set_target_offset`] is not differentiated).
+    /// The block's true twist in the world at the current time (scripted motion and path).
     pub fn target_twist(&self) -> Twist {
         target_path::target_twist(&self.target, &self.path, self.arm.time())
     }

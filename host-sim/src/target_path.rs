@@ -52,12 +52,11 @@ pub enum TargetPath {
     Fixed,
     /// A conveyor along world `y` (see the module docs).
     Conveyor {
-        /// Speed of the straight runs (m/s).
-        speed_m_s: f64,
-        /// Length of the shuttle (m).
-        travel_m: f64,
-        /// Peak acceleration of the reversals (m/s²).
-        accel_m_s2: f64,
+        /// The shuttle.
+        conveyor: Conveyor,
+        /// The conveyor's own time at `t = 0` (s): 0 starts at rest at the −y end,
+        /// [`Conveyor::middle_time`] in the middle at full speed towards +y.
+        start_s: f64,
     },
     /// A seeded random smooth motion: each position axis and each rotation angle (about world
     /// `z`, then `y`, then `x`) is a sum of [`RANDOM_COMPONENTS`] sinusoids, zero at `t = 0`,
@@ -68,6 +67,68 @@ pub enum TargetPath {
         /// Angles about world z, y, x (rad).
         angles: [[Sinusoid; RANDOM_COMPONENTS]; 3],
     },
+}
+
+/// A conveyor along world `y` shuttling back and forth over `travel_m`: straight runs at
+/// `speed_m_s`, reversals with half-cosine velocity profiles of peak acceleration `accel_m_s2`
+/// (a real shuttle's finite deceleration at each end). Its own clock starts at rest at the
+/// `−y` end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Conveyor {
+    /// Speed of the straight runs (m/s).
+    pub speed_m_s: f64,
+    /// Length of the shuttle (m).
+    pub travel_m: f64,
+    /// Peak acceleration of the reversals (m/s²).
+    pub accel_m_s2: f64,
+}
+
+impl Conveyor {
+    /// `(t_r, d_r, straight, half)`: duration and distance of a whole reversal's half-cosine
+    /// (rest → speed takes `t_r/2` over `d_r`), length of the straight run, and the time from
+    /// one end to the other.
+    fn profile(&self) -> (f64, f64, f64, f64) {
+        use std::f64::consts::PI;
+        let (v, a) = (self.speed_m_s, self.accel_m_s2);
+        let t_r = PI * v / a;
+        let d_r = v * t_r / PI;
+        let straight = (self.travel_m - 2.0 * d_r).max(0.0);
+        (t_r, d_r, straight, t_r + straight / v)
+    }
+
+    /// Position (relative to the shuttle's middle) and velocity along `y` at the conveyor's
+    /// own time `t`.
+    pub fn state(&self, t: f64) -> (f64, f64) {
+        use std::f64::consts::PI;
+        let (t_r, d_r, straight, half) = self.profile();
+        let v = self.speed_m_s;
+        let u = t.rem_euclid(2.0 * half);
+        let (s, out) = if u < half { (u, true) } else { (u - half, false) };
+        let (y, vy) = if s < 0.5 * t_r {
+            (d_r * (1.0 - (PI * s / t_r).cos()), v * (PI * s / t_r).sin())
+        } else if s < 0.5 * t_r + straight / v {
+            (d_r + v * (s - 0.5 * t_r), v)
+        } else {
+            let s2 = s - 0.5 * t_r - straight / v;
+            (d_r + straight + d_r * (PI * s2 / t_r).sin(), v * (PI * s2 / t_r).cos())
+        };
+        // Out (0 → travel) and back (travel → 0), centred on the shuttle's middle.
+        if out { (y - 0.5 * self.travel_m, vy) } else { (0.5 * self.travel_m - y, -vy) }
+    }
+
+    /// The conveyor's time at which it first passes the middle of its travel (at full speed
+    /// towards +y when the travel has a straight run).
+    pub fn middle_time(&self) -> f64 {
+        0.5 * self.profile().3
+    }
+
+    /// Seconds the conveyor has run at constant speed at its own time `t` (0 while it
+    /// accelerates or reverses).
+    pub fn steady_for(&self, t: f64) -> f64 {
+        let (t_r, _, straight, half) = self.profile();
+        let s = t.rem_euclid(half) - 0.5 * t_r;
+        if s >= 0.0 && s < straight / self.speed_m_s { s } else { 0.0 }
+    }
 }
 
 /// The pose offset of a [`TargetPath`] at one time and its derivative.
@@ -100,11 +161,12 @@ impl TargetPath {
     pub fn from_scenario(s: &Scenario) -> Self {
         let t = &s.target;
         if t.conveyor_speed_m_s > 0.0 {
-            return Self::Conveyor {
+            let conveyor = Conveyor {
                 speed_m_s: t.conveyor_speed_m_s,
                 travel_m: t.conveyor_travel_m,
                 accel_m_s2: t.conveyor_accel_m_s2,
             };
+            return Self::Conveyor { conveyor, start_s: 0.0 };
         }
         if t.random_amplitude_m > 0.0 {
             return Self::random(
@@ -137,12 +199,21 @@ impl TargetPath {
         Self::Random { position, angles }
     }
 
+    /// Seconds the block has moved at constant velocity at `t` (only a conveyor's straight
+    /// runs count; 0 for every other path, which has none).
+    pub fn steady_for(&self, t: f64) -> f64 {
+        match *self {
+            Self::Conveyor { conveyor, start_s } => conveyor.steady_for(start_s + t),
+            Self::Fixed | Self::Random { .. } => 0.0,
+        }
+    }
+
     /// The offset at time `t` (s).
     pub fn offset(&self, t: f64) -> PathOffset {
         match *self {
             Self::Fixed => PathOffset::none(),
-            Self::Conveyor { speed_m_s, travel_m, accel_m_s2 } => {
-                let (y, vy) = conveyor(t, speed_m_s, travel_m, accel_m_s2);
+            Self::Conveyor { conveyor, start_s } => {
+                let (y, vy) = conveyor.state(start_s + t);
                 PathOffset {
                     position: Vector3::new(0.0, y, 0.0),
                     velocity: Vector3::new(0.0, vy, 0.0),
@@ -170,28 +241,6 @@ fn random_offset(
     let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), c);
     let w = Vector3::z() * ad + rz * (Vector3::y() * bd) + rz * ry * (Vector3::x() * cd);
     PathOffset { position: p, velocity: v, rotation: rz * ry * rx, angular_velocity: w }
-}
-
-/// Position (relative to the shuttle's middle) and velocity of the conveyor at `t`.
-fn conveyor(t: f64, v: f64, travel: f64, accel: f64) -> (f64, f64) {
-    use std::f64::consts::PI;
-    // A reversal's half (rest → speed or speed → rest) lasts t_r/2 over the distance d_r.
-    let t_r = PI * v / accel;
-    let d_r = v * t_r / PI;
-    let straight = (travel - 2.0 * d_r).max(0.0);
-    let half = t_r + straight / v;
-    let u = t.rem_euclid(2.0 * half);
-    let (s, out) = if u < half { (u, true) } else { (u - half, false) };
-    let (y, vy) = if s < 0.5 * t_r {
-        (d_r * (1.0 - (PI * s / t_r).cos()), v * (PI * s / t_r).sin())
-    } else if s < 0.5 * t_r + straight / v {
-        (d_r + v * (s - 0.5 * t_r), v)
-    } else {
-        let s2 = s - 0.5 * t_r - straight / v;
-        (d_r + straight + d_r * (PI * s2 / t_r).sin(), v * (PI * s2 / t_r).cos())
-    };
-    // Out (0 → travel) and back (travel → 0), centred on the shuttle's middle.
-    if out { (y - 0.5 * travel, vy) } else { (0.5 * travel - y, -vy) }
 }
 
 /// `^W T_M(t)` with the block's path: the paper's turning block displaced by the path's offset
@@ -237,14 +286,18 @@ mod tests {
     #[test]
     fn target_path_twists_are_derivatives() {
         check_path_twist(&TargetPath::Fixed);
-        check_path_twist(&TargetPath::Conveyor { speed_m_s: 0.2, travel_m: 0.2, accel_m_s2: 0.5 });
-        check_path_twist(&TargetPath::Conveyor { speed_m_s: 0.3, travel_m: 0.2, accel_m_s2: 0.9 });
+        let c = Conveyor { speed_m_s: 0.2, travel_m: 0.2, accel_m_s2: 0.5 };
+        check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: 0.0 });
+        check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: c.middle_time() });
+        let c = Conveyor { speed_m_s: 0.3, travel_m: 0.2, accel_m_s2: 0.9 };
+        check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: 0.0 });
         check_path_twist(&TargetPath::random(7, 0.05, 10f64.to_radians(), 1.0));
     }
 
     #[test]
     fn conveyor_shuttles_within_its_travel_at_its_speed() {
-        let path = TargetPath::Conveyor { speed_m_s: 0.2, travel_m: 0.2, accel_m_s2: 0.5 };
+        let conveyor = Conveyor { speed_m_s: 0.2, travel_m: 0.2, accel_m_s2: 0.5 };
+        let path = TargetPath::Conveyor { conveyor, start_s: 0.0 };
         let (mut lo, mut hi, mut vmax, mut amax): (f64, f64, f64, f64) = (0.0, 0.0, 0.0, 0.0);
         let dt = 1e-3;
         for k in 0..20_000 {
@@ -261,6 +314,25 @@ mod tests {
         assert!(amax <= 0.5 + 1e-3, "peak acceleration {amax}");
         let o = path.offset(0.0);
         assert!((o.position.y + 0.1).abs() < 1e-12 && o.velocity.y == 0.0, "starts at rest at one end");
+    }
+
+    #[test]
+    fn conveyor_started_in_the_middle_runs_steadily_until_its_reversal() {
+        // 1 m of travel at 0.2 m/s, reversing at 0.5 m/s²: 0.08 m to stop, 4.2 s of straight run.
+        let c = Conveyor { speed_m_s: 0.2, travel_m: 1.0, accel_m_s2: 0.5 };
+        let path = TargetPath::Conveyor { conveyor: c, start_s: c.middle_time() };
+        let o = path.offset(0.0);
+        assert!(o.position.y.abs() < 1e-12 && (o.velocity.y - 0.2).abs() < 1e-12, "{o:?}");
+        let straight_s = (1.0 - 2.0 * 0.08) / 0.2;
+        assert!((path.steady_for(0.0) - 0.5 * straight_s).abs() < 1e-9);
+        assert!((path.steady_for(1.0) - 0.5 * straight_s - 1.0).abs() < 1e-9);
+        // Reversing at the +y end: not steady, slower; steady again on the way back.
+        let end = 0.5 * straight_s + 0.5 * std::f64::consts::PI * 0.2 / 0.5;
+        assert_eq!(path.steady_for(end), 0.0);
+        assert!(path.offset(end).velocity.y.abs() < 1e-9 && (path.offset(end).position.y - 0.5).abs() < 1e-9);
+        let back = end + 0.5 * std::f64::consts::PI * 0.2 / 0.5 + 0.3;
+        assert!((path.steady_for(back) - 0.3).abs() < 1e-9 && (path.offset(back).velocity.y + 0.2).abs() < 1e-9);
+        assert_eq!(TargetPath::Fixed.steady_for(3.0), 0.0);
     }
 
     #[test]

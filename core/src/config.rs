@@ -18,7 +18,7 @@ pub const DEFAULT_POPULATION: usize = 40;
 pub const POPULATION_CAPACITY: usize = 40;
 
 /// Default number of sample points on each row of the surface-strips model.
-pub const DEFAULT_GRID: usize = 5;
+pub const DEFAULT_GRID: usize = 8;
 
 /// Distances (metres) inside a face's edge of the rows of inner sample points `S_in,k`
 /// that run along that edge. Graded: the nearest row makes the fitness sharp (a few

@@ -2,7 +2,7 @@
 //! counts the instructions of every phase of one GA generation with TIMER0 (see
 //! `evorec_firmware::timing`) and prints one `GEN` line per generation through semihosting.
 //!
-//! Runs, in order: the default configuration (population 40, 5 points per row) on
+//! Runs, in order: the default configuration (population 40, 8 points per row) on
 //! `timing::FULL_FRAMES` RGB565 frames of every kind (the hue of every sampled pixel is
 //! looked up in the core's `RGB565_HUE` table inside the measured window), then the sweep (populations 20/40/60 × rows of
 //! 4/8/12 points, and population 40 with rows of 5, 6 and 7, `Tracker<7, P, G>` monomorphised for each) on `timing::SWEEP_FRAMES` frames
@@ -210,10 +210,10 @@ mod firmware {
 
         // The "full" run is the core's default configuration; fail to build if it moves.
         const {
-            assert!(evorec_core::config::DEFAULT_POPULATION == 40 && evorec_core::config::DEFAULT_GRID == 5);
+            assert!(evorec_core::config::DEFAULT_POPULATION == 40 && evorec_core::config::DEFAULT_GRID == 8);
         };
         let Some(slot) = SLOT.try_take() else { rt::exit(false) };
-        let ok = run_config::<P40G5, 40, 5>("full", slot, FULL_FRAMES, &timer, left, right)
+        let ok = run_config::<P40G8, 40, 8>("full", slot, FULL_FRAMES, &timer, left, right)
             && run_config::<P20G4, 20, 4>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
             && run_config::<P20G8, 20, 8>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
             && run_config::<P20G12, 20, 12>("sweep", slot, SWEEP_FRAMES, &timer, left, right)

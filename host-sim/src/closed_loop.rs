@@ -9,9 +9,11 @@
 //!    target filter's velocity) —, the core's [`Servo`] turns it into a camera twist, and the
 //!    twist is integrated into the flange setpoint that the arm's resolved-rate controller
 //!    follows (joint velocity limits, joint-limit avoidance);
-//! 2. the frame pair is rendered (or the block hidden during an occlusion) and the tracker
-//!    runs one generation on it; the estimate (with the tracker's status) updates the target
-//!    filter and is queued until it reaches the servo.
+//! 2. the frame pair is rendered as the cameras' RGB565 pixels (or the block hidden during an
+//!    occlusion) and the tracker runs one generation on it — the host's ([`run`]) or the
+//!    firmware's under QEMU (`crate::hil::run_closed_loop`, `evorec hil`), both through the
+//!    same [`ServoBoard`]; the estimate (with the tracker's status) updates the board's copy
+//!    of the target filter and is queued until it reaches the servo.
 //!
 //! The servo moves only on estimates whose status is [`Status::Tracking`] (the tracker's own
 //! decision, with its confirmation generations: see `evorec_core::status`); otherwise it
@@ -20,24 +22,25 @@
 use std::collections::VecDeque;
 
 use anyhow::{Result, anyhow};
+use evorec_core::board::{CameraController, ErrorType, FrameInfo};
 use evorec_core::feedforward::{self, CameraTwist};
-use evorec_core::hue::HueImage;
+use evorec_core::image::Rgb565;
 use evorec_core::kinematics::PA10;
 use evorec_core::pose::Psi;
 use evorec_core::servo::{PoseError, Servo, ServoConfig, ServoInput, ServoLimits};
 use evorec_core::status::Status;
 use evorec_core::target_motion::{self, TargetFilter};
-use evorec_core::tracker::{Feedforward, JointSample, StereoFrame};
+use evorec_core::tracker::{Estimate, Feedforward, JointSample};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
 use crate::arm::{ArmSim, CONTROL_PERIOD_S, DOF};
-use crate::experiment::{self, INITIAL_SPREAD, RunOutput, SimTracker, Summary};
+use crate::experiment::{self, INITIAL_SPREAD, ProgressBoard, RunOutput, SimTracker, Summary};
 use crate::motion::Twist;
 use crate::motion::flange_to_camera_f64;
 use crate::render;
 use crate::scenario::{Scenario, ServoSection};
-use crate::sim::{TraceRow, World, frame_total};
+use crate::sim::{SimError, TraceRow, World, frame_total};
 use crate::target_path::{Conveyor, TargetPath};
 
 /// A frame counts towards the steady state only after the conveyor ran at constant speed for
@@ -372,85 +375,197 @@ pub struct ClosedLoopSummary<'a> {
     pub servo: &'a ServoSummary,
 }
 
-/// Runs a scenario with `[servo]` in closed loop (see the module documentation). `on_frame`
-/// is called after every frame.
+/// Runs a scenario with `[servo]` in closed loop with the host's tracker (see the module
+/// documentation). `on_frame` is called after every frame.
 ///
 /// # Errors
 /// No `[servo]` section, or the world, tracker or servo cannot be built.
-pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Result<ClosedLoopOutput> {
-    let sec = s.servo.ok_or_else(|| anyhow!("the scenario has no [servo] section"))?;
-    let mut world = World::new(s)?;
-    let truth0 = world.truth();
-    let config = servo_config(&sec, &world.target_in_camera());
-    let desired = config.desired;
-    let servo = Servo::new(config).map_err(|e| anyhow!("servo: {e}"))?;
+pub fn run(s: &Scenario, opts: &LoopOptions, on_frame: impl FnMut()) -> Result<ClosedLoopOutput> {
+    let mut board = ServoBoard::new(s, opts)?;
+    let (_, rejected) = run_host_tracker(s, &mut board, on_frame)?;
+    Ok(board.finish(rejected))
+}
+
+/// Drives `board` to its end with the host's tracker (the core's `board::run`); returns the
+/// tracker and the frames it refused.
+fn run_host_tracker(s: &Scenario, board: &mut ServoBoard, mut on_frame: impl FnMut()) -> Result<(SimTracker, u32)> {
     let mut tracker = SimTracker::new(experiment::tracker_config(s)?).map_err(|e| anyhow!("tracker: {e}"))?;
-    tracker.reset_around(&truth0, &INITIAL_SPREAD).map_err(|e| anyhow!("initial pose: {e}"))?;
-    let mount = crate::sim::flange_to_camera(s);
-    let mut ctl = Controller {
-        servo,
-        mount,
-        mount64: flange_to_camera_f64(s.camera.baseline_m),
-        setpoint: None,
-        pending: VecDeque::new(),
-        latest: None,
-        tracking: false,
-        target_velocity: opts.target_velocity,
-        speed: 0.0,
-        rot_speed: 0.0,
-    };
-    let ff = opts.feedforward.unwrap_or_else(|| experiment::feedforward(s.method));
-    let (w, h) = (s.camera.width, s.camera.height);
-    let n = usize::from(w) * usize::from(h);
+    tracker.reset_around(&board.start_pose(), &INITIAL_SPREAD).map_err(|e| anyhow!("initial pose: {e}"))?;
+    let ff = board.feedforward();
+    let n = crate::sim::image_bytes(s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
-    let frames = frame_total(s);
-    let (mut rows, mut servo_rows) = (Vec::with_capacity(frames as usize), Vec::with_capacity(frames as usize));
-    let (mut rejected, mut last_us) = (0u32, None::<u64>);
-    let delay = f64::from(sec.delay_frames) * s.frame_period_s;
-    if let Some(conveyor) = opts.conveyor {
-        world.set_target_path(TargetPath::Conveyor { conveyor, start_s: conveyor.middle_time() });
+    let mut progress = ProgressBoard { inner: board, on_frame: &mut on_frame };
+    let stats = evorec_core::board::run(&mut progress, &mut tracker, ff, &mut left, &mut right, u32::MAX)
+        .map_err(|e| anyhow!("closed loop: {e:?}"))?;
+    Ok((tracker, stats.rejected))
+}
+
+/// What the board keeps of the frame it delivered last, until its estimate is published.
+#[derive(Debug, Clone, Copy)]
+struct Capture {
+    t: f64,
+    joints: JointSample<DOF>,
+    occluded: bool,
+    steady: bool,
+}
+
+/// The closed loop as the camera-controller board a tracker sees ([`CameraController`]): the
+/// same board for the host's tracker ([`run`], through the core's `board::run`) and for the
+/// firmware's on QEMU (`crate::hil::run_closed_loop`, over the link), so both close the loop
+/// with the same code.
+///
+/// [`CameraController::next_frame`] runs the 1 kHz servo loop up to the frame's capture time
+/// and renders the frame pair as the cameras' RGB565 pixels (the bytes the firmware receives
+/// too); [`CameraController::publish`] queues the frame's estimate until it reaches the servo
+/// and records the frame's rows. The "ff+target" hand-over predicts with the board's own copy of
+/// the core's [`TargetFilter`], fed exactly as the tracker feeds its own (the same code on the
+/// same numbers, only with [`Feedforward::OnWithTarget`]), because the firmware publishes the
+/// estimate only.
+pub struct ServoBoard {
+    world: World,
+    ctl: Controller,
+    filter: TargetFilter,
+    feedforward: Feedforward,
+    opts: LoopOptions,
+    desired: Isometry3<f32>,
+    start: Psi,
+    delay_s: f64,
+    frames: u32,
+    next: u32,
+    current: Option<Capture>,
+    rows: Vec<TraceRow>,
+    servo_rows: Vec<ServoRow>,
+}
+
+impl ServoBoard {
+    /// The closed loop of `s` (which needs a `[servo]` section) with `opts`, at `t = 0`.
+    ///
+    /// # Errors
+    /// No `[servo]` section, or the world or servo cannot be built.
+    pub fn new(s: &Scenario, opts: &LoopOptions) -> Result<Self> {
+        let sec = s.servo.ok_or_else(|| anyhow!("the scenario has no [servo] section"))?;
+        let mut world = World::new(s)?;
+        let start = world.truth();
+        let config = servo_config(&sec, &world.target_in_camera());
+        let desired = config.desired;
+        let servo = Servo::new(config).map_err(|e| anyhow!("servo: {e}"))?;
+        let ctl = Controller {
+            servo,
+            mount: crate::sim::flange_to_camera(s),
+            mount64: flange_to_camera_f64(s.camera.baseline_m),
+            setpoint: None,
+            pending: VecDeque::new(),
+            latest: None,
+            tracking: false,
+            target_velocity: opts.target_velocity,
+            speed: 0.0,
+            rot_speed: 0.0,
+        };
+        if let Some(conveyor) = opts.conveyor {
+            world.set_target_path(TargetPath::Conveyor { conveyor, start_s: conveyor.middle_time() });
+        }
+        let frames = frame_total(s);
+        Ok(Self {
+            world,
+            ctl,
+            filter: TargetFilter::with_defaults(),
+            feedforward: opts.feedforward.unwrap_or_else(|| experiment::feedforward(s.method)),
+            opts: *opts,
+            desired,
+            start,
+            delay_s: f64::from(sec.delay_frames) * s.frame_period_s,
+            frames,
+            next: 0,
+            current: None,
+            rows: Vec::with_capacity(frames as usize),
+            servo_rows: Vec::with_capacity(frames as usize),
+        })
     }
-    for k in 0..frames {
-        let t = f64::from(k) * s.frame_period_s;
-        world.advance_with(t, |arm| ctl.control(arm));
-        let steady = opts.conveyor.is_none() || world.target_path().steady_for(t) >= STEADY_AFTER_REVERSAL_S;
-        let occluded = opts.occlusion.is_some_and(|(a, d)| t >= a && t < a + d);
-        world.set_target_hidden(occluded);
-        let images = world.render();
-        render::hue_into(&images.left, &mut left);
-        render::hue_into(&images.right, &mut right);
-        let joints = world.arm().joint_sample();
-        let frame = StereoFrame {
-            left: HueImage::new_checked(&left[..], w, h).map_err(|e| anyhow!("left image: {e:?}"))?,
-            right: HueImage::new_checked(&right[..], w, h).map_err(|e| anyhow!("right image: {e:?}"))?,
-        };
-        let dt = last_us.map_or(0.0, |t0| joints.time_us.saturating_sub(t0) as f32 * 1e-6);
-        let est = match tracker.step(&frame, &joints, dt, ff) {
-            Ok(e) => e,
-            Err(e) => {
-                log::warn!("frame {k} refused: {e}");
-                rejected += 1;
-                continue;
-            }
-        };
-        last_us = Some(joints.time_us);
+
+    /// The true pose at `t = 0`, around which the tracker's population starts.
+    pub fn start_pose(&self) -> Psi {
+        self.start
+    }
+
+    /// The tracker's feedforward in this loop.
+    pub fn feedforward(&self) -> Feedforward {
+        self.feedforward
+    }
+
+    /// The board's copy of the target filter.
+    pub fn target_filter(&self) -> &TargetFilter {
+        &self.filter
+    }
+
+    /// The run's output; `rejected` frames were refused by the tracker.
+    pub fn finish(self, rejected: u32) -> ClosedLoopOutput {
+        let s = self.world.scenario();
+        let summary = Summary::of(&self.rows, rejected, s);
+        let servo_summary = ServoSummary::of(&self.servo_rows, s.duration_s);
+        ClosedLoopOutput { run: RunOutput { rows: self.rows, summary }, servo: self.servo_rows, servo_summary }
+    }
+}
+
+impl ErrorType for ServoBoard {
+    type Error = SimError;
+}
+
+impl CameraController<DOF> for ServoBoard {
+    type Format = Rgb565;
+
+    fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SimError> {
+        if self.next >= self.frames {
+            return Err(SimError::EndOfStream);
+        }
+        let s = self.world.scenario();
+        let (w, h) = (s.camera.width, s.camera.height);
+        let n = usize::from(w) * usize::from(h) * 2;
+        if left.len() < n || right.len() < n {
+            return Err(SimError::BufferTooSmall);
+        }
+        let t = f64::from(self.next) * s.frame_period_s;
+        let ctl = &mut self.ctl;
+        self.world.advance_with(t, |arm| ctl.control(arm));
+        let steady = self.opts.conveyor.is_none() || self.world.target_path().steady_for(t) >= STEADY_AFTER_REVERSAL_S;
+        let occluded = self.opts.occlusion.is_some_and(|(a, d)| t >= a && t < a + d);
+        self.world.set_target_hidden(occluded);
+        let images = self.world.render();
+        render::rgb565_into(&images.left, left);
+        render::rgb565_into(&images.right, right);
+        let joints = self.world.arm().joint_sample();
+        self.current = Some(Capture { t, joints, occluded, steady });
+        let info = FrameInfo { sequence: self.next, capture_time_us: (t * 1e6).round() as u64, width: w, height: h };
+        self.next += 1;
+        Ok(info)
+    }
+
+    fn joint_sample(&mut self) -> Result<JointSample<DOF>, SimError> {
+        Ok(self.world.arm().joint_sample())
+    }
+
+    fn publish(&mut self, _frame: &FrameInfo, est: &Estimate) -> Result<(), SimError> {
+        let Some(Capture { t, joints, occluded, steady }) = self.current.take() else { return Ok(()) };
+        if self.feedforward == Feedforward::OnWithTarget {
+            let world = target_motion::world_pose(&PA10, &joints.q, &self.ctl.mount, &est.psi);
+            self.filter.update_with_status(&world, joints.time_us, est.fitness, est.status);
+        }
         let tracking = est.status == Status::Tracking;
-        let filter = *tracker.target_filter();
-        ctl.pending.push_back((t + delay, Released { psi: est.psi, q: joints.q, filter, tracking }));
-        let truth = world.truth();
-        let true_rel: Isometry3<f32> = world.target_in_camera().cast();
-        servo_rows.push(ServoRow {
+        let released = Released { psi: est.psi, q: joints.q, filter: self.filter, tracking };
+        self.ctl.pending.push_back((t + self.delay_s, released));
+        let truth = self.world.truth();
+        let true_rel: Isometry3<f32> = self.world.target_in_camera().cast();
+        self.servo_rows.push(ServoRow {
             t,
-            command: *ctl.servo.command(),
-            error: PoseError::between(&true_rel, &desired),
-            tracking: ctl.tracking,
+            command: *self.ctl.servo.command(),
+            error: PoseError::between(&true_rel, &self.desired),
+            tracking: self.ctl.tracking,
             occluded,
-            camera_speed_m_s: std::mem::take(&mut ctl.speed),
-            camera_rot_speed_rad_s: std::mem::take(&mut ctl.rot_speed),
+            camera_speed_m_s: std::mem::take(&mut self.ctl.speed),
+            camera_rot_speed_rad_s: std::mem::take(&mut self.ctl.rot_speed),
             tracker_error_m: norm(&(est.psi.translation() - truth.translation())),
             steady,
         });
-        rows.push(TraceRow {
+        self.rows.push(TraceRow {
             t,
             q: joints.q,
             qd: joints.qd,
@@ -461,11 +576,90 @@ pub fn run(s: &Scenario, opts: &LoopOptions, mut on_frame: impl FnMut()) -> Resu
             hidden: occluded,
             handover: None,
         });
-        on_frame();
+        Ok(())
     }
-    let summary = Summary::of(&rows, rejected, s);
-    let servo_summary = ServoSummary::of(&servo_rows, s.duration_s);
-    Ok(ClosedLoopOutput { run: RunOutput { rows, summary }, servo: servo_rows, servo_summary })
+}
+
+/// How two closed-loop runs of one scenario compare, frame by frame (`evorec hil` on a
+/// `[servo]` scenario against the host's run). Frames are paired in order; a pair is the same
+/// frame when both capture times are equal.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Comparison {
+    /// Frames with an estimate in each run.
+    pub frames: [usize; 2],
+    /// Paired frames whose estimate `ψ`, fitness and status are bit-identical.
+    pub identical_estimates: usize,
+    /// Paired frames whose joint state `q, q̇` at capture and servo command are bit-identical
+    /// (the arm moved the same way).
+    pub identical_trajectory: usize,
+    /// Capture time of the first frame that differs in either respect (s).
+    pub first_difference_s: Option<f64>,
+    /// Largest difference of the estimates' translations over the paired frames (m).
+    pub max_estimate_diff_m: f64,
+    /// Largest difference of a joint angle over the paired frames (rad).
+    pub max_joint_diff_rad: f64,
+}
+
+impl Comparison {
+    /// Whether the runs are bit-identical: as many frames, every estimate and the whole
+    /// trajectory.
+    pub fn identical(&self) -> bool {
+        let [a, b] = self.frames;
+        a == b && self.identical_estimates == a && self.identical_trajectory == a
+    }
+
+    /// One line for the terminal.
+    pub fn describe(&self) -> String {
+        let [a, b] = self.frames;
+        let verdict = if self.identical() { "bit-identical" } else { "DIFFERENT" };
+        let first = self.first_difference_s.map_or(String::new(), |t| format!(", first difference at t = {t:.3} s"));
+        format!(
+            "firmware against host closed loop: {verdict} ({a} / {b} frames; estimates identical in {}, arm trajectory \
+             and command in {}{first}; largest estimate difference {:.3} mm, joint difference {:.2e} rad)",
+            self.identical_estimates,
+            self.identical_trajectory,
+            self.max_estimate_diff_m * 1e3,
+            self.max_joint_diff_rad
+        )
+    }
+}
+
+/// Compares run `a` with run `b` (see [`Comparison`]).
+pub fn compare(a: &ClosedLoopOutput, b: &ClosedLoopOutput) -> Comparison {
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let mut c = Comparison {
+        frames: [a.run.rows.len(), b.run.rows.len()],
+        identical_estimates: 0,
+        identical_trajectory: 0,
+        first_difference_s: None,
+        max_estimate_diff_m: 0.0,
+        max_joint_diff_rad: 0.0,
+    };
+    let pairs = a.run.rows.iter().zip(&a.servo).zip(b.run.rows.iter().zip(&b.servo));
+    for ((ra, sa), (rb, sb)) in pairs {
+        let same_frame = ra.t.to_bits() == rb.t.to_bits();
+        let estimate = same_frame
+            && bits(&ra.estimate.0) == bits(&rb.estimate.0)
+            && ra.fitness.to_bits() == rb.fitness.to_bits()
+            && ra.status == rb.status;
+        let command = |s: &ServoRow| bits(&[s.command.v.as_slice(), s.command.w.as_slice()].concat());
+        let trajectory =
+            same_frame && bits(&ra.q) == bits(&rb.q) && bits(&ra.qd) == bits(&rb.qd) && command(sa) == command(sb);
+        c.identical_estimates += usize::from(estimate);
+        c.identical_trajectory += usize::from(trajectory);
+        if !(estimate && trajectory) && c.first_difference_s.is_none() {
+            c.first_difference_s = Some(ra.t.min(rb.t));
+        }
+        c.max_estimate_diff_m =
+            c.max_estimate_diff_m.max(norm(&(ra.estimate.translation() - rb.estimate.translation())));
+        let dq = ra.q.iter().zip(&rb.q).map(|(x, y)| f64::from((x - y).abs())).fold(0.0, f64::max);
+        c.max_joint_diff_rad = c.max_joint_diff_rad.max(dq);
+    }
+    let shorter = a.run.rows.len().min(b.run.rows.len());
+    if c.first_difference_s.is_none() {
+        c.first_difference_s = a.run.rows.get(shorter).or_else(|| b.run.rows.get(shorter)).map(|r| r.t);
+    }
+    c
 }
 
 /// Writes `trace.csv` (with the servo columns), `summary.json` (with the servo summary) and
@@ -515,6 +709,34 @@ mod tests {
         assert!((first - 0.1).abs() < 1e-3, "starts 0.1 m from the desired pose: {first}");
         let limit = ServoSection::new([0.0; 3]).max_speed_m_s;
         assert!(sum.max_camera_speed_m_s <= limit * 1.02, "{sum:?}");
+    }
+
+    #[test]
+    fn the_boards_target_filter_is_the_trackers() {
+        let mut s = scenario(2.0);
+        s.method = Method::FfTarget;
+        let mut board = ServoBoard::new(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
+        let (tracker, rejected) = run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(rejected, 0);
+        assert!(tracker.target_filter().has_track() && tracker.target_filter().is_trusted());
+        assert_eq!(board.target_filter(), tracker.target_filter());
+    }
+
+    #[test]
+    fn compare_finds_the_first_changed_estimate() {
+        let s = scenario(1.0);
+        let a = run(&s, &LoopOptions::for_scenario(&s), || {}).unwrap_or_else(|e| unreachable!("{e}"));
+        let n = a.run.rows.len();
+        assert!(compare(&a, &a).identical());
+        let mut b = a.clone();
+        b.run.rows[10].estimate.0[2] = f32::from_bits(b.run.rows[10].estimate.0[2].to_bits() ^ 1);
+        b.servo[20].command.v.x += 1e-3;
+        let c = compare(&a, &b);
+        assert!(!c.identical());
+        assert_eq!((c.identical_estimates, c.identical_trajectory), (n - 1, n - 1));
+        assert_eq!(c.first_difference_s, Some(a.run.rows[10].t));
+        b.run.rows.pop();
+        assert_eq!(compare(&a, &b).frames, [n, n - 1]);
     }
 
     #[test]

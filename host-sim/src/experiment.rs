@@ -315,29 +315,31 @@ pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -
     Ok(RunOutput { rows, summary })
 }
 
-/// Wraps the board to report each delivered frame.
-struct ProgressBoard<'a, F: FnMut()> {
-    inner: SimBoard,
-    on_frame: &'a mut F,
+/// Wraps a board to report each delivered frame.
+pub(crate) struct ProgressBoard<'a, B, F: FnMut()> {
+    /// The board.
+    pub(crate) inner: B,
+    /// Called after every delivered frame.
+    pub(crate) on_frame: &'a mut F,
 }
 
-impl<F: FnMut()> board::ErrorType for ProgressBoard<'_, F> {
-    type Error = sim::SimError;
+impl<B: board::ErrorType, F: FnMut()> board::ErrorType for ProgressBoard<'_, B, F> {
+    type Error = B::Error;
 }
 
-impl<F: FnMut()> board::CameraController<PA10_DOF> for ProgressBoard<'_, F> {
-    type Format = <sim::SimBoard as board::CameraController<PA10_DOF>>::Format;
-    fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<board::FrameInfo, sim::SimError> {
+impl<B: board::CameraController<PA10_DOF>, F: FnMut()> board::CameraController<PA10_DOF> for ProgressBoard<'_, B, F> {
+    type Format = B::Format;
+    fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<board::FrameInfo, B::Error> {
         let r = self.inner.next_frame(left, right);
         if r.is_ok() {
             (self.on_frame)();
         }
         r
     }
-    fn joint_sample(&mut self) -> Result<evorec_core::JointSample<PA10_DOF>, sim::SimError> {
+    fn joint_sample(&mut self) -> Result<evorec_core::JointSample<PA10_DOF>, B::Error> {
         self.inner.joint_sample()
     }
-    fn publish(&mut self, frame: &board::FrameInfo, estimate: &evorec_core::Estimate) -> Result<(), sim::SimError> {
+    fn publish(&mut self, frame: &board::FrameInfo, estimate: &evorec_core::Estimate) -> Result<(), B::Error> {
         self.inner.publish(frame, estimate)
     }
 }

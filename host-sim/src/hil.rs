@@ -12,11 +12,14 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use evorec_core::board::{CameraController, Error as _, ErrorKind};
+use evorec_core::pose::Psi;
+use evorec_core::tracker::Feedforward;
 use evorec_firmware::faults::FaultConfig;
 use evorec_firmware::host::{HilOptions, HilSession, Reply};
-use evorec_firmware::protocol::{Frame, Setup};
+use evorec_firmware::protocol::{DOF, Frame, LinkFormat, Setup};
 use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, IMAGE_BYTES};
 
+use crate::closed_loop::{ClosedLoopOutput, LoopOptions, ServoBoard};
 use crate::experiment::{self, INITIAL_SPREAD, RunOutput, Summary};
 use crate::scenario::Scenario;
 use crate::sim::{SimBoard, World};
@@ -107,13 +110,17 @@ pub fn run_with_faults(
     faults: Option<FaultConfig>,
     on_frame: impl FnMut(),
 ) -> Result<(RunOutput, LinkReport)> {
-    // Both directions, each with its own random stream.
-    let options = HilOptions {
+    run_with_options(s, firmware, workdir, &options_with_faults(faults), on_frame)
+}
+
+/// The session options of `evorec hil --faults`: `faults` (`None`: a clean link) into both
+/// directions, each with its own random stream.
+pub fn options_with_faults(faults: Option<FaultConfig>) -> HilOptions {
+    HilOptions {
         faults_to_firmware: faults,
         faults_to_host: faults.map(|c| FaultConfig { seed: c.seed.wrapping_add(1), ..c }),
         ..Default::default()
-    };
-    run_with_options(s, firmware, workdir, &options, on_frame)
+    }
 }
 
 /// [`run`] with the session's `options` (fault injection per direction, timeouts); also
@@ -127,8 +134,51 @@ pub fn run_with_options(
     firmware: &Path,
     workdir: &Path,
     options: &HilOptions,
-    mut on_frame: impl FnMut(),
+    on_frame: impl FnMut(),
 ) -> Result<(RunOutput, LinkReport)> {
+    let world = World::new(s)?;
+    let truth0 = world.truth();
+    let mut session = start_session(s, &truth0, experiment::feedforward(s.method), firmware, workdir, options)?;
+    let mut board = SimBoard::new(world);
+    let rejected = drive(&mut session, &mut board, on_frame)?;
+    let link = finish(session)?;
+    let rows = board.into_rows();
+    let summary = Summary::of(&rows, rejected, s);
+    Ok((RunOutput { rows, summary }, link))
+}
+
+/// The closed loop of a scenario with `[servo]` (`evorec hil` on such a scenario) with the
+/// tracker in the firmware: the same [`ServoBoard`] as [`crate::closed_loop::run`], but each frame
+/// goes over the link and the servo acts on the firmware's estimate of it, so the arm's motion
+/// depends on what the firmware computed. Host and firmware being bit-identical, the output
+/// equals [`crate::closed_loop::run`]'s on a clean link ([`crate::closed_loop::compare`]).
+///
+/// # Errors
+/// As [`run`], and no `[servo]` section.
+pub fn run_closed_loop(
+    s: &Scenario,
+    opts: &LoopOptions,
+    firmware: &Path,
+    workdir: &Path,
+    options: &HilOptions,
+    on_frame: impl FnMut(),
+) -> Result<(ClosedLoopOutput, LinkReport)> {
+    let mut board = ServoBoard::new(s, opts)?;
+    let mut session = start_session(s, &board.start_pose(), board.feedforward(), firmware, workdir, options)?;
+    let rejected = drive(&mut session, &mut board, on_frame)?;
+    let link = finish(session)?;
+    Ok((board.finish(rejected), link))
+}
+
+/// Starts the firmware on QEMU with the tracker of `s`, its population around `start`.
+fn start_session(
+    s: &Scenario,
+    start: &Psi,
+    feedforward: Feedforward,
+    firmware: &Path,
+    workdir: &Path,
+    options: &HilOptions,
+) -> Result<HilSession> {
     if (s.camera.width, s.camera.height) != (FRAME_WIDTH, FRAME_HEIGHT) {
         bail!(
             "the firmware takes {FRAME_WIDTH}x{FRAME_HEIGHT} frames but this scenario renders {}x{}; \
@@ -137,13 +187,18 @@ pub fn run_with_options(
             s.camera.height
         );
     }
-    let world = World::new(s)?;
-    let truth0 = world.truth();
     let config = experiment::tracker_config(s)?;
-    let setup = Setup::from_tracker_config(&config, experiment::feedforward(s.method), &truth0, &INITIAL_SPREAD)
+    let setup = Setup::from_tracker_config(&config, feedforward, start, &INITIAL_SPREAD)
         .map_err(|e| anyhow::anyhow!("firmware setup: {e:?}"))?;
-    let mut session = HilSession::start_with(firmware, workdir, &setup, options).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let mut board = SimBoard::new(world);
+    HilSession::start_with(firmware, workdir, &setup, options).map_err(|e| anyhow::anyhow!("{e}"))
+}
+
+/// Streams every frame of `board` with its joint sample to the firmware and publishes the
+/// firmware's estimates on the board, in lock-step; returns the frames without an estimate.
+fn drive<B>(session: &mut HilSession, board: &mut B, mut on_frame: impl FnMut()) -> Result<u32>
+where
+    B: CameraController<DOF, Format = LinkFormat>,
+{
     let (mut left, mut right) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
     let mut rejected = 0u32;
     loop {
@@ -162,16 +217,18 @@ pub fn run_with_options(
         }
         on_frame();
     }
+    Ok(rejected)
+}
+
+/// Ends the session (`END` → `DONE`) and reports what the link did.
+fn finish(session: HilSession) -> Result<LinkReport> {
     let done = session.finish().map_err(|e| anyhow::anyhow!("{e}")).context("finishing the firmware run")?;
     log::info!("firmware: {:?}, log in {}", done.done, done.log_path.display());
-    let link = LinkReport {
+    Ok(LinkReport {
         done: done.done,
         host_drops: done.host_drops,
         lost: done.lost,
         faults_sent: done.faults_sent,
         faults_received: done.faults_received,
-    };
-    let rows = board.into_rows();
-    let summary = Summary::of(&rows, rejected, s);
-    Ok((RunOutput { rows, summary }, link))
+    })
 }

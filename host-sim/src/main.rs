@@ -370,6 +370,47 @@ fn report_servo(s: &closed_loop::ServoSummary) {
     );
 }
 
+/// With fault injection: prints what the link did and writes `link.json`.
+fn report_link(link: &hil::LinkReport, out: &Path, faults: bool) -> Result<()> {
+    if faults {
+        println!("{}", link.describe());
+        std::fs::write(out.join("link.json"), link.to_json())
+            .with_context(|| format!("write {}", out.join("link.json").display()))?;
+    }
+    Ok(())
+}
+
+/// `evorec hil` on a scenario with `[servo]`: the closed loop on the firmware's estimates
+/// (its trace and summary as `evorec run` writes them), then the host's run of the same loop,
+/// compared frame by frame (`comparison.json`). On a clean link a difference is an error.
+fn hil_servo(
+    s: &Scenario,
+    scenario: &Path,
+    out: &Path,
+    firmware: &Path,
+    faults: Option<evorec_firmware::faults::FaultConfig>,
+    t0: Instant,
+) -> Result<()> {
+    let opts = closed_loop::LoopOptions::for_scenario(s);
+    let options = hil::options_with_faults(faults);
+    let (output, link) = hil::run_closed_loop(s, &opts, firmware, &out.join("qemu"), &options, || {})?;
+    report_link(&link, out, faults.is_some())?;
+    let title = format!("{} ({}, closed loop, firmware on QEMU)", scenario.display(), s.method.as_str());
+    closed_loop::write_outputs(&output, out, &title)?;
+    report(&output.run.summary.accuracy, t0);
+    report_servo(&output.servo_summary);
+    let t1 = Instant::now();
+    let host = closed_loop::run(s, &opts, || {})?;
+    let comparison = closed_loop::compare(&output, &host);
+    println!("{} (host run {:.1} s)", comparison.describe(), t1.elapsed().as_secs_f64());
+    io::write_json(&out.join("comparison.json"), &comparison)?;
+    println!("wrote {}", out.display());
+    if faults.is_none() && !comparison.identical() {
+        anyhow::bail!("the firmware's closed loop differs from the host's on a clean link (see comparison.json)");
+    }
+    Ok(())
+}
+
 fn execute(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Run { scenario, out, method } => {
@@ -427,12 +468,11 @@ fn execute(cli: Cli) -> Result<()> {
                 Some(r) => Some(evorec_firmware::faults::FaultConfig::from_rate(r, fault_seed)),
                 None => None,
             };
-            let (output, link) = hil::run_with_faults(&s, &firmware, &out.join("qemu"), faults, || {})?;
-            if faults.is_some() {
-                println!("{}", link.describe());
-                std::fs::write(out.join("link.json"), link.to_json())
-                    .with_context(|| format!("write {}", out.join("link.json").display()))?;
+            if s.servo.is_some() {
+                return hil_servo(&s, &scenario, &out, &firmware, faults, t0);
             }
+            let (output, link) = hil::run_with_faults(&s, &firmware, &out.join("qemu"), faults, || {})?;
+            report_link(&link, &out, faults.is_some())?;
             let title = format!("{} ({}, firmware on QEMU)", scenario.display(), s.method.as_str());
             experiment::write_outputs(&output, &out, &title)?;
             report(&output.summary.accuracy, t0);

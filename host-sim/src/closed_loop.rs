@@ -43,6 +43,9 @@ use crate::scenario::{Scenario, ServoSection};
 use crate::sim::{SimError, TraceRow, World, frame_total};
 use crate::target_path::{Conveyor, TargetPath};
 
+mod compare;
+pub use compare::{Comparison, compare};
+
 /// A frame counts towards the steady state only after the conveyor ran at constant speed for
 /// this long (s).
 pub const STEADY_AFTER_REVERSAL_S: f64 = 1.0;
@@ -580,88 +583,6 @@ impl CameraController<DOF> for ServoBoard {
     }
 }
 
-/// How two closed-loop runs of one scenario compare, frame by frame (`evorec hil` on a
-/// `[servo]` scenario against the host's run). Frames are paired in order; a pair is the same
-/// frame when both capture times are equal.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Comparison {
-    /// Frames with an estimate in each run.
-    pub frames: [usize; 2],
-    /// Paired frames whose estimate `ψ`, fitness and status are bit-identical.
-    pub identical_estimates: usize,
-    /// Paired frames whose joint state `q, q̇` at capture and servo command are bit-identical
-    /// (the arm moved the same way).
-    pub identical_trajectory: usize,
-    /// Capture time of the first frame that differs in either respect (s).
-    pub first_difference_s: Option<f64>,
-    /// Largest difference of the estimates' translations over the paired frames (m).
-    pub max_estimate_diff_m: f64,
-    /// Largest difference of a joint angle over the paired frames (rad).
-    pub max_joint_diff_rad: f64,
-}
-
-impl Comparison {
-    /// Whether the runs are bit-identical: as many frames, every estimate and the whole
-    /// trajectory.
-    pub fn identical(&self) -> bool {
-        let [a, b] = self.frames;
-        a == b && self.identical_estimates == a && self.identical_trajectory == a
-    }
-
-    /// One line for the terminal.
-    pub fn describe(&self) -> String {
-        let [a, b] = self.frames;
-        let verdict = if self.identical() { "bit-identical" } else { "DIFFERENT" };
-        let first = self.first_difference_s.map_or(String::new(), |t| format!(", first difference at t = {t:.3} s"));
-        format!(
-            "firmware against host closed loop: {verdict} ({a} / {b} frames; estimates identical in {}, arm trajectory \
-             and command in {}{first}; largest estimate difference {:.3} mm, joint difference {:.2e} rad)",
-            self.identical_estimates,
-            self.identical_trajectory,
-            self.max_estimate_diff_m * 1e3,
-            self.max_joint_diff_rad
-        )
-    }
-}
-
-/// Compares run `a` with run `b` (see [`Comparison`]).
-pub fn compare(a: &ClosedLoopOutput, b: &ClosedLoopOutput) -> Comparison {
-    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-    let mut c = Comparison {
-        frames: [a.run.rows.len(), b.run.rows.len()],
-        identical_estimates: 0,
-        identical_trajectory: 0,
-        first_difference_s: None,
-        max_estimate_diff_m: 0.0,
-        max_joint_diff_rad: 0.0,
-    };
-    let pairs = a.run.rows.iter().zip(&a.servo).zip(b.run.rows.iter().zip(&b.servo));
-    for ((ra, sa), (rb, sb)) in pairs {
-        let same_frame = ra.t.to_bits() == rb.t.to_bits();
-        let estimate = same_frame
-            && bits(&ra.estimate.0) == bits(&rb.estimate.0)
-            && ra.fitness.to_bits() == rb.fitness.to_bits()
-            && ra.status == rb.status;
-        let command = |s: &ServoRow| bits(&[s.command.v.as_slice(), s.command.w.as_slice()].concat());
-        let trajectory =
-            same_frame && bits(&ra.q) == bits(&rb.q) && bits(&ra.qd) == bits(&rb.qd) && command(sa) == command(sb);
-        c.identical_estimates += usize::from(estimate);
-        c.identical_trajectory += usize::from(trajectory);
-        if !(estimate && trajectory) && c.first_difference_s.is_none() {
-            c.first_difference_s = Some(ra.t.min(rb.t));
-        }
-        c.max_estimate_diff_m =
-            c.max_estimate_diff_m.max(norm(&(ra.estimate.translation() - rb.estimate.translation())));
-        let dq = ra.q.iter().zip(&rb.q).map(|(x, y)| f64::from((x - y).abs())).fold(0.0, f64::max);
-        c.max_joint_diff_rad = c.max_joint_diff_rad.max(dq);
-    }
-    let shorter = a.run.rows.len().min(b.run.rows.len());
-    if c.first_difference_s.is_none() {
-        c.first_difference_s = a.run.rows.get(shorter).or_else(|| b.run.rows.get(shorter)).map(|r| r.t);
-    }
-    c
-}
-
 /// Writes `trace.csv` (with the servo columns), `summary.json` (with the servo summary) and
 /// the plots of a closed-loop run into `dir`.
 ///
@@ -684,7 +605,7 @@ mod tests {
     use crate::scenario::Method;
 
     /// A still block, the camera brought 0.1 m closer, 320×240.
-    fn scenario(duration_s: f64) -> Scenario {
+    pub(super) fn scenario(duration_s: f64) -> Scenario {
         let mut s = Scenario::new(1, duration_s, Method::Ff);
         s.camera.width = 320;
         s.camera.height = 240;
@@ -720,23 +641,6 @@ mod tests {
         assert_eq!(rejected, 0);
         assert!(tracker.target_filter().has_track() && tracker.target_filter().is_trusted());
         assert_eq!(board.target_filter(), tracker.target_filter());
-    }
-
-    #[test]
-    fn compare_finds_the_first_changed_estimate() {
-        let s = scenario(1.0);
-        let a = run(&s, &LoopOptions::for_scenario(&s), || {}).unwrap_or_else(|e| unreachable!("{e}"));
-        let n = a.run.rows.len();
-        assert!(compare(&a, &a).identical());
-        let mut b = a.clone();
-        b.run.rows[10].estimate.0[2] = f32::from_bits(b.run.rows[10].estimate.0[2].to_bits() ^ 1);
-        b.servo[20].command.v.x += 1e-3;
-        let c = compare(&a, &b);
-        assert!(!c.identical());
-        assert_eq!((c.identical_estimates, c.identical_trajectory), (n - 1, n - 1));
-        assert_eq!(c.first_difference_s, Some(a.run.rows[10].t));
-        b.run.rows.pop();
-        assert_eq!(compare(&a, &b).frames, [n, n - 1]);
     }
 
     #[test]

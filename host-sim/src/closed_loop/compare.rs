@@ -4,10 +4,11 @@
 use serde::Serialize;
 
 use super::{ClosedLoopOutput, ServoRow, norm};
+use crate::sim::TraceRow;
 
 /// How two closed-loop runs of one scenario compare, frame by frame (`evorec hil` on a
-/// `[servo]` scenario against the host's run). Frames are paired in order; a pair is the same
-/// frame when both capture times are equal.
+/// `[servo]` scenario against the host's run). Frames are paired by capture time; a frame
+/// only one run has (refused, or lost on the link) is a difference.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Comparison {
     /// Frames with an estimate in each run.
@@ -51,7 +52,6 @@ impl Comparison {
 
 /// Compares run `a` with run `b` (see [`Comparison`]).
 pub fn compare(a: &ClosedLoopOutput, b: &ClosedLoopOutput) -> Comparison {
-    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     let mut c = Comparison {
         frames: [a.run.rows.len(), b.run.rows.len()],
         identical_estimates: 0,
@@ -60,31 +60,54 @@ pub fn compare(a: &ClosedLoopOutput, b: &ClosedLoopOutput) -> Comparison {
         max_estimate_diff_m: 0.0,
         max_joint_diff_rad: 0.0,
     };
-    let pairs = a.run.rows.iter().zip(&a.servo).zip(b.run.rows.iter().zip(&b.servo));
-    for ((ra, sa), (rb, sb)) in pairs {
-        let same_frame = ra.t.to_bits() == rb.t.to_bits();
-        let estimate = same_frame
-            && bits(&ra.estimate.0) == bits(&rb.estimate.0)
-            && ra.fitness.to_bits() == rb.fitness.to_bits()
-            && ra.status == rb.status;
-        let command = |s: &ServoRow| bits(&[s.command.v.as_slice(), s.command.w.as_slice()].concat());
-        let trajectory =
-            same_frame && bits(&ra.q) == bits(&rb.q) && bits(&ra.qd) == bits(&rb.qd) && command(sa) == command(sb);
-        c.identical_estimates += usize::from(estimate);
-        c.identical_trajectory += usize::from(trajectory);
-        if !(estimate && trajectory) && c.first_difference_s.is_none() {
-            c.first_difference_s = Some(ra.t.min(rb.t));
+    let (mut i, mut j) = (0, 0);
+    while let (Some(ra), Some(rb)) = (a.run.rows.get(i), b.run.rows.get(j)) {
+        if ra.t < rb.t || rb.t < ra.t {
+            // A frame one run has and the other has not (refused or lost on the link).
+            c.first_difference_s.get_or_insert(ra.t.min(rb.t));
+            if ra.t < rb.t {
+                i += 1
+            } else {
+                j += 1
+            }
+            continue;
         }
-        c.max_estimate_diff_m =
-            c.max_estimate_diff_m.max(norm(&(ra.estimate.translation() - rb.estimate.translation())));
-        let dq = ra.q.iter().zip(&rb.q).map(|(x, y)| f64::from((x - y).abs())).fold(0.0, f64::max);
-        c.max_joint_diff_rad = c.max_joint_diff_rad.max(dq);
+        let (estimate, trajectory) = c.pair((ra, a.servo.get(i)), (rb, b.servo.get(j)));
+        if !(estimate && trajectory) {
+            c.first_difference_s.get_or_insert(ra.t);
+        }
+        (i, j) = (i + 1, j + 1);
     }
-    let shorter = a.run.rows.len().min(b.run.rows.len());
-    if c.first_difference_s.is_none() {
-        c.first_difference_s = a.run.rows.get(shorter).or_else(|| b.run.rows.get(shorter)).map(|r| r.t);
+    // Frames after the end of the other run.
+    if let Some(r) = a.run.rows.get(i).or_else(|| b.run.rows.get(j)) {
+        c.first_difference_s.get_or_insert(r.t);
     }
     c
+}
+
+impl Comparison {
+    /// Counts a pair of frames with the same capture time (trace row and servo row of each
+    /// run); returns whether the estimates and whether the trajectories are bit-identical.
+    fn pair(
+        &mut self,
+        (ra, sa): (&TraceRow, Option<&ServoRow>),
+        (rb, sb): (&TraceRow, Option<&ServoRow>),
+    ) -> (bool, bool) {
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let command =
+            |s: Option<&ServoRow>| s.map(|s| bits(&[s.command.v.as_slice(), s.command.w.as_slice()].concat()));
+        let estimate = bits(&ra.estimate.0) == bits(&rb.estimate.0)
+            && ra.fitness.to_bits() == rb.fitness.to_bits()
+            && ra.status == rb.status;
+        let trajectory = bits(&ra.q) == bits(&rb.q) && bits(&ra.qd) == bits(&rb.qd) && command(sa) == command(sb);
+        self.identical_estimates += usize::from(estimate);
+        self.identical_trajectory += usize::from(trajectory);
+        let de = norm(&(ra.estimate.translation() - rb.estimate.translation()));
+        self.max_estimate_diff_m = self.max_estimate_diff_m.max(de);
+        let dq = ra.q.iter().zip(&rb.q).map(|(x, y)| f64::from((x - y).abs())).fold(0.0, f64::max);
+        self.max_joint_diff_rad = self.max_joint_diff_rad.max(dq);
+        (estimate, trajectory)
+    }
 }
 
 #[cfg(test)]
@@ -108,5 +131,13 @@ mod tests {
         assert_eq!(c.first_difference_s, Some(a.run.rows[10].t));
         b.run.rows.pop();
         assert_eq!(compare(&a, &b).frames, [n, n - 1]);
+        // A frame missing in the middle: the others still pair by capture time.
+        let mut d = a.clone();
+        d.run.rows.remove(5);
+        d.servo.remove(5);
+        let c = compare(&a, &d);
+        assert_eq!((c.identical_estimates, c.identical_trajectory), (n - 1, n - 1));
+        assert_eq!(c.first_difference_s, Some(a.run.rows[5].t));
+        assert!(!c.identical());
     }
 }

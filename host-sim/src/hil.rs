@@ -6,7 +6,9 @@
 //! semihosting link ([`evorec_firmware::host::HilSession`]) and the firmware's estimate comes
 //! back. The firmware runs the core's generic loop on the same numbers, so `trace.csv` and
 //! `summary.json` equal those of `evorec run` bit for bit (the workspace test
-//! `hil_matches_run` checks it). Nothing is built here.
+//! `hil_matches_run` checks it). A scenario with `[servo]` runs the closed loop
+//! ([`run_closed_loop`]): the servo acts on the firmware's estimates, and the run equals the
+//! host's closed loop bit for bit (the workspace test `hil_servo`). Nothing is built here.
 
 use std::path::Path;
 

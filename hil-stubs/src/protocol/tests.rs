@@ -457,6 +457,7 @@ fn a_superseded_frame_is_skipped_in_a_few_reads_and_the_frame_behind_it_decodes(
     assert_eq!(read_message(&mut rx, &mut lb, &mut rb).unwrap(), Envelope::bare(Message::End));
     // Decoding a frame reads RX_CHUNK bytes at a time (about 2,400 reads); skipping one reads
     // the header 32 bytes at a time, the images in two bulk reads, the COBS tail again by 32.
+    std::println!("a superseded frame: {skip_reads} reads to skip; a frame: {frame_reads} reads to decode");
     assert!(skip_reads * 20 < frame_reads, "skip {skip_reads} reads, decode {frame_reads}");
 
     // A reader that decodes everything returns the flagged frame, flags and all.

@@ -351,6 +351,9 @@ fn feed(state: &mut DecoderState, asm: &mut Assembly<'_>, chunk: &[u8]) -> (usiz
 /// a frame's size against the buffers before any image byte is stored, the CRC at the
 /// delimiter. After a [`ReadError::Decode`] the reader has skipped to the next delimiter, so
 /// the next call reads the next message (on an error the buffers' contents are unspecified).
+/// A reader made with [`LinkReader::newest_frames_only`] ends a `FRAME` flagged
+/// [`FLAG_NEWER_FOLLOWS`] with [`DecodeError::Superseded`] once its fixed part is checked, and
+/// skips the rest in bulk reads into `left` (never more than the undecoded payload and CRC).
 ///
 /// # Errors
 /// [`ReadError::Link`] from the source (the link is then unusable), [`ReadError::Decode`] for

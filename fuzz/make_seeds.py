@@ -83,6 +83,8 @@ def main():
     write("firmware_serve", "wrong-size-frame", config + msg(2, frame(4, 3, 1, 0), seq=1) + end)
     superseded = msg(2, frame(w, h, 33_333, 10), seq=1, time_us=33_333, flags=1)
     write("firmware_serve", "overload", config + superseded + frames[len(frames) // 2 :] + end)
+    # A superseded frame cut in its images: the board's bulk skip meets the next delimiter.
+    write("firmware_serve", "overload-cut", config + superseded[: len(superseded) // 2] + frames + end)
     damaged = bytearray(frames)
     damaged[60] ^= 0x10
     write("firmware_serve", "damaged", config + bytes(damaged[: len(damaged) - 40]) + frames + end)

@@ -13,7 +13,10 @@
 //! Faults and overload: a damaged message, a frame whose sequence number is not above the
 //! last one, a message of a type not expected, and a frame superseded by a newer one
 //! ([`FLAG_NEWER_FOLLOWS`]) get no answer; each is counted by reason ([`DropCounts`], reported
-//! in `DONE`) and the board reads on. Only a failing link ends the loop early.
+//! in `DONE`) and the board reads on. Only a failing link ends the loop early. A superseded
+//! frame costs the board little: its header and size are checked, the rest is skipped in bulk
+//! without decoding or CRC ([`LinkReader::newest_frames_only`]), so a burst of frames that
+//! arrived during a generation does not delay the newest one behind it.
 
 use evorec_core::Tracker;
 use evorec_core::board::{self, CameraController, ErrorKind, ErrorType, FrameInfo, LoopStats};
@@ -115,7 +118,7 @@ where
     /// A board over the two ends of a link.
     pub fn new(rx: R, tx: W) -> Self {
         Self {
-            rx: LinkReader::new(rx),
+            rx: LinkReader::newest_frames_only(rx),
             tx,
             joints: JointSample { q: [0.0; DOF], qd: [0.0; DOF], time_us: 0 },
             pending: None,

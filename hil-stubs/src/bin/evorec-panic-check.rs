@@ -31,10 +31,11 @@ mod probe {
     /// The link bytes the decoder reads (opaque to the optimiser through `black_box`).
     static LINK: [u8; 64] = [0; 64];
 
-    /// Root of the decode path: one message from `bytes` into the frame buffers.
+    /// Root of the decode path: one message from `bytes` into the frame buffers, read as the
+    /// firmware's board reads (a superseded frame is skipped in bulk).
     #[inline(never)]
     fn decode_root(bytes: &[u8], left: &mut [u8], right: &mut [u8]) -> Result<u32, ReadError<Truncated>> {
-        let mut rx = LinkReader::new(SliceSource::new(bytes));
+        let mut rx = LinkReader::newest_frames_only(SliceSource::new(bytes));
         let env = read_message(&mut rx, left, right)?;
         Ok(env.sequence)
     }

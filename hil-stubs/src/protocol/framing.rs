@@ -42,12 +42,20 @@ pub struct LinkReader<S> {
     pos: usize,
     end: usize,
     flags: u16,
+    skip_superseded: bool,
 }
 
 impl<S: ByteSource> LinkReader<S> {
     /// Reads from `src`.
     pub fn new(src: S) -> Self {
-        Self { src, buf: [0; RX_CHUNK], pos: 0, end: 0, flags: 0 }
+        Self { src, buf: [0; RX_CHUNK], pos: 0, end: 0, flags: 0, skip_superseded: false }
+    }
+
+    /// Reads from `src` as a board that only works on the newest frame: a `FRAME` flagged
+    /// [`FLAG_NEWER_FOLLOWS`] is dropped unread ([`DecodeError::Superseded`]) as soon as its
+    /// size is checked, its remaining bytes skipped in bulk (see [`read_message`]).
+    pub fn newest_frames_only(src: S) -> Self {
+        Self { skip_superseded: true, ..Self::new(src) }
     }
 
     /// The source.
@@ -96,6 +104,37 @@ impl<S: ByteSource> LinkReader<S> {
                 return Ok(());
             }
         }
+    }
+
+    /// Drops the rest of a message of which at least `min_left` more wire bytes come before
+    /// its end delimiter (true of an intact message): those are read in bulk into `scratch`,
+    /// a few large reads checked only for a zero byte, then the rest up to the delimiter as
+    /// in [`Self::skip_past_delimiter`]. A zero among the bulk bytes (the message was cut
+    /// short) ends the skip there; what was read after it is kept for the next message if it
+    /// fits the read buffer, else lost (the next message is then dropped as damaged).
+    fn skip_message(&mut self, min_left: usize, scratch: &mut [u8]) -> Result<(), S::Error> {
+        let buffered = self.buffered();
+        if let Some(z) = buffered.iter().position(|&b| b == 0) {
+            self.consume(z + 1);
+            return Ok(());
+        }
+        let mut left = min_left.saturating_sub(buffered.len());
+        self.consume(buffered.len());
+        while let Some(chunk) = scratch.get_mut(..left.min(scratch.len())).filter(|c| !c.is_empty()) {
+            let n = self.src.read_some(chunk)?.min(chunk.len());
+            let got = chunk.get(..n).unwrap_or_default();
+            // `contains` on bytes is core's word-at-a-time memchr.
+            if got.contains(&0) {
+                let z = got.iter().position(|&b| b == 0).unwrap_or(n);
+                let rest = got.get(z + 1..).unwrap_or_default();
+                let keep = if rest.len() <= RX_CHUNK { rest.len() } else { 0 };
+                self.end = put(&mut self.buf, 0, rest.get(..keep).unwrap_or_default());
+                self.pos = 0;
+                return Ok(());
+            }
+            left -= n;
+        }
+        self.skip_past_delimiter()
     }
 }
 
@@ -146,6 +185,13 @@ impl<'b> Assembly<'b> {
     /// Payload bytes the header and (for frames) the fixed part announce.
     fn payload_len(&self) -> usize {
         self.fixed + 2 * self.image
+    }
+
+    /// A `FRAME` flagged [`FLAG_NEWER_FOLLOWS`] whose fixed part has arrived, so its size has
+    /// been checked against the header and the receive buffers.
+    fn superseded_frame(&self) -> bool {
+        self.header.is_some_and(|h| h.kind == MsgType::Frame && h.flags & FLAG_NEWER_FOLLOWS != 0)
+            && self.at >= HEADER_LEN + FRAME_FIXED_LEN
     }
 
     /// Takes the next decoded bytes.
@@ -305,6 +351,9 @@ fn feed(state: &mut DecoderState, asm: &mut Assembly<'_>, chunk: &[u8]) -> (usiz
 /// a frame's size against the buffers before any image byte is stored, the CRC at the
 /// delimiter. After a [`ReadError::Decode`] the reader has skipped to the next delimiter, so
 /// the next call reads the next message (on an error the buffers' contents are unspecified).
+/// A reader made with [`LinkReader::newest_frames_only`] ends a `FRAME` flagged
+/// [`FLAG_NEWER_FOLLOWS`] with [`DecodeError::Superseded`] once its fixed part is checked, and
+/// skips the rest in bulk reads into `left` (never more than the undecoded payload and CRC).
 ///
 /// # Errors
 /// [`ReadError::Link`] from the source (the link is then unusable), [`ReadError::Decode`] for
@@ -350,6 +399,13 @@ fn read_into<'b, S: ByteSource>(
         let (used, step) = feed(&mut state, asm, chunk);
         rx.consume(used);
         match step {
+            Step::More if rx.skip_superseded && asm.superseded_frame() => {
+                // The rest of the message: its undecoded payload and CRC, one wire byte at
+                // least for each (a zero travels as a code byte).
+                let min_left = (HEADER_LEN + asm.payload_len() + CRC_LEN).saturating_sub(asm.at);
+                rx.skip_message(min_left, asm.left).map_err(ReadError::Link)?;
+                return Err(ReadError::Decode(DecodeError::Superseded));
+            }
             Step::More => {}
             Step::Complete => {
                 rx.flags = asm.header.map_or(0, |h| h.flags);

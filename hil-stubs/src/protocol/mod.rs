@@ -197,6 +197,10 @@ pub enum DecodeError {
     /// The message's framing is broken: it ended (at a delimiter) before its announced size,
     /// or a delimiter arrived inside a COBS run (a cut or damaged message).
     Framing,
+    /// Not damage: a `FRAME` flagged [`FLAG_NEWER_FOLLOWS`], dropped unread by a reader that
+    /// works only on the newest frame ([`LinkReader::newest_frames_only`]). Its header and
+    /// size were checked; its images and CRC were skipped, not decoded.
+    Superseded,
 }
 
 impl core::fmt::Display for DecodeError {
@@ -214,6 +218,7 @@ impl core::fmt::Display for DecodeError {
             }
             Self::BadValue => f.write_str("field value out of range"),
             Self::Framing => f.write_str("message cut short (delimiter inside the message)"),
+            Self::Superseded => f.write_str("frame superseded by a newer one (skipped unread)"),
         }
     }
 }
@@ -346,6 +351,7 @@ impl DropCounts {
             DecodeError::BadLength { .. } | DecodeError::FrameTooLarge { .. } => &mut self.length,
             DecodeError::BadCrc { .. } => &mut self.crc,
             DecodeError::BadValue => &mut self.value,
+            DecodeError::Superseded => &mut self.superseded,
         };
         *c = c.saturating_add(1);
     }

@@ -402,3 +402,95 @@ mod prop {
         }
     }
 }
+
+/// A [`ByteSource`] that counts its reads.
+struct CountingSource<'a> {
+    src: SliceSource<'a>,
+    reads: usize,
+}
+
+impl ByteSource for CountingSource<'_> {
+    type Error = Truncated;
+    fn read_some(&mut self, buf: &mut [u8]) -> Result<usize, Truncated> {
+        self.reads += 1;
+        self.src.read_some(buf)
+    }
+}
+
+/// A full-size frame whose images hold zeros, long non-zero runs and everything between.
+fn busy_frame(sequence: u32, left: &[u8], right: &[u8]) -> Envelope<'static> {
+    let frame = Frame {
+        width: 160,
+        height: 120,
+        joints: JointSample { q: [0.25; DOF], qd: [-0.5; DOF], time_us: u64::from(sequence) * 33_333 },
+        left: left.to_vec().leak(),
+        right: right.to_vec().leak(),
+    };
+    Envelope { sequence, capture_time_us: u64::from(sequence) * 33_333, message: Message::Frame(frame) }
+}
+
+fn busy_images() -> (Vec<u8>, Vec<u8>) {
+    let n = 160 * 120 * BYTES_PER_PIXEL;
+    let left: Vec<u8> = (0..n).map(|i| if i % 700 < 400 { 0xA5 } else { (i % 7) as u8 }).collect();
+    let right: Vec<u8> = (0..n).map(|i| (i * 31 % 256) as u8).collect();
+    (left, right)
+}
+
+#[test]
+fn a_superseded_frame_is_skipped_in_a_few_reads_and_the_frame_behind_it_decodes() {
+    let (l, r) = busy_images();
+    let (older, newer) = (busy_frame(1, &l, &r), busy_frame(2, &r, &l));
+    let mut stream = VecSink::default();
+    write_message_with_flags(&mut stream, &older, FLAG_NEWER_FOLLOWS).unwrap();
+    let skipped_len = stream.0.len();
+    write_message(&mut stream, &newer).unwrap();
+    write_message(&mut stream, &Envelope::bare(Message::End)).unwrap();
+    let (mut lb, mut rb) = (vec![0u8; l.len()], vec![0u8; l.len()]);
+
+    // The board drops the flagged frame after its header and size: a handful of reads.
+    let mut rx = LinkReader::newest_frames_only(CountingSource { src: SliceSource::new(&stream.0), reads: 0 });
+    assert_eq!(read_message(&mut rx, &mut lb, &mut rb), Err(ReadError::Decode(DecodeError::Superseded)));
+    let skip_reads = rx.get_ref().reads;
+    assert_eq!(stream.0.len() - rx.get_ref().src.remaining().len() - rx.buffered().len(), skipped_len);
+    assert_eq!(read_message(&mut rx, &mut lb, &mut rb).unwrap(), newer);
+    let frame_reads = rx.get_ref().reads - skip_reads;
+    assert_eq!(read_message(&mut rx, &mut lb, &mut rb).unwrap(), Envelope::bare(Message::End));
+    // Decoding a frame reads RX_CHUNK bytes at a time (about 2,400 reads); skipping one reads
+    // the header 32 bytes at a time, the images in two bulk reads, the COBS tail again by 32.
+    std::println!("a superseded frame: {skip_reads} reads to skip; a frame: {frame_reads} reads to decode");
+    assert!(skip_reads * 20 < frame_reads, "skip {skip_reads} reads, decode {frame_reads}");
+
+    // A reader that decodes everything returns the flagged frame, flags and all.
+    let mut rx = LinkReader::new(SliceSource::new(&stream.0));
+    assert_eq!(read_message(&mut rx, &mut lb, &mut rb).unwrap(), older);
+    assert_eq!(rx.last_flags(), FLAG_NEWER_FOLLOWS);
+}
+
+#[test]
+fn a_cut_superseded_frame_costs_at_most_the_message_behind_it() {
+    let (l, r) = busy_images();
+    let mut stream = VecSink::default();
+    write_message_with_flags(&mut stream, &busy_frame(1, &l, &r), FLAG_NEWER_FOLLOWS).unwrap();
+    // Cut in its images: the message behind it starts at the next delimiter.
+    let cut = stream.0.len() / 2;
+    stream.0.truncate(cut);
+    for seq in [2, 3] {
+        write_message(&mut stream, &busy_frame(seq, &r, &l)).unwrap();
+    }
+    write_message(&mut stream, &Envelope::bare(Message::End)).unwrap();
+    let (mut lb, mut rb) = (vec![0u8; l.len()], vec![0u8; l.len()]);
+    let mut rx = LinkReader::newest_frames_only(SliceSource::new(&stream.0));
+    let mut got = Vec::new();
+    loop {
+        match read_message(&mut rx, &mut lb, &mut rb) {
+            Ok(env) => got.push(Ok((env.message.kind(), env.sequence))),
+            Err(ReadError::Decode(e)) => got.push(Err(e)),
+            Err(ReadError::Link(Truncated)) => break,
+        }
+    }
+    // The cut frame is dropped as superseded; the bulk read took the start of frame 2 along,
+    // which is then dropped as damaged; frame 3 and END decode.
+    assert_eq!(got.first(), Some(&Err(DecodeError::Superseded)));
+    assert_eq!(got[got.len() - 2..], [Ok((MsgType::Frame, 3)), Ok((MsgType::End, 0))]);
+    assert!(got.len() <= 4, "{got:?}");
+}

@@ -122,9 +122,44 @@ impl<'a, F: PixelFormat> View<'a, F> {
     }
 
     /// `Σ plane[hue]` over the `G` points of a fixed-point row (the pinhole kernel's inner
-    /// loop; `pixels` must not be empty, see [`walk_edge`]).
+    /// loop; `pixels` must not be empty, see [`walk_edge`]; `plane` maps [`NO_HUE`] to 0, as
+    /// every plane of a [`HueLut`] does).
     ///
-    /// Per point: `u >> 16` is `⌊u⌋` (arithmetic shift), the column; as an unsigned number it
+    /// Two formulations with the same sums: the board's ([`View::walk_selected`], branch-free,
+    /// constant work on the Cortex-M4) and the host's ([`View::walk_checked`], one checked
+    /// load per point, the cheaper one for an out-of-order CPU with branch prediction).
+    #[inline(always)]
+    fn walk<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
+        #[cfg(target_arch = "arm")]
+        let hits = self.walk_selected::<G>(row, plane);
+        #[cfg(not(target_arch = "arm"))]
+        let hits = self.walk_checked::<G>(row, plane);
+        hits
+    }
+
+    /// The host's walk: the column test selects an index past the end, and the slice's
+    /// checked read gives [`PixelFormat::NONE`] (no hue, 0 in every plane) for every point
+    /// outside the image. The same index and the same pixel as [`View::walk_selected`] for a
+    /// point inside, and 0 for a point outside, so the same sum; here the read is a bounds
+    /// check and a load (a branch that only a change between inside and outside mispredicts).
+    #[cfg_attr(target_arch = "arm", allow(dead_code))]
+    #[inline(always)]
+    fn walk_checked<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
+        let (mut u, mut v) = (row.u, row.v);
+        let mut hits = 0u32;
+        for _ in 0..G {
+            let col = (u >> FIX_BITS) as u32;
+            let index = ((v >> FIX_BITS) as u32).wrapping_mul(self.width).wrapping_add(col);
+            let index = if col < self.width { index } else { u32::MAX };
+            let px = self.pixels.get(index as usize).copied().unwrap_or(F::NONE);
+            hits += u32::from(plane[usize::from(F::hue(px))]);
+            u = u.wrapping_add(row.du);
+            v = v.wrapping_add(row.dv);
+        }
+        hits
+    }
+
+    /// The board's walk (see [`View::walk`]). Per point: `u >> 16` is `⌊u⌋` (arithmetic shift), the column; as an unsigned number it
     /// is `≥ width` left of the image too, and such a column moves the index to `u32::MAX`.
     /// The row needs no compare of its own: for any `i32` `v`, `|v >> 16| ≤ 2¹⁵`, so with a
     /// column inside the image the wrapping index `row · width + col` is `< len` exactly when
@@ -132,8 +167,9 @@ impl<'a, F: PixelFormat> View<'a, F> {
     /// is the image test. A point outside reads pixel 0 instead and its score is not added:
     /// the same instructions inside and outside the image and no branch (the index and the
     /// addition are selected, the loads always happen), so every point costs the same.
+    #[cfg_attr(not(any(target_arch = "arm", test)), allow(dead_code))]
     #[inline(always)]
-    fn walk<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
+    fn walk_selected<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
         let (mut u, mut v) = (row.u, row.v);
         let mut hits = 0u32;
         for _ in 0..G {
@@ -194,7 +230,7 @@ trait RowWalk {
 
 /// One row of the pinhole kernel in 16.16 fixed point: its first point (pixel coordinates,
 /// `(0, 0)` the corner of the first pixel) and the step between its points.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 struct FixedRow {
     u: i32,
     v: i32,
@@ -203,15 +239,34 @@ struct FixedRow {
 }
 
 impl FixedRow {
-    /// The row from `start` to `start + span` (homogeneous coordinates of `K·(R·p + t)` with
-    /// the first two rows of `K` scaled by `2¹⁶`) walked in `G − 1` equal steps.
-    ///
-    /// The conversion truncates towards zero: a point in `(−2⁻¹⁶, 0)` reads column or row 0
-    /// instead of −1 (as far off as the fixed point's own resolution).
+    /// One row from `start` to `start + span`, as [`FixedRow::edge`] makes each (the
+    /// board's code: per row, its two divisions).
+    #[cfg_attr(not(any(target_arch = "arm", test)), allow(dead_code))]
     #[inline(always)]
     fn new<const G: usize>(start: [f32; 3], span: [f32; 3]) -> Self {
         let end = add(start, span);
-        let (i0, i1) = (1.0 / start[2], 1.0 / end[2]);
+        Self::from_ends::<G>(start, 1.0 / start[2], end, 1.0 / end[2])
+    }
+
+    /// The rows of one edge, each from `starts[r]` to `starts[r] + span` (homogeneous
+    /// coordinates of `K·(R·p + t)` with the first two rows of `K` scaled by `2¹⁶`) walked in
+    /// `G − 1` equal steps, the divisions of all rows side by side (independent, so they
+    /// overlap, or share a vector division where the CPU has one).
+    ///
+    /// The conversion truncates towards zero: a point in `(−2⁻¹⁶, 0)` reads column or row 0
+    /// instead of −1 (as far off as the fixed point's own resolution).
+    #[cfg_attr(target_arch = "arm", allow(dead_code))]
+    #[inline(always)]
+    fn edge<const G: usize, const N: usize>(starts: &[[f32; 3]; N], span: [f32; 3]) -> [Self; N] {
+        let ends = starts.map(|s| add(s, span));
+        let i0 = starts.map(|s| 1.0 / s[2]);
+        let i1 = ends.map(|e| 1.0 / e[2]);
+        core::array::from_fn(|r| Self::from_ends::<G>(starts[r], i0[r], ends[r], i1[r]))
+    }
+
+    /// The row from `start` to `end` given `i0 = 1 / start[2]` and `i1 = 1 / end[2]`.
+    #[inline(always)]
+    fn from_ends<const G: usize>(start: [f32; 3], i0: f32, end: [f32; 3], i1: f32) -> Self {
         let (u0, v0) = (start[0] * i0, start[1] * i0);
         let (u1, v1) = (end[0] * i1, end[1] * i1);
         let per_step = 1.0 / (G - 1) as f32;
@@ -221,7 +276,7 @@ impl FixedRow {
 
 /// The plain pinhole walk: the perspective division at the rows' two ends only, then an
 /// affine walk in 16.16 fixed point between them (per point two integer additions, the index,
-/// two compares, the pixel load, the tables; see [`View::hue_fixed`]).
+/// two compares, the pixel load, the tables; see [`View::walk`]).
 ///
 /// **Exactness.** The projection of a straight row is a straight segment, and the affine walk
 /// stays on the segment between the exactly projected ends: every point read is the
@@ -245,14 +300,21 @@ struct Affine<'v, 'p, F: PixelFormat> {
 impl<F: PixelFormat> RowWalk for Affine<'_, '_, F> {
     #[inline(always)]
     fn count_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, plane: &[u8; 256]) -> u32 {
-        walk_edge::<G, N, F>(self.view, &edge.starts.map(|start| FixedRow::new::<G>(start, edge.span)), plane)
+        // The same rows either way; the board's code (and instruction count) stays as it was.
+        #[cfg(target_arch = "arm")]
+        let rows = edge.starts.map(|start| FixedRow::new::<G>(start, edge.span));
+        #[cfg(not(target_arch = "arm"))]
+        let rows = FixedRow::edge::<G, N>(&edge.starts, edge.span);
+        walk_edge::<G, N, F>(self.view, &rows, plane)
     }
 }
 
 /// The integer part of [`Affine`]: `Σ plane[hue]` over the fixed-point rows of one edge,
-/// out of line so that its registers hold only the walk (and its code, hence its
-/// instruction count, does not move with the code around it).
-#[inline(never)]
+/// out of line on the board so that its registers hold only the walk (and its code, hence
+/// its instruction count, does not move with the code around it); inlined on the host, where
+/// the call and its register saves cost more than the rows' walk gains from them.
+#[cfg_attr(target_arch = "arm", inline(never))]
+#[cfg_attr(not(target_arch = "arm"), inline(always))]
 fn walk_edge<const G: usize, const N: usize, F: PixelFormat>(
     view: &View<'_, F>,
     rows: &[FixedRow; N],
@@ -752,6 +814,8 @@ mod tests {
                     };
                     let (a, b) = (h(&first), h(&last));
                     let row = FixedRow::new::<G>(a, sub(b, a));
+                    // The host's batched rows are the board's, bit for bit.
+                    assert_eq!(FixedRow::edge::<G, 1>(&[a], sub(b, a)), [row]);
                     let ((u0, v0), w0) = project(&first);
                     let ((u1, v1), w1) = project(&last);
                     let (du, dv) = (u1 - u0, v1 - v0);
@@ -776,6 +840,46 @@ mod tests {
         }
         // The pose is tilted: the walk does move points along their rows, a little.
         assert!(worst_shift > 1e-3 && worst_shift < 0.1, "{worst_shift}");
+    }
+
+    #[test]
+    fn host_and_board_walks_count_the_same() {
+        // Random rows in, across and outside a small image of random hue bytes (NO_HUE
+        // included): the host's checked walk and the board's selected walk give the same sums.
+        let (w, h) = (37u16, 23u16);
+        let mut x = 0x2545_f491u32;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x
+        };
+        let pixels: vec::Vec<u8> = (0..usize::from(w) * usize::from(h))
+            .map(|_| if next() % 4 == 0 { NO_HUE } else { (next() % 180) as u8 })
+            .collect();
+        let img = HueImage::new_checked(&pixels[..], w, h).unwrap();
+        let view = View::of(&img);
+        let lut = HueLut::new(&[0, 60, 120, 30, 90, 150], DEFAULT_HUE_TOLERANCE);
+        let reach = |r: u32| (r % (120 << FIX_BITS)) as i32 - (40 << FIX_BITS);
+        let (mut inside, mut outside) = (0, 0);
+        for k in 0..20_000 {
+            let row = FixedRow {
+                u: reach(next()),
+                v: reach(next()),
+                du: (next() % (16 << FIX_BITS)) as i32 - (8 << FIX_BITS),
+                dv: (next() % (16 << FIX_BITS)) as i32 - (8 << FIX_BITS),
+            };
+            let plane = if k % 2 == 0 { lut.plane(k % 6) } else { lut.any((k % 64) as u8) };
+            let (checked, selected) = (view.walk_checked::<8>(&row, plane), view.walk_selected::<8>(&row, plane));
+            assert_eq!(checked, selected, "{row:?}");
+            let col = (row.u >> FIX_BITS) as u32;
+            if col < u32::from(w) && ((row.v >> FIX_BITS) as u32) < u32::from(h) {
+                inside += 1;
+            } else {
+                outside += 1;
+            }
+        }
+        assert!(inside > 1000 && outside > 1000, "{inside} / {outside}");
     }
 
     #[test]

@@ -303,10 +303,24 @@ impl<F: PixelFormat> RowWalk for Affine<'_, '_, F> {
         // The same rows either way; the board's code (and instruction count) stays as it was.
         #[cfg(target_arch = "arm")]
         let rows = edge.starts.map(|start| FixedRow::new::<G>(start, edge.span));
+        #[cfg(target_arch = "arm")]
+        return walk_edge::<G, N, F>(self.view, &rows, plane);
         #[cfg(not(target_arch = "arm"))]
-        let rows = FixedRow::edge::<G, N>(&edge.starts, edge.span);
-        walk_edge::<G, N, F>(self.view, &rows, plane)
+        host_edge::<G, N, F>(self.view, &edge.starts, edge.span, plane)
     }
+}
+
+/// The host's edge: its rows ([`FixedRow::edge`]) and their walk, out of line (its registers
+/// hold the view, the rows and the plane, not the camera's set-up).
+#[cfg(not(target_arch = "arm"))]
+#[inline(never)]
+fn host_edge<const G: usize, const N: usize, F: PixelFormat>(
+    view: &View<'_, F>,
+    starts: &[[f32; 3]; N],
+    span: [f32; 3],
+    plane: &[u8; 256],
+) -> u32 {
+    walk_edge::<G, N, F>(view, &FixedRow::edge::<G, N>(starts, span), plane)
 }
 
 /// The integer part of [`Affine`]: `Σ plane[hue]` over the fixed-point rows of one edge,

@@ -325,8 +325,8 @@ fn host_edge<const G: usize, const N: usize, F: PixelFormat>(
 
 /// The integer part of [`Affine`]: `Σ plane[hue]` over the fixed-point rows of one edge,
 /// out of line on the board so that its registers hold only the walk (and its code, hence
-/// its instruction count, does not move with the code around it); inlined on the host, where
-/// the call and its register saves cost more than the rows' walk gains from them.
+/// its instruction count, does not move with the code around it); on the host inlined into
+/// `host_edge`, which also makes the rows.
 #[cfg_attr(target_arch = "arm", inline(never))]
 #[cfg_attr(not(target_arch = "arm"), inline(always))]
 fn walk_edge<const G: usize, const N: usize, F: PixelFormat>(

@@ -122,9 +122,44 @@ impl<'a, F: PixelFormat> View<'a, F> {
     }
 
     /// `Σ plane[hue]` over the `G` points of a fixed-point row (the pinhole kernel's inner
-    /// loop; `pixels` must not be empty, see [`walk_edge`]).
+    /// loop; `pixels` must not be empty, see [`walk_edge`]; `plane` maps [`NO_HUE`] to 0, as
+    /// every plane of a [`HueLut`] does).
     ///
-    /// Per point: `u >> 16` is `⌊u⌋` (arithmetic shift), the column; as an unsigned number it
+    /// Two formulations with the same sums: the board's ([`View::walk_selected`], branch-free,
+    /// constant work on the Cortex-M4) and the host's ([`View::walk_checked`], one checked
+    /// load per point, the cheaper one for an out-of-order CPU with branch prediction).
+    #[inline(always)]
+    fn walk<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
+        #[cfg(target_arch = "arm")]
+        let hits = self.walk_selected::<G>(row, plane);
+        #[cfg(not(target_arch = "arm"))]
+        let hits = self.walk_checked::<G>(row, plane);
+        hits
+    }
+
+    /// The host's walk: the column test selects an index past the end, and the slice's
+    /// checked read gives [`PixelFormat::NONE`] (no hue, 0 in every plane) for every point
+    /// outside the image. The same index and the same pixel as [`View::walk_selected`] for a
+    /// point inside, and 0 for a point outside, so the same sum; here the read is a bounds
+    /// check and a load (a branch that only a change between inside and outside mispredicts).
+    #[cfg_attr(target_arch = "arm", allow(dead_code))]
+    #[inline(always)]
+    fn walk_checked<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
+        let (mut u, mut v) = (row.u, row.v);
+        let mut hits = 0u32;
+        for _ in 0..G {
+            let col = (u >> FIX_BITS) as u32;
+            let index = ((v >> FIX_BITS) as u32).wrapping_mul(self.width).wrapping_add(col);
+            let index = if col < self.width { index } else { u32::MAX };
+            let px = self.pixels.get(index as usize).copied().unwrap_or(F::NONE);
+            hits += u32::from(plane[usize::from(F::hue(px))]);
+            u = u.wrapping_add(row.du);
+            v = v.wrapping_add(row.dv);
+        }
+        hits
+    }
+
+    /// The board's walk (see [`View::walk`]). Per point: `u >> 16` is `⌊u⌋` (arithmetic shift), the column; as an unsigned number it
     /// is `≥ width` left of the image too, and such a column moves the index to `u32::MAX`.
     /// The row needs no compare of its own: for any `i32` `v`, `|v >> 16| ≤ 2¹⁵`, so with a
     /// column inside the image the wrapping index `row · width + col` is `< len` exactly when
@@ -132,8 +167,9 @@ impl<'a, F: PixelFormat> View<'a, F> {
     /// is the image test. A point outside reads pixel 0 instead and its score is not added:
     /// the same instructions inside and outside the image and no branch (the index and the
     /// addition are selected, the loads always happen), so every point costs the same.
+    #[cfg_attr(not(any(target_arch = "arm", test)), allow(dead_code))]
     #[inline(always)]
-    fn walk<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
+    fn walk_selected<const G: usize>(&self, row: &FixedRow, plane: &[u8; 256]) -> u32 {
         let (mut u, mut v) = (row.u, row.v);
         let mut hits = 0u32;
         for _ in 0..G {
@@ -194,7 +230,7 @@ trait RowWalk {
 
 /// One row of the pinhole kernel in 16.16 fixed point: its first point (pixel coordinates,
 /// `(0, 0)` the corner of the first pixel) and the step between its points.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 struct FixedRow {
     u: i32,
     v: i32,
@@ -203,15 +239,34 @@ struct FixedRow {
 }
 
 impl FixedRow {
-    /// The row from `start` to `start + span` (homogeneous coordinates of `K·(R·p + t)` with
-    /// the first two rows of `K` scaled by `2¹⁶`) walked in `G − 1` equal steps.
-    ///
-    /// The conversion truncates towards zero: a point in `(−2⁻¹⁶, 0)` reads column or row 0
-    /// instead of −1 (as far off as the fixed point's own resolution).
+    /// One row from `start` to `start + span`, as [`FixedRow::edge`] makes each (the
+    /// board's code: per row, its two divisions).
+    #[cfg_attr(not(any(target_arch = "arm", test)), allow(dead_code))]
     #[inline(always)]
     fn new<const G: usize>(start: [f32; 3], span: [f32; 3]) -> Self {
         let end = add(start, span);
-        let (i0, i1) = (1.0 / start[2], 1.0 / end[2]);
+        Self::from_ends::<G>(start, 1.0 / start[2], end, 1.0 / end[2])
+    }
+
+    /// The rows of one edge, each from `starts[r]` to `starts[r] + span` (homogeneous
+    /// coordinates of `K·(R·p + t)` with the first two rows of `K` scaled by `2¹⁶`) walked in
+    /// `G − 1` equal steps, the divisions of all rows side by side (independent, so they
+    /// overlap, or share a vector division where the CPU has one).
+    ///
+    /// The conversion truncates towards zero: a point in `(−2⁻¹⁶, 0)` reads column or row 0
+    /// instead of −1 (as far off as the fixed point's own resolution).
+    #[cfg_attr(target_arch = "arm", allow(dead_code))]
+    #[inline(always)]
+    fn edge<const G: usize, const N: usize>(starts: &[[f32; 3]; N], span: [f32; 3]) -> [Self; N] {
+        let ends = starts.map(|s| add(s, span));
+        let i0 = starts.map(|s| 1.0 / s[2]);
+        let i1 = ends.map(|e| 1.0 / e[2]);
+        core::array::from_fn(|r| Self::from_ends::<G>(starts[r], i0[r], ends[r], i1[r]))
+    }
+
+    /// The row from `start` to `end` given `i0 = 1 / start[2]` and `i1 = 1 / end[2]`.
+    #[inline(always)]
+    fn from_ends<const G: usize>(start: [f32; 3], i0: f32, end: [f32; 3], i1: f32) -> Self {
         let (u0, v0) = (start[0] * i0, start[1] * i0);
         let (u1, v1) = (end[0] * i1, end[1] * i1);
         let per_step = 1.0 / (G - 1) as f32;
@@ -221,7 +276,7 @@ impl FixedRow {
 
 /// The plain pinhole walk: the perspective division at the rows' two ends only, then an
 /// affine walk in 16.16 fixed point between them (per point two integer additions, the index,
-/// two compares, the pixel load, the tables; see [`View::hue_fixed`]).
+/// two compares, the pixel load, the tables; see [`View::walk`]).
 ///
 /// **Exactness.** The projection of a straight row is a straight segment, and the affine walk
 /// stays on the segment between the exactly projected ends: every point read is the
@@ -245,14 +300,35 @@ struct Affine<'v, 'p, F: PixelFormat> {
 impl<F: PixelFormat> RowWalk for Affine<'_, '_, F> {
     #[inline(always)]
     fn count_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, plane: &[u8; 256]) -> u32 {
-        walk_edge::<G, N, F>(self.view, &edge.starts.map(|start| FixedRow::new::<G>(start, edge.span)), plane)
+        // The same rows either way; the board's code (and instruction count) stays as it was.
+        #[cfg(target_arch = "arm")]
+        let rows = edge.starts.map(|start| FixedRow::new::<G>(start, edge.span));
+        #[cfg(target_arch = "arm")]
+        return walk_edge::<G, N, F>(self.view, &rows, plane);
+        #[cfg(not(target_arch = "arm"))]
+        host_edge::<G, N, F>(self.view, &edge.starts, edge.span, plane)
     }
 }
 
-/// The integer part of [`Affine`]: `Σ plane[hue]` over the fixed-point rows of one edge,
-/// out of line so that its registers hold only the walk (and its code, hence its
-/// instruction count, does not move with the code around it).
+/// The host's edge: its rows ([`FixedRow::edge`]) and their walk, out of line (its registers
+/// hold the view, the rows and the plane, not the camera's set-up).
+#[cfg(not(target_arch = "arm"))]
 #[inline(never)]
+fn host_edge<const G: usize, const N: usize, F: PixelFormat>(
+    view: &View<'_, F>,
+    starts: &[[f32; 3]; N],
+    span: [f32; 3],
+    plane: &[u8; 256],
+) -> u32 {
+    walk_edge::<G, N, F>(view, &FixedRow::edge::<G, N>(starts, span), plane)
+}
+
+/// The integer part of [`Affine`]: `Σ plane[hue]` over the fixed-point rows of one edge,
+/// out of line on the board so that its registers hold only the walk (and its code, hence
+/// its instruction count, does not move with the code around it); on the host inlined into
+/// `host_edge`, which also makes the rows.
+#[cfg_attr(target_arch = "arm", inline(never))]
+#[cfg_attr(not(target_arch = "arm"), inline(always))]
 fn walk_edge<const G: usize, const N: usize, F: PixelFormat>(
     view: &View<'_, F>,
     rows: &[FixedRow; N],
@@ -587,215 +663,4 @@ impl<'m, const G: usize> Evaluator<'m, G> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::camera::Pinhole;
-    use crate::config::DEFAULT_HUE_TOLERANCE;
-    use crate::hue::HueImage;
-    use crate::model::{Block, ROW_DISTANCES_M};
-    use crate::synth;
-    use std::vec;
-
-    const W: u16 = 640;
-    const H: u16 = 480;
-
-    fn rig() -> StereoRig {
-        StereoRig::parallel(Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, W, H).unwrap(), 0.1).unwrap()
-    }
-
-    fn scene(psi: &Psi) -> (std::vec::Vec<u8>, std::vec::Vec<u8>) {
-        let rig = rig();
-        let iso = psi.try_to_isometry().unwrap();
-        let mut right = vec![NO_HUE; usize::from(W) * usize::from(H)];
-        let mut left = right.clone();
-        synth::render_block(&Block::PAPER, &rig.right, &iso, &mut right).unwrap();
-        synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut left).unwrap();
-        (left, right)
-    }
-
-    #[test]
-    fn true_pose_scores_exactly_one_and_perturbations_score_less() {
-        let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
-        let hues = model.faces().map(|f| f.hue);
-        let lut = HueLut::new(&hues, DEFAULT_HUE_TOLERANCE);
-        let rig = rig();
-        let eval = Evaluator::new(&model, &lut, &rig);
-        // A corner towards the camera, so three faces are visible: the model diagonal (1,1,1)
-        // turned most of the way onto the camera's −z.
-        let q = crate::quat::from_angle_axis(2.0, &Vector3::new(-1.0, 1.0, 0.1)).unwrap();
-        let truth = Psi::from_parts(&Vector3::new(0.02, -0.01, 0.75), &q);
-        let (l, r) = scene(&truth);
-        let left = HueImage::new_checked(&l[..], W, H).unwrap();
-        let right = HueImage::new_checked(&r[..], W, H).unwrap();
-        let f = eval.evaluate_psi(&truth, &left, &right);
-        assert_eq!(f.total, 1.0, "{f:?}");
-        assert_eq!(f.right.visible.count_ones(), 3);
-        assert_eq!(f.right.inner_total, 3 * SurfaceStrips::<8>::INNER_PER_FACE as u32);
-        // Every perturbation of 8 mm or 0.03 in ε lowers F.
-        for i in 0..6 {
-            for sign in [-1.0f32, 1.0] {
-                let mut p = truth;
-                p.0[i] += sign * if i < 3 { 0.008 } else { 0.03 };
-                let fp = eval.evaluate_psi(&p, &left, &right).total;
-                assert!(fp < 1.0, "gene {i} {sign}: {fp}");
-            }
-        }
-        // Far away poses score (close to) nothing.
-        let far = Psi::new([0.25, 0.2, 1.1], [0.0; 3]);
-        assert!(eval.evaluate_psi(&far, &left, &right).total < 0.2);
-        // A pose behind the camera scores 0 without reading out of bounds.
-        let behind = Psi::new([0.0, 0.0, -0.5], [0.0; 3]);
-        assert_eq!(eval.evaluate_psi(&behind, &left, &right).total, 0.0);
-    }
-
-    /// A fully saturated, bright RGB565 colour of hue byte `h` (black for `NO_HUE`).
-    fn hue_to_rgb565(h: u8) -> [u8; 2] {
-        if h == NO_HUE {
-            return [0, 0];
-        }
-        let deg = 2.0 * f32::from(h);
-        let f = |n: f32| {
-            let k = (n + deg / 60.0) % 6.0;
-            (255.0 * (1.0 - k.min(4.0 - k).clamp(0.0, 1.0))) as u8
-        };
-        crate::image::rgb888_to_rgb565(f(5.0), f(3.0), f(1.0)).to_le_bytes()
-    }
-
-    #[test]
-    fn rgb565_frames_score_as_their_hue_frames() {
-        use crate::image::{Rgb565, Rgb565Image};
-        let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
-        let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
-        let rig = rig();
-        let eval = Evaluator::new(&model, &lut, &rig);
-        let q = crate::quat::from_angle_axis(2.0, &Vector3::new(-1.0, 1.0, 0.1)).unwrap();
-        let truth = Psi::from_parts(&Vector3::new(0.02, -0.01, 0.75), &q);
-        let (l, r) = scene(&truth);
-        let to565 = |img: &[u8]| img.iter().flat_map(|&h| hue_to_rgb565(h)).collect::<std::vec::Vec<u8>>();
-        let (l5, r5) = (to565(&l), to565(&r));
-        for (h, px) in l.iter().zip(l5.chunks(2)) {
-            assert_eq!(crate::image::rgb565_to_hue(u16::from_le_bytes([px[0], px[1]])), *h);
-        }
-        let (left, right) =
-            (HueImage::new_checked(&l[..], W, H).unwrap(), HueImage::new_checked(&r[..], W, H).unwrap());
-        let left5: Rgb565Image<&[u8]> = Rgb565Image::new_checked(&l5[..], W, H).unwrap();
-        let right5 = crate::image::Image::<_, Rgb565>::new_checked(&r5[..], W, H).unwrap();
-        for i in 0..12 {
-            let mut p = truth;
-            p.0[i % 6] += if i < 6 { 0.004 } else { -0.02 };
-            assert_eq!(eval.evaluate_psi(&p, &left, &right), eval.evaluate_psi(&p, &left5, &right5), "{i}");
-        }
-        assert_eq!(eval.evaluate_psi(&truth, &left5, &right5).total, 1.0);
-    }
-
-    #[test]
-    fn distorted_kernel_samples_where_the_lens_projects() {
-        use crate::camera::Distortion;
-        let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
-        let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
-        let q = crate::quat::from_angle_axis(2.0, &Vector3::new(-1.0, 1.0, 0.1)).unwrap();
-        let truth = Psi::from_parts(&Vector3::new(0.02, -0.01, 0.75), &q);
-        let (_, img) = scene(&truth);
-        let image = HueImage::new_checked(&img[..], W, H).unwrap();
-        let (r, t) = (truth.rotation_unchecked(), truth.translation());
-        let plain = rig().right;
-        let plain_counts = camera_counts(&model, &lut, &plain, &image, &r, &t);
-        // A negligible lens takes the distorted kernel and must count (almost) the same.
-        let tiny = plain.with_distortion(Distortion::plumb_bob([1e-7, 0.0, 0.0, 0.0, 0.0]).unwrap());
-        let tiny_counts = camera_counts(&model, &lut, &tiny, &image, &r, &t);
-        assert_eq!(tiny_counts.visible, plain_counts.visible);
-        assert!(
-            tiny_counts.inner_matched.abs_diff(plain_counts.inner_matched) <= 2,
-            "{tiny_counts:?} {plain_counts:?}"
-        );
-        // A real lens moves the samples: on the undistorted image, the match drops.
-        let barrel = plain.with_distortion(Distortion::plumb_bob([-0.3, 0.1, 0.0, 0.0, 0.0]).unwrap());
-        let barrel_counts = camera_counts(&model, &lut, &barrel, &image, &r, &t);
-        assert!(barrel_counts.score() < plain_counts.score(), "{barrel_counts:?} {plain_counts:?}");
-        assert!(barrel_counts.strip_matched > 0, "{barrel_counts:?}");
-        // A point far outside the field never reads a pixel, whatever the polynomial does.
-        let p = Psi::new([5.0, 0.0, 0.5], [0.0; 3]);
-        let far = camera_counts(&model, &lut, &barrel, &image, &p.rotation_unchecked(), &p.translation());
-        assert_eq!(far.inner_matched + far.strip_matched, 0);
-    }
-
-    #[test]
-    fn affine_walk_stays_on_the_projected_row() {
-        const G: usize = 8;
-        let cam = rig().right;
-        let q = crate::quat::from_angle_axis(0.8, &Vector3::new(0.3, 1.0, 0.2)).unwrap();
-        let pose = Psi::from_parts(&Vector3::new(0.05, -0.03, 0.45), &q);
-        let (r, t) = (pose.rotation_unchecked(), pose.translation());
-        let s = FIX_ONE;
-        let proj = Projector::new([cam.fx() * s, cam.fy() * s, cam.cx() * s, cam.cy() * s], &r, &t);
-        let model = SurfaceStrips::<G>::new(&Block::PAPER).unwrap();
-        let project = |p: &Vector3<f32>| {
-            let c = r * p + t;
-            (
-                (
-                    f64::from(cam.fx()) * f64::from(c.x) / f64::from(c.z) + f64::from(cam.cx()),
-                    f64::from(cam.fy()) * f64::from(c.y) / f64::from(c.z) + f64::from(cam.cy()),
-                ),
-                f64::from(c.z),
-            )
-        };
-        let mut worst_shift = 0.0f64;
-        for face in model.faces() {
-            for e in &face.edges {
-                for d in ROW_DISTANCES_M {
-                    let first = e.base + e.inward * d;
-                    let last = first + e.step * (G - 1) as f32;
-                    let h = |p: &Vector3<f32>| {
-                        let m = &proj.m;
-                        let row = |i: usize| m[i][0] * p.x + m[i][1] * p.y + m[i][2] * p.z + proj.c[i];
-                        [row(0), row(1), row(2)]
-                    };
-                    let (a, b) = (h(&first), h(&last));
-                    let row = FixedRow::new::<G>(a, sub(b, a));
-                    let ((u0, v0), w0) = project(&first);
-                    let ((u1, v1), w1) = project(&last);
-                    let (du, dv) = (u1 - u0, v1 - v0);
-                    let len2 = du * du + dv * dv;
-                    let bound = (w1 - w0).abs() / (4.0 * w0.min(w1));
-                    for i in 0..G {
-                        let fx = f64::from(row.u.wrapping_add(row.du * i as i32)) / 65536.0;
-                        let fy = f64::from(row.v.wrapping_add(row.dv * i as i32)) / 65536.0;
-                        // On the projected segment: distance to its line ≤ 0.01 px...
-                        let off = ((fx - u0) * dv - (fy - v0) * du).abs() / len2.sqrt();
-                        assert!(off < 0.01, "{off} px off the row");
-                        // ...and the row point it shows is within the bound of the model's.
-                        let s_img = ((fx - u0) * du + (fy - v0) * dv) / len2;
-                        let s = i as f64 / (G - 1) as f64;
-                        let s_model = s_img * w0 / ((1.0 - s_img) * w1 + s_img * w0);
-                        let shift = (s_model - s).abs();
-                        assert!(shift <= bound + 1e-3, "shift {shift} > bound {bound}");
-                        worst_shift = worst_shift.max(shift);
-                    }
-                }
-            }
-        }
-        // The pose is tilted: the walk does move points along their rows, a little.
-        assert!(worst_shift > 1e-3 && worst_shift < 0.1, "{worst_shift}");
-    }
-
-    #[test]
-    fn a_blank_image_scores_zero() {
-        let model = SurfaceStrips::<4>::new(&Block::PAPER).unwrap();
-        let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
-        let rig = rig();
-        let eval = Evaluator::new(&model, &lut, &rig);
-        let blank = vec![NO_HUE; usize::from(W) * usize::from(H)];
-        let img = HueImage::new_checked(&blank[..], W, H).unwrap();
-        let f = eval.evaluate_psi(&Psi::new([0.0, 0.0, 0.7], [0.0; 3]), &img, &img);
-        assert_eq!(f.total, 0.0);
-        assert!(f.right.inner_total > 0);
-    }
-
-    #[test]
-    fn score_clamps_at_zero() {
-        let c = Counts { inner_matched: 3, inner_total: 10, strip_matched: 7, visible: 1 };
-        assert_eq!(c.score(), 0.0);
-        let c = Counts { inner_matched: 7, inner_total: 10, strip_matched: 2, visible: 1 };
-        assert!((c.score() - 0.5).abs() < 1e-7);
-    }
-}
+mod tests;

@@ -29,7 +29,7 @@
 
 use core::fmt;
 
-use evorec_core::camera::StereoRig;
+use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::NO_HUE;
 use evorec_core::hue;
 use evorec_core::image::expand_hue_to_rgb565;
@@ -217,6 +217,19 @@ pub fn schedule(k: u32, frames: u32) -> CaseKind {
     let block = frames.div_ceil(kinds).max(1);
     let i = (k / block).min(kinds - 1);
     CaseKind::ALL.get(i as usize).copied().unwrap_or(CaseKind::Tracking)
+}
+
+/// The timing runs' stereo rig at `width × height` (the board profile's frame size): f = 200 px
+/// at 160 px wide, scaled with the width so every profile sees the same view, principal point
+/// at the centre, 0.1 m baseline.
+///
+/// # Errors
+/// [`FrameError`] for a size the camera model refuses (zero).
+pub fn rig_for(width: u16, height: u16) -> Result<StereoRig, FrameError> {
+    let f = 200.0 * f32::from(width) / 160.0;
+    let cam = Pinhole::new_checked(f, f, f32::from(width) / 2.0, f32::from(height) / 2.0, width, height)
+        .map_err(|_| FrameError)?;
+    StereoRig::parallel(cam, 0.1).map_err(|_| FrameError)
 }
 
 /// xorshift32: the noise generator of the frames (not the GA's generator).
@@ -684,6 +697,15 @@ mod tests {
         assert_eq!(GenLine::parse(&format!("{g}")), Some(g));
         assert_eq!(GenLine::parse("GEN p=40 g=8"), None);
         assert_eq!(GenLine::parse("[INFO ] hello"), None);
+    }
+
+    #[test]
+    fn rig_for_scales_the_selftest_view() {
+        // At 160×120 the rig is the self-test's; at 320×240 the focal length doubles.
+        assert_eq!(rig_for(160, 120).unwrap(), crate::selftest::rig().unwrap());
+        let m7 = rig_for(320, 240).unwrap();
+        assert_eq!((m7.right.width(), m7.right.height()), (320, 240));
+        assert!(rig_for(0, 240).is_err());
     }
 
     #[test]

@@ -143,13 +143,18 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
-    /// Worst-case timing and memory per GA generation on the Cortex-M4: runs the timing
-    /// firmware under QEMU with -icount and writes DIR/timing.json and DIR/timing.md. Builds
-    /// nothing: build the firmware first (`cd hil-stubs && cargo build --release`).
+    /// Worst-case timing and memory per GA generation on the board: runs the timing firmware
+    /// under QEMU with -icount and writes DIR/timing.json and DIR/timing.md. Builds nothing:
+    /// build the firmware first (`cd hil-stubs && cargo build --release`; for `--profile m7`
+    /// `cd hil-stubs && CARGO_TARGET_DIR=../target/m7 cargo build --release --features m7`).
     Timing {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
+        /// Board profile: `m4` (Cortex-M4F, STM32F4 at 168 MHz, 160×120) or `m7` (Cortex-M7,
+        /// STM32H743 at 480 MHz, 320×240).
+        #[arg(long, default_value = "m4", value_parser = ["m4", "m7"])]
+        profile: String,
     },
     /// Track a recorded stereo sequence (`evorec-seq/1` directory): writes DIR/trace.csv,
     /// DIR/estimate.tum (TUM format), DIR/summary.json, plots and DIR/overlay_<N>.png. Nothing is
@@ -533,9 +538,11 @@ fn execute(cli: Cli) -> Result<()> {
             println!("{}", evorec_sim::acquire::markdown(&report));
             println!("{} trials per case in {:.1} s; wrote {}", trials, t0.elapsed().as_secs_f64(), out.display());
         }
-        Command::Timing { out } => {
+        Command::Timing { out, profile } => {
+            let board = evorec_sim::timing::Board::by_name(&profile)
+                .ok_or_else(|| anyhow::anyhow!("--profile {profile}: expected m4 or m7"))?;
             io::create_out_dir(&out)?;
-            evorec_sim::timing::run(&out)?;
+            evorec_sim::timing::run(&out, board)?;
         }
         Command::Render { scenario, frame: n, out } => {
             let s = load(&scenario)?;

@@ -32,10 +32,10 @@ fn default_generation_stays_within_the_instruction_budget() -> Result<(), Failur
     }
     // Builds the firmware images of the checked-out source (a no-op when up to date).
     evorec_firmware::host::build_firmware(evorec_firmware::BoardProfile::M4)?;
-    let elf = timing::find_image(timing::TIMING_IMAGE)?;
+    let elf = timing::find_image(&timing::Board::M4, timing::TIMING_IMAGE)?;
     let qemu = timing::find_qemu()?;
     let workdir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("timing_budget");
-    let m = timing::measure(&qemu, &elf, &workdir)?;
+    let m = timing::measure(&qemu, &timing::Board::M4, &elf, &workdir)?;
     let full = m.runs.iter().find(|r| r.name == "full").ok_or_else(|| Failure("no full run".into()))?;
     let s = full.stats();
     println!(
@@ -117,5 +117,42 @@ fn default_generation_stays_within_the_instruction_budget() -> Result<(), Failur
         s.evaluate.max,
         s.per_point.max
     );
+    Ok(())
+}
+
+/// The Cortex-M7 profile's table (`evorec timing --profile m7`): the same timing firmware built
+/// with feature `m7` (320×240 frames, QEMU `mps2-an500`), run end to end through the report
+/// (QEMU, the firmware demo's stack, the disassembly's cycle model, `timing.json`). The
+/// generation's work does not depend on the frame size, so the M4's budget holds here too.
+#[test]
+fn m7_profile_timing_table_is_written() -> Result<(), Failure> {
+    if std::env::var_os("EVOREC_SKIP_HIL").is_some_and(|v| v == "1") {
+        println!("timing_budget (M7) skipped: EVOREC_SKIP_HIL=1");
+        return Ok(());
+    }
+    evorec_firmware::host::build_firmware(evorec_firmware::BoardProfile::M7)?;
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("timing_m7");
+    timing::run(&out, timing::Board::M7)?;
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("timing.json"))?)?;
+    let num = |path: &[&str]| {
+        path.iter().try_fold(&json, |v, k| v.get(k)).and_then(serde_json::Value::as_f64).unwrap_or(f64::NAN)
+    };
+    println!(
+        "timing_budget (M7): worst {} instructions, {} per model point, {} ms with flash wait states",
+        num(&["instructions_per_generation", "max"]),
+        num(&["instructions_per_point_eval"]),
+        num(&["cycle_estimate", "with_flash_wait_states", "milliseconds_per_generation"])
+    );
+    assert_eq!(json["profile"], "m7");
+    assert_eq!((num(&["frame_width"]), num(&["frame_height"])), (320.0, 240.0));
+    assert_eq!(num(&["cycle_estimate", "clock_mhz"]), 480.0);
+    assert!(num(&["frames"]) >= 100.0);
+    assert!(num(&["instructions_per_generation", "max"]) <= GENERATION_BUDGET);
+    assert_eq!(num(&["deadline", "missed"]), 0.0);
+    // Both point conventions: 960 model points, 768 walked per individual at rows of 8.
+    let (model, walked) = (num(&["instructions_per_point_eval"]), num(&["instructions_per_walked_point"]));
+    assert!((model * 960.0 - walked * 768.0).abs() < 2.0 * 960.0 * 0.01, "{model} / {walked}");
+    assert!(num(&["cycle_estimate", "with_flash_wait_states", "milliseconds_per_generation"]) <= 16.0);
+    assert_eq!(json["ram_check"]["fits"], true, "static RAM + stack over 512 KiB");
     Ok(())
 }

@@ -4,16 +4,23 @@
 //!
 //! Runs, in order: the default configuration (population 40, 8 points per row) on
 //! `timing::FULL_FRAMES` RGB565 frames of every kind (the hue of every sampled pixel is
-//! looked up in the core's `RGB565_HUE` table inside the measured window), then the sweep (populations 20/40/60 × rows of
-//! 4/8/12 points, and population 40 with rows of 5, 6 and 7, `Tracker<7, P, G>` monomorphised for each) on `timing::SWEEP_FRAMES` frames
-//! each. Every frame is made on the board before its generation, so the measured window
+//! looked up in the core's `RGB565_HUE` table inside the measured window), then, on the M4
+//! profile, the sweep (populations 20/40/60 × rows of 4/8/12 points, and population 40 with
+//! rows of 5, 6 and 7, `Tracker<7, P, G>` monomorphised for each; population 40 with rows of 8
+//! is the `full` run) on `timing::SWEEP_FRAMES` frames each. The M7 profile (feature `m7`,
+//! 320×240) runs the `full` run only: the same code on larger frames. Every frame is made on the board before its generation, so the measured window
 //! holds only `Tracker::step_probed` (feedforward on). Before each generation the tracker is
 //! put in the status of its frame kind (`CaseKind::forced_status`: searching or lost for those
 //! kinds, tracking for all others), which decides the generation's work. Before each generation the free stack
 //! is painted again, and its high-water mark after the generation is printed too.
 //!
-//! `evorec timing --out DIR` (host) runs this image and writes the report. Build it with
-//! `cd hil-stubs && cargo build --release` (→ `target/thumbv7em-none-eabihf/release/evorec-timing`).
+//! The rig is `timing::rig_for` the profile's frame size (f = 200 px at 160×120, scaled with
+//! the width, so both profiles see the same view).
+//!
+//! `evorec timing --out DIR [--profile m7]` (host) runs this image and writes the report. Build
+//! it with `cd hil-stubs && cargo build --release` (→
+//! `target/thumbv7em-none-eabihf/release/evorec-timing`; for the M7 `CARGO_TARGET_DIR=../target/m7
+//! cargo build --release --features m7`).
 //!
 //! Built for the host, this binary only explains how to build the real one.
 #![cfg_attr(target_os = "none", no_std)]
@@ -31,9 +38,9 @@ mod firmware {
     use evorec_firmware::protocol::Setup;
     use evorec_firmware::timing::{
         BANNER, CaseGen, DeadlineReport, DownCounter, FRAME_PERIOD_US, FULL_FRAMES, GenLine, PhaseTicks, PhaseTimer,
-        SWEEP_FRAMES, schedule,
+        SWEEP_FRAMES, rig_for, schedule,
     };
-    use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, rt, selftest, sys};
+    use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, PROFILE, rt, selftest, sys};
     use static_cell::ConstStaticCell;
 
     /// Seed of the frames' noise generator.
@@ -141,7 +148,10 @@ mod firmware {
         left: &mut [u8],
         right: &mut [u8],
     ) -> bool {
-        let Ok(config) = selftest::tracker_config() else { return false };
+        let Ok(mut config) = selftest::tracker_config() else { return false };
+        // The board profile's frame size (160×120 on the M4, 320×240 on the M7).
+        let Ok(rig) = rig_for(FRAME_WIDTH, FRAME_HEIGHT) else { return false };
+        config.rig = rig;
         let Ok(mut cases) = CaseGen::new(config.rig, config.flange_to_camera, FRAME_SEED) else { return false };
         let start = cases.truth(0, false);
         let Ok(mut setup) = Setup::from_tracker_config(&config, Feedforward::On, &start, &selftest::SPREAD) else {
@@ -155,14 +165,16 @@ mod firmware {
             return false;
         };
         hprintln!(
-            "RUN name={} p={} g={} frames={} points_per_camera={} width={} height={}",
+            "RUN name={} p={} g={} frames={} points_per_camera={} walked_per_camera={} width={} height={} profile={}",
             name,
             P,
             G,
             frames,
             SurfaceStrips::<G>::POINTS_PER_CAMERA,
+            SurfaceStrips::<G>::WALKED_PER_CAMERA,
             FRAME_WIDTH,
-            FRAME_HEIGHT
+            FRAME_HEIGHT,
+            PROFILE.name
         );
         let mut deadline = DeadlineReport::default();
         for k in 0..frames {
@@ -213,21 +225,27 @@ mod firmware {
             assert!(evorec_core::config::DEFAULT_POPULATION == 40 && evorec_core::config::DEFAULT_GRID == 8);
         };
         let Some(slot) = SLOT.try_take() else { rt::exit(false) };
-        let ok = run_config::<P40G8, 40, 8>("full", slot, FULL_FRAMES, &timer, left, right)
-            && run_config::<P20G4, 20, 4>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P20G8, 20, 8>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P20G12, 20, 12>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G4, 40, 4>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G5, 40, 5>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G6, 40, 6>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G7, 40, 7>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G8, 40, 8>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P40G12, 40, 12>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P60G4, 60, 4>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P60G8, 60, 8>("sweep", slot, SWEEP_FRAMES, &timer, left, right)
-            && run_config::<P60G12, 60, 12>("sweep", slot, SWEEP_FRAMES, &timer, left, right);
+        let full = run_config::<P40G8, 40, 8>("full", slot, FULL_FRAMES, &timer, left, right);
+        // The sweep chooses the configuration, on the M4 (the M7 runs the same code).
+        let ok = full && (cfg!(feature = "m7") || sweep(slot, &timer, left, right));
         hprintln!("END {}", if ok { "ok" } else { "failed" });
         rt::exit(ok)
+    }
+
+    /// The sweep: every configuration but the default one (the `full` run) on
+    /// [`SWEEP_FRAMES`] frames each; false on the first failure.
+    fn sweep(slot: &mut Slot, timer: &Timer0, left: &mut [u8], right: &mut [u8]) -> bool {
+        run_config::<P20G4, 20, 4>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P20G8, 20, 8>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P20G12, 20, 12>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P40G4, 40, 4>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P40G5, 40, 5>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P40G6, 40, 6>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P40G7, 40, 7>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P40G12, 40, 12>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P60G4, 60, 4>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P60G8, 60, 8>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P60G12, 60, 12>("sweep", slot, SWEEP_FRAMES, timer, left, right)
     }
 }
 

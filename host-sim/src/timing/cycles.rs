@@ -1,4 +1,5 @@
-//! Instruction mix and the cycle ESTIMATE (never a measurement) for a 168 MHz Cortex-M4F.
+//! Instruction mix and the cycle ESTIMATE (never a measurement) for the board's part (a
+//! 168 MHz Cortex-M4F or a 480 MHz Cortex-M7, see [`Board`]).
 
 use std::collections::BTreeMap;
 use std::fs;
@@ -6,10 +7,10 @@ use std::path::Path;
 
 use anyhow::{Context, Result, anyhow};
 
-use super::ESTIMATE_CLOCK_HZ;
 use super::disasm::{Graph, Insn, call_graph, disassemble, is_branch, is_default_generation, reg_count};
 use super::elf::FlashImage;
 use super::flash::{self, HotLoop, Waits};
+use super::profile::{Board, MemorySystem};
 
 /// Instruction classes with their worst-case Cortex-M4 cycle costs (Cortex-M4 TRM r0p1,
 /// §3.3 "Processor instruction timings" and the FPU chapter's instruction timings), for
@@ -125,13 +126,13 @@ pub(super) fn is_pixel_load(i: &Insn) -> bool {
         || (m.trim_end_matches(".w") == "ldrh" && i.operands.replace(' ', "").ends_with(",lsl#1]"))
 }
 
-/// The point and rest mixes of the generation in `elf`.
-pub(super) fn analyse_mix(objdump: &Path, elf: &Path) -> Result<MixAnalysis> {
+/// The point and rest mixes of the generation in `elf`, flash and caches as in `mem`.
+pub(super) fn analyse_mix(objdump: &Path, elf: &Path, mem: &MemorySystem) -> Result<MixAnalysis> {
     let funcs = disassemble(objdump, elf)?;
     let image = FlashImage::new(fs::read(elf).with_context(|| format!("reading {}", elf.display()))?)?;
     let g = Graph { funcs: &funcs, calls: call_graph(&funcs), frame: Vec::new() };
     let root =
-        g.find(is_default_generation).ok_or_else(|| anyhow!("no P40G5 generation function in {}", elf.display()))?;
+        g.find(is_default_generation).ok_or_else(|| anyhow!("no P40G8 generation function in {}", elf.display()))?;
     let reach = g.reachable(root);
     let kernel = reach
         .iter()
@@ -156,7 +157,7 @@ pub(super) fn analyse_mix(objdump: &Path, elf: &Path) -> Result<MixAnalysis> {
         if b - a <= median + median / 4 {
             windows += 1;
             let window = kf.insns.get(a..b).unwrap_or_default();
-            point_waits.add_line_stalls(window);
+            point_waits.add_line_stalls(window, mem);
             lo = lo.min(window.first().map_or(u32::MAX, |x| x.0));
             hi = hi.max(kf.insns.get(b).map_or(0, |x| x.0));
             for k in a..b {
@@ -187,9 +188,9 @@ pub(super) fn analyse_mix(objdump: &Path, elf: &Path) -> Result<MixAnalysis> {
             rest.add(i, 1.0);
             rest_waits.add(i, fl.get(k).copied().unwrap_or(flash::Load::Other));
         }
-        rest_waits.add_line_stalls(func.insns.iter().enumerate().filter(|(k, _)| outside(*k)).map(|(_, x)| x));
+        rest_waits.add_line_stalls(func.insns.iter().enumerate().filter(|(k, _)| outside(*k)).map(|(_, x)| x), mem);
     }
-    let hot = HotLoop::new(lo.min(hi), hi);
+    let hot = HotLoop::new(lo.min(hi), hi, mem);
     Ok(MixAnalysis { point, windows, rest, point_waits, rest_waits, hot })
 }
 
@@ -202,7 +203,7 @@ pub struct CycleEstimate {
     pub rest_cycles: f64,
     /// Total.
     pub cycles: f64,
-    /// At [`ESTIMATE_CLOCK_HZ`].
+    /// At the board's clock.
     pub microseconds: f64,
     /// Flash wait-state cycles of the sample points (data loads; code fetch unless the hot
     /// loop hits the ART instruction cache, then its cold misses per kernel call).
@@ -211,22 +212,24 @@ pub struct CycleEstimate {
     pub flash_rest_cycles: f64,
     /// Worst case with flash wait states: `cycles + flash_point_cycles + flash_rest_cycles`.
     pub flash_cycles: f64,
-    /// `flash_cycles` at [`ESTIMATE_CLOCK_HZ`].
+    /// `flash_cycles` at the board's clock.
     pub flash_microseconds: f64,
     /// Sensitivity: the sample points' code missing the instruction cache too and every load of
-    /// unknown provenance in them read from flash (µs at [`ESTIMATE_CLOCK_HZ`]).
+    /// unknown provenance in them read from flash (µs at the board's clock).
     pub flash_uncached_microseconds: f64,
 }
 
-/// The estimate for `worst_instructions` of which `points` are sample points in `calls` kernel
-/// calls (population × 2 cameras), every branch at `branch` cycles.
+/// The estimate on `board` for `worst_instructions` of which `points` are sample points in
+/// `calls` kernel calls (population × 2 cameras × 12 edges), every branch at `branch` cycles.
 pub(super) fn estimate(
+    board: &Board,
     mix: &MixAnalysis,
     worst_instructions: f64,
     points: f64,
     calls: f64,
     branch: f64,
 ) -> CycleEstimate {
+    let mem = &board.memory;
     let cpi = |m: &Mix| if m.instructions > 0.0 { cycles_with_branch_cost(m, branch) / m.instructions } else { 0.0 };
     let point_ins = (points * mix.point.instructions).min(worst_instructions);
     let point_cycles = point_ins * cpi(&mix.point);
@@ -235,16 +238,19 @@ pub(super) fn estimate(
     let cycles = point_cycles + rest_cycles;
     let points_done = if mix.point.instructions > 0.0 { point_ins / mix.point.instructions } else { 0.0 };
     let flash_point_cycles = if mix.hot.cached {
-        points_done * mix.point_waits.cycles_cached(false) + calls * mix.hot.cold_cycles()
+        points_done * mix.point_waits.cycles_cached(false, mem) + calls * mix.hot.cold_cycles
     } else {
-        points_done * mix.point_waits.cycles_uncached(false)
+        points_done * mix.point_waits.cycles_uncached(false, mem)
     };
-    let per_rest =
-        if mix.rest.instructions > 0.0 { mix.rest_waits.cycles_uncached(true) / mix.rest.instructions } else { 0.0 };
+    let per_rest = if mix.rest.instructions > 0.0 {
+        mix.rest_waits.cycles_uncached(true, mem) / mix.rest.instructions
+    } else {
+        0.0
+    };
     let flash_rest_cycles = rest_ins * per_rest;
     let flash_cycles = cycles + flash_point_cycles + flash_rest_cycles;
-    let uncached = cycles + points_done * mix.point_waits.cycles_uncached(true) + flash_rest_cycles;
-    let us = |c: f64| c / ESTIMATE_CLOCK_HZ * 1e6;
+    let uncached = cycles + points_done * mix.point_waits.cycles_uncached(true, mem) + flash_rest_cycles;
+    let us = |c: f64| c / board.clock_hz * 1e6;
     CycleEstimate {
         point_cycles,
         rest_cycles,
@@ -259,10 +265,11 @@ pub(super) fn estimate(
 }
 
 /// The assumptions of the estimate, as stated in the report.
-pub(super) fn assumptions() -> Vec<&'static str> {
+pub(super) fn assumptions(board: &Board) -> Vec<&'static str> {
     vec![
-        "Cortex-M4F at 168 MHz; the zero-wait-state figure assumes every code and data access at 0 wait states, the flash figure adds the wait states of the model below",
-        "per-class worst-case costs from the Cortex-M4 TRM: ALU/IT 1, MUL/UMULL/UMLAL 1, MLA/MLS 2, SDIV/UDIV 12, LDR/STR 2, LDRD/STRD 3, LDM/STM/PUSH/POP 1+N (+3 if PC is loaded), every branch 1+P with P = 3 (pipeline refill, conditional branches counted as taken), VADD/VSUB/VMUL/VCVT/VMOV/VCMP 1, VMLA/VMLS 3, VDIV.F32/VSQRT.F32 14, VLDR/VSTR 2, VLDM/VSTM/VPUSH/VPOP 1+N words",
+        board.pipeline,
+        "the zero-wait-state figure assumes every code and data access at 0 wait states, the flash figure adds the wait states of the model below",
+        "per-class worst-case costs from the Cortex-M4 TRM: ALU/IT 1, MUL/UMULL/UMLAL 1, MLA/MLS 2, SDIV/UDIV 12, LDR/STR 2, LDRD/STRD 3, LDM/STM/PUSH/POP 1+N (+3 if PC is loaded), every branch 1+P (P = 3 on the M4: pipeline refill, conditional branches counted as taken; the board's branch cost above replaces it), VADD/VSUB/VMUL/VCVT/VMOV/VCMP 1, VMLA/VMLS 3, VDIV.F32/VSQRT.F32 14, VLDR/VSTR 2, VLDM/VSTM/VPUSH/VPOP 1+N words",
         "instruction mix: sample points = measured points x the mean static mix of one point (the instructions between consecutive pixel loads in the unrolled integer walk of the fitness kernel, walk_edge (the RGB565 walk's ldrh [pixels, index, lsl #1], one per point, or a predicated ldrblo/ldrhlo); the per-row perspective divisions are in the rest); every other measured instruction x the cycles per instruction of the static mix of all other code reachable from the generation function (llvm-objdump)",
         "no interrupts, no DMA contention, FPU lazy stacking not triggered",
     ]

@@ -209,5 +209,5 @@ impl Graph<'_> {
 
 /// Name test of the default configuration's generation function.
 pub(super) fn is_default_generation(name: &str) -> bool {
-    name.contains("P40G5") && name.contains("generation")
+    name.contains("P40G8") && name.contains("generation")
 }

@@ -1,20 +1,17 @@
-//! Flash wait states of an STM32F4 at 168 MHz behind its ART accelerator, added to the
-//! per-class cycle estimate.
+//! Flash wait states behind the part's caches, added to the per-class cycle estimate; the part
+//! is a [`MemorySystem`] (STM32F4 at 168 MHz behind its ART accelerator: 5 wait states, 16-byte
+//! lines, 1 KiB instruction cache; STM32H743 at 480 MHz behind the Cortex-M7's L1 caches).
 //!
-//! The part: 5 wait states at 168 MHz (RM0090, "Relation between CPU clock frequency and Flash
-//! memory read time", 2.7–3.6 V), so a flash access that misses the ART takes 6 cycles instead
-//! of 1. The ART has a 64-line instruction cache and an 8-line data cache of 128-bit lines and a
-//! prefetch buffer that reads the next 128-bit line while the current one executes.
-//!
-//! The model, per instruction of the disassembly (each item a worst case unless it says so):
+//! The model, per instruction of the disassembly (each item a worst case unless it says so;
+//! `W` = [`MemorySystem::miss_cycles`]):
 //! - **data from flash**: a load whose address is in flash (a PC-relative literal, a `tbb`/`tbh`
 //!   table, or a load through a register holding a flash address: set by `movw`/`movt`, `adr`
-//!   or a literal load, tracked forward through the function) misses the data cache: +5;
+//!   or a literal load, tracked forward through the function) misses the data cache: +W;
 //! - **branches**: every branch (conditional ones counted as taken, as in the class model)
-//!   lands on a line that misses the instruction cache: +5;
-//! - **sequential fetch**: the prefetch buffer has the next line after 6 cycles; a line whose
+//!   lands on a line that misses the instruction cache: +W;
+//! - **sequential fetch**: the prefetch has the next line after W + 1 cycles; a line whose
 //!   instructions execute in fewer cycles stalls for the difference;
-//! - **hot loop**: when the fitness kernel's unrolled point code spans at most the 1 KiB
+//! - **hot loop**: when the fitness kernel's unrolled point code spans at most the
 //!   instruction cache, it hits after its first pass: its branches and lines cost nothing
 //!   extra, except one miss per line per kernel call (the rest of the generation may evict it).
 
@@ -23,13 +20,7 @@ use std::collections::HashMap;
 use super::cycles::classify;
 use super::disasm::{Function, Insn};
 use super::elf::FlashImage;
-
-/// Flash wait states at 168 MHz.
-pub const WAIT_STATES: f64 = 5.0;
-/// Bytes of one ART line (128 bits).
-pub const LINE_BYTES: u32 = 16;
-/// Bytes of the ART instruction cache (64 lines of 128 bits).
-pub const ICACHE_BYTES: u32 = 1024;
+use super::profile::MemorySystem;
 
 /// What an instruction reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -162,7 +153,7 @@ pub struct Waits {
     pub other_loads: f64,
     /// Branches.
     pub branches: f64,
-    /// Sequential-fetch stall cycles (lines executing in fewer than 6 cycles).
+    /// Sequential-fetch stall cycles (lines executing in fewer than `W + 1` cycles).
     pub fetch_stall: f64,
 }
 
@@ -181,12 +172,12 @@ impl Waits {
     }
 
     /// Adds the sequential-fetch stalls of the instructions `insns` (address order).
-    pub(super) fn add_line_stalls<'a>(&mut self, insns: impl IntoIterator<Item = &'a (u32, Insn)>) {
+    pub(super) fn add_line_stalls<'a>(&mut self, insns: impl IntoIterator<Item = &'a (u32, Insn)>, mem: &MemorySystem) {
         let mut lines: HashMap<u32, f64> = HashMap::new();
         for (addr, i) in insns {
-            *lines.entry(addr / LINE_BYTES).or_default() += f64::from(classify(i).1);
+            *lines.entry(addr / mem.line_bytes).or_default() += f64::from(classify(i).1);
         }
-        self.fetch_stall += lines.values().map(|c| (WAIT_STATES + 1.0 - c).max(0.0)).sum::<f64>();
+        self.fetch_stall += lines.values().map(|c| (mem.miss_cycles + 1.0 - c).max(0.0)).sum::<f64>();
     }
 
     /// Divides every count by `n`.
@@ -202,47 +193,38 @@ impl Waits {
     /// Extra cycles when the code misses the instruction cache: data from flash, every branch
     /// to a missing line, sequential stalls; `other_as_flash` also counts loads of unknown
     /// provenance as flash loads.
-    pub fn cycles_uncached(&self, other_as_flash: bool) -> f64 {
-        self.cycles_cached(other_as_flash) + WAIT_STATES * self.branches + self.fetch_stall
+    pub fn cycles_uncached(&self, other_as_flash: bool, mem: &MemorySystem) -> f64 {
+        self.cycles_cached(other_as_flash, mem) + mem.miss_cycles * self.branches + self.fetch_stall
     }
 
     /// Extra cycles when the code hits the instruction cache: data from flash only.
-    pub fn cycles_cached(&self, other_as_flash: bool) -> f64 {
+    pub fn cycles_cached(&self, other_as_flash: bool, mem: &MemorySystem) -> f64 {
         let other = if other_as_flash { self.other_loads } else { 0.0 };
-        WAIT_STATES * (self.flash_loads + other)
+        mem.miss_cycles * (self.flash_loads + other)
     }
 }
 
-/// Whether the hot loop fits the ART instruction cache, and its cold misses per kernel call.
+/// Whether the hot loop fits the instruction cache, and its cold misses per kernel call.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HotLoop {
     /// Bytes from the first to the last point window of the kernel.
     pub span_bytes: u32,
-    /// `span_bytes ≤` [`ICACHE_BYTES`].
+    /// `span_bytes ≤` [`MemorySystem::icache_bytes`].
     pub cached: bool,
+    /// Cycles of refilling the loop's lines once (one kernel call).
+    pub cold_cycles: f64,
 }
 
 impl HotLoop {
-    /// The hot loop spanning `start..end`.
-    pub fn new(start: u32, end: u32) -> Self {
+    /// The hot loop spanning `start..end` in the memory system `mem`.
+    pub fn new(start: u32, end: u32, mem: &MemorySystem) -> Self {
         let span_bytes = end.saturating_sub(start);
-        Self { span_bytes, cached: span_bytes <= ICACHE_BYTES }
+        Self {
+            span_bytes,
+            cached: span_bytes <= mem.icache_bytes,
+            cold_cycles: f64::from(span_bytes.div_ceil(mem.line_bytes)) * mem.miss_cycles,
+        }
     }
-
-    /// Cycles of refilling the loop's lines once (one kernel call).
-    pub fn cold_cycles(&self) -> f64 {
-        f64::from(self.span_bytes.div_ceil(LINE_BYTES)) * WAIT_STATES
-    }
-}
-
-/// The assumptions of the wait-state model, as stated in the report.
-pub(super) fn assumptions() -> Vec<&'static str> {
-    vec![
-        "flash: STM32F4 at 168 MHz with 5 wait states (RM0090, 2.7-3.6 V) behind the ART accelerator (64 x 128-bit instruction cache, 8 x 128-bit data cache, prefetch buffer): a flash access that misses the ART costs +5 cycles",
-        "data: every load from flash misses the ART data cache (+5): PC-relative literals, tbb/tbh tables, and loads through a register holding a flash address (movw/movt, adr or a literal load, tracked forward through each function; e.g. constant tables in .rodata, the RGB565 -> hue table); the frames, the tracker and the stack are in SRAM (0 wait states)",
-        "code outside the hot loop: every branch lands on a line that misses the instruction cache (+5); sequential fetch is covered by the prefetch buffer except a 16-byte line whose instructions execute in fewer than 6 cycles stalls for the difference; in the rest of the code, loads through registers of unknown provenance are counted as flash loads too",
-        "hot loop (the sample points of the fitness kernel): if its unrolled code spans at most 1 KiB it hits the instruction cache after one miss per line per call of the integer walk (population x 2 cameras x 12 edges calls per generation); otherwise it is costed like the rest of the code",
-    ]
 }
 
 #[cfg(test)]
@@ -300,12 +282,20 @@ mod tests {
     fn line_stalls_and_hot_loop() {
         let mut w = Waits::default();
         let code = f(&[("adds", "r0, r1", None), ("adds", "r0, r1", None), ("vdiv.f32", "s0, s1, s2", None)]);
-        w.add_line_stalls(&code.insns);
+        let f4 = MemorySystem::STM32F4;
+        w.add_line_stalls(&code.insns, &f4);
         assert_eq!(w.fetch_stall, 0.0);
         let mut w = Waits::default();
-        w.add_line_stalls(&code.insns[..2]);
+        w.add_line_stalls(&code.insns[..2], &f4);
         assert_eq!(w.fetch_stall, 4.0);
-        assert!(HotLoop::new(0x100, 0x500).cached && !HotLoop::new(0x100, 0x501).cached);
-        assert_eq!(HotLoop::new(0, 32).cold_cycles(), 10.0);
+        assert!(HotLoop::new(0x100, 0x500, &f4).cached && !HotLoop::new(0x100, 0x501, &f4).cached);
+        assert_eq!(HotLoop::new(0, 32, &f4).cold_cycles, 10.0);
+        // The M7's 32-byte lines at +9: two instructions of one line stall for 8 cycles.
+        let h7 = MemorySystem::STM32H7;
+        let mut w = Waits::default();
+        w.add_line_stalls(&code.insns[..2], &h7);
+        assert_eq!(w.fetch_stall, 8.0);
+        assert!(HotLoop::new(0, 4096, &h7).cached);
+        assert_eq!(HotLoop::new(0, 64, &h7).cold_cycles, 18.0);
     }
 }

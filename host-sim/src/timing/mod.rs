@@ -1,10 +1,13 @@
-//! `evorec timing --out DIR`: worst-case instructions, stack and memory of one GA generation on
-//! the Cortex-M4, measured under QEMU, and a cycle estimate for a 168 MHz Cortex-M4F.
+//! `evorec timing --out DIR [--profile m4|m7]`: worst-case instructions, stack and memory of one
+//! GA generation on the board (the Cortex-M4 profile at 160×120, or the Cortex-M7 profile at
+//! 320×240, see [`Board`]), measured under QEMU, and a cycle estimate for its part (a 168 MHz
+//! STM32F4 or a 480 MHz STM32H743).
 //!
 //! What it does (it builds nothing; a missing image or tool is reported with the command that
 //! provides it):
 //! 1. runs the timing firmware (`evorec-timing`, see `hil-stubs/src/bin/evorec-timing.rs`)
-//!    under `qemu-system-arm -machine mps2-an386 -icount shift=10`. The firmware makes its
+//!    under `qemu-system-arm -machine mps2-an386 -icount shift=10` (`mps2-an500` for the M7,
+//!    whose image is the same code built with feature `m7`). The firmware makes its
 //!    frames on the board (the core's `synth` rasterizer plus a xorshift noise generator: blank,
 //!    target absent, target filling the image, noise, target under noise, target tracked, at
 //!    random poses, fast arm motion), runs one generation per frame with feedforward on, and
@@ -19,13 +22,15 @@
 //!    graph from `llvm-objdump -d`;
 //! 4. classifies the instructions of the hot loop and of the rest of the generation's code
 //!    (`llvm-objdump`) to turn the measured counts into a cycle ESTIMATE (never a
-//!    measurement) for a 168 MHz Cortex-M4F with per-class worst-case cycle costs;
+//!    measurement) for the board's part with per-class worst-case cycle costs and its flash
+//!    wait states behind its caches;
 //! 5. writes `DIR/timing.json`, `DIR/timing.md` and the raw QEMU logs.
 
 mod cycles;
 mod disasm;
 mod elf;
 mod flash;
+mod profile;
 mod qemu;
 mod report;
 mod stack;
@@ -41,6 +46,7 @@ use evorec_firmware::timing::ICOUNT_SHIFT;
 pub use cycles::{CycleEstimate, Mix, MixAnalysis};
 pub use elf::MemoryUse;
 pub use flash::{HotLoop, Waits};
+pub use profile::{Board, MemorySystem};
 pub use qemu::{
     DeadlineSummary, Measurement, Run, find_image, find_llvm_tool, find_qemu, find_stack_sizes_image, measure,
     parse_output, run_qemu,
@@ -53,8 +59,6 @@ use elf::{memory_use, sections};
 use qemu::painted_stack;
 use stack::analyse_stack;
 
-/// How to build both firmware images.
-pub const BUILD_HINT: &str = "cd hil-stubs && cargo build --release";
 /// How to build the images with `.stack_sizes` (optional, for the static stack analysis).
 pub const STACK_SIZES_HINT: &str = "hil-stubs/scripts/build-stack-sizes.sh";
 /// How to install QEMU.
@@ -73,22 +77,20 @@ pub const GENERATION_BUDGET: f64 = 1.0e6;
 pub const POINT_TARGET: f64 = 25.0;
 /// Target for max/min instructions over the frames.
 pub const RATIO_TARGET: f64 = 1.05;
-/// RAM of the budgeted part (memory-m4.x).
-pub const RAM_BYTES: u64 = 128 * 1024;
-/// Clock of the cycle estimate.
-pub const ESTIMATE_CLOCK_HZ: f64 = 168.0e6;
 /// Longest a QEMU run may take.
 pub const QEMU_TIMEOUT: Duration = Duration::from_secs(600);
 /// The target triple of the firmware.
 const TARGET: &str = "thumbv7em-none-eabihf";
-/// Start of RAM on mps2-an386 / STM32F4 (`memory-m4.x`).
+/// Start of RAM on mps2-an386 and mps2-an500 (`memory-m4.x`, `memory-m7.x`).
 const RAM_ORIGIN: u64 = 0x2000_0000;
 
 /// Everything one `evorec timing` run measured and derived; the report writers' input.
 struct Results {
+    /// The board measured.
+    board: Board,
     /// The default configuration's long run.
     full: RunStats,
-    /// The sweep over population × points per row.
+    /// The sweep over population × points per row (empty on the M7).
     sweep: Vec<RunStats>,
     /// Ticks of two back-to-back TIMER0 reads.
     read_pair_ticks: u32,
@@ -122,23 +124,35 @@ struct Results {
     firmware_elf: PathBuf,
 }
 
-/// `evorec timing --out DIR`: see the module docs.
+/// `evorec timing --out DIR --profile NAME` on `board`: see the module docs.
 ///
 /// # Errors
 /// A missing image, QEMU or llvm-objdump (the message says how to get it), a failed QEMU
 /// run, or an output file that cannot be written.
-pub fn run(out: &Path) -> Result<()> {
-    let timing_elf = find_image(TIMING_IMAGE)?;
-    let firmware_elf = find_image(FIRMWARE_IMAGE)?;
+pub fn run(out: &Path, board: Board) -> Result<()> {
+    let timing_elf = find_image(&board, TIMING_IMAGE)?;
+    let firmware_elf = find_image(&board, FIRMWARE_IMAGE)?;
     let qemu = find_qemu()?;
     let objdump = find_llvm_tool("llvm-objdump")?;
     fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
 
     eprintln!("timing: running {} under QEMU -icount shift={ICOUNT_SHIFT}", timing_elf.display());
     let started = Instant::now();
-    let m = measure(&qemu, &timing_elf, out)?;
+    let m = measure(&qemu, &board, &timing_elf, out)?;
     eprintln!("timing: {} runs measured in {:.1} s", m.runs.len(), started.elapsed().as_secs_f64());
     let full = m.runs.iter().find(|r| r.name == "full").ok_or_else(|| anyhow!("no full run in the output"))?;
+    let frame = (u32::from(board.profile.frame_width), u32::from(board.profile.frame_height));
+    if full.frame != frame {
+        bail!(
+            "{} ran at {}×{}, not the {} profile's {}: build it with `{}`",
+            timing_elf.display(),
+            full.frame.0,
+            full.frame.1,
+            board.profile.name,
+            board.frame_size(),
+            board.build_hint
+        );
+    }
     let full = full.stats();
     let sweep: Vec<RunStats> = m.runs.iter().filter(|r| r.name == "sweep").map(Run::stats).collect();
 
@@ -146,7 +160,7 @@ pub fn run(out: &Path) -> Result<()> {
     // frames including the tracker's construction.
     let demo_dir = out.join("firmware-demo");
     let _ = fs::remove_dir_all(&demo_dir);
-    let demo_log = run_qemu(&qemu, &firmware_elf, &demo_dir, "firmware.log", false)?;
+    let demo_log = run_qemu(&qemu, &board, &firmware_elf, &demo_dir, "firmware.log", false)?;
     let demo_stack = painted_stack(&demo_log);
 
     let fw_mem = memory_use(&sections(&fs::read(&firmware_elf)?)?);
@@ -154,7 +168,7 @@ pub fn run(out: &Path) -> Result<()> {
 
     // The `.stack_sizes` build is used only if it is not older than the measured image.
     let modified = |p: &Path| fs::metadata(p).and_then(|m| m.modified()).ok();
-    let stack_image = find_stack_sizes_image(TIMING_IMAGE).filter(|p| {
+    let stack_image = find_stack_sizes_image(&board, TIMING_IMAGE).filter(|p| {
         let fresh = modified(p) >= modified(&timing_elf);
         if !fresh {
             eprintln!(
@@ -173,25 +187,21 @@ pub fn run(out: &Path) -> Result<()> {
         Some(_) => Some(analyse_stack(&objdump, &timing_elf)?),
         None => None,
     };
-    let mix = analyse_mix(&objdump, &timing_elf)?;
-    let points = f64::from(full.population) * f64::from(full.points_per_individual);
+    let mix = analyse_mix(&objdump, &timing_elf, &board.memory)?;
+    // The points the kernel walks (the cycle model's point mix is one walked point).
+    let points = f64::from(full.population) * f64::from(full.walked_per_individual);
     // Kernel calls whose hot loop may start cold in the ART cache: the integer walk
     // (`walk_edge`) runs once per edge, 3 faces x 4 edges per camera, with the per-row float
     // code (larger than the cache) in between.
     let calls = 2.0 * f64::from(full.population) * 12.0;
-    let cyc = estimate(&mix, full.call.max, points, calls, 4.0);
-    let cyc_eval = estimate(&mix, full.evaluate.max, points, calls, 4.0);
+    let cyc = estimate(&board, &mix, full.call.max, points, calls, board.branch_cycles);
+    let cyc_eval = estimate(&board, &mix, full.evaluate.max, points, calls, board.branch_cycles);
     // Sensitivity: every branch at 2 cycles (taken with a 1-cycle refill; not-taken ones cost 1).
-    let cyc_b2 = estimate(&mix, full.call.max, points, calls, 2.0);
-
-    // Marginal cost of a point: Evaluate at 8 vs 4 points per row, population 40.
-    let eval_at = |p: u32, g: u32| sweep.iter().find(|s| s.population == p && s.grid == g).map(|s| s.evaluate.mean);
-    let marginal = match (eval_at(40, 4), eval_at(40, 8)) {
-        (Some(a), Some(b)) => Some((b - a) / (40.0 * 2.0 * 60.0 * 4.0)),
-        _ => None,
-    };
+    let cyc_b2 = estimate(&board, &mix, full.call.max, points, calls, 2.0);
+    let marginal = marginal(&full, &sweep);
 
     let r = Results {
+        board,
         full,
         sweep,
         read_pair_ticks: m.read_pair_ticks,
@@ -228,4 +238,15 @@ pub fn run(out: &Path) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Marginal instructions of one more model point per row: Evaluate (mean) at 8 minus 4 points
+/// per row, population 40 (rows of 8 are the `full` run, rows of 4 a sweep run), over the
+/// 2 · 60 · 4 model points (2 · 48 · 4 walked ones: × 1.25 per walked point). `None` without
+/// the sweep (the M7 profile).
+fn marginal(full: &RunStats, sweep: &[RunStats]) -> Option<f64> {
+    let eval_at = |g: u32| {
+        std::iter::once(full).chain(sweep).find(|s| s.population == 40 && s.grid == g).map(|s| s.evaluate.mean)
+    };
+    Some((eval_at(8)? - eval_at(4)?) / (40.0 * 2.0 * 60.0 * 4.0))
 }

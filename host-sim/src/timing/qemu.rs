@@ -8,15 +8,17 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, anyhow, bail};
 use evorec_firmware::timing::{BANNER, DEADLINE_TICKS, DeadlineReport, GenLine, ICOUNT_SHIFT, ticks_to_instructions};
 
-use super::{BUILD_HINT, LLVM_HINT, QEMU_HINT, QEMU_TIMEOUT, TARGET, TIMING_ELF_ENV, TIMING_IMAGE};
+use super::profile::Board;
+use super::{LLVM_HINT, QEMU_HINT, QEMU_TIMEOUT, TARGET, TIMING_ELF_ENV, TIMING_IMAGE};
 
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// Target directories searched for the firmware: `$CARGO_TARGET_DIR` (relative to the
-/// workspace root), then the workspace's `target/`.
-fn target_dirs() -> Vec<PathBuf> {
+/// Target directories searched for the firmware of `board`: `$CARGO_TARGET_DIR` (relative to
+/// the workspace root), then the workspace's `target/`; each with the board's subdirectory
+/// (`m7/` for the M7).
+fn target_dirs(board: &Board) -> Vec<PathBuf> {
     let ws = workspace();
     let mut dirs = Vec::new();
     if let Some(dir) = std::env::var_os("CARGO_TARGET_DIR") {
@@ -26,39 +28,43 @@ fn target_dirs() -> Vec<PathBuf> {
     if !dirs.contains(&default) {
         dirs.push(default);
     }
-    dirs
+    match board.target_subdir {
+        Some(sub) => dirs.into_iter().map(|d| d.join(sub)).collect(),
+        None => dirs,
+    }
 }
 
-/// The release image `name` built in `hil-stubs/` (`$EVOREC_TIMING_ELF` for the timing image,
-/// `$EVOREC_FIRMWARE_ELF` for the firmware, if set).
+/// The release image `name` of `board` built in `hil-stubs/` (on the M4, `$EVOREC_TIMING_ELF`
+/// for the timing image and `$EVOREC_FIRMWARE_ELF` for the firmware, if set).
 ///
 /// # Errors
 /// The image does not exist; the message says how to build it.
-pub fn find_image(name: &str) -> Result<PathBuf> {
+pub fn find_image(board: &Board, name: &str) -> Result<PathBuf> {
     let env = if name == TIMING_IMAGE { TIMING_ELF_ENV } else { evorec_firmware::host::FIRMWARE_ENV };
-    if let Some(p) = std::env::var_os(env) {
+    let build_hint = board.build_hint;
+    if let Some(p) = std::env::var_os(env).filter(|_| *board == Board::M4) {
         let p = PathBuf::from(p);
         if p.is_file() {
             return Ok(p);
         }
-        bail!("{env}={} does not exist: build the firmware with `{BUILD_HINT}`", p.display());
+        bail!("{env}={} does not exist: build the firmware with `{build_hint}`", p.display());
     }
     let candidates: Vec<PathBuf> =
-        target_dirs().into_iter().map(|d| d.join(TARGET).join("release").join(name)).collect();
+        target_dirs(board).into_iter().map(|d| d.join(TARGET).join("release").join(name)).collect();
     if let Some(p) = candidates.iter().find(|p| p.is_file()) {
         return Ok(p.clone());
     }
     let list: Vec<String> = candidates.iter().map(|p| p.display().to_string()).collect();
     bail!(
-        "firmware image `{name}` not found (looked at {}): build it with `{BUILD_HINT}` \
+        "firmware image `{name}` not found (looked at {}): build it with `{build_hint}` \
          (needs `rustup target add {TARGET}`), or point {env} at it",
         list.join(", ")
     )
 }
 
 /// The `.stack_sizes` build of image `name` by [`STACK_SIZES_HINT`], if it exists.
-pub fn find_stack_sizes_image(name: &str) -> Option<PathBuf> {
-    target_dirs()
+pub fn find_stack_sizes_image(board: &Board, name: &str) -> Option<PathBuf> {
+    target_dirs(board)
         .into_iter()
         .map(|d| d.join("stack-sizes").join(TARGET).join("release").join(name))
         .find(|p| p.is_file())
@@ -102,17 +108,26 @@ pub fn find_llvm_tool(tool: &str) -> Result<PathBuf> {
     }
 }
 
-/// Runs `elf` on QEMU mps2-an386 (with `-icount shift=`[`ICOUNT_SHIFT`] if `icount`) in
-/// `workdir`, its output to `workdir/log_name`, and returns that output.
+/// Runs `elf` on QEMU as `board`'s machine (mps2-an386 or mps2-an500; with `-icount
+/// shift=`[`ICOUNT_SHIFT`] if `icount`) in `workdir`, its output to `workdir/log_name`, and
+/// returns that output.
 ///
 /// # Errors
 /// QEMU could not start, timed out or exited with failure (the log's end is in the message).
-pub fn run_qemu(qemu: &Path, elf: &Path, workdir: &Path, log_name: &str, icount: bool) -> Result<String> {
+pub fn run_qemu(
+    qemu: &Path,
+    board: &Board,
+    elf: &Path,
+    workdir: &Path,
+    log_name: &str,
+    icount: bool,
+) -> Result<String> {
     fs::create_dir_all(workdir).with_context(|| format!("creating {}", workdir.display()))?;
     let log_path = workdir.join(log_name);
     let log = fs::File::create(&log_path).with_context(|| format!("creating {}", log_path.display()))?;
     let mut cmd = Command::new(qemu);
-    cmd.args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none"])
+    cmd.args(board.qemu_machine())
+        .args(["-nographic", "-monitor", "none"])
         .args(["-semihosting-config", "enable=on,target=native"]);
     if icount {
         cmd.args(["-icount", &format!("shift={ICOUNT_SHIFT}")]);
@@ -152,8 +167,15 @@ pub struct Run {
     pub capacity: u32,
     /// Points per row.
     pub grid: u32,
-    /// Sample points per camera and pose (`SurfaceStrips::POINTS_PER_CAMERA`).
+    /// Sample points per camera and pose in the model (`SurfaceStrips::POINTS_PER_CAMERA`,
+    /// 60 · G: the convention of the per-point targets).
     pub points_per_camera: u32,
+    /// Sample points the kernel walks per camera and pose (`SurfaceStrips::WALKED_PER_CAMERA`,
+    /// 48 · G: outer rows only on the silhouette edges; `points_per_camera` when the line has
+    /// no `walked_per_camera=`).
+    pub walked_per_camera: u32,
+    /// Frame size the firmware ran at (`width=`, `height=`; 0 when absent).
+    pub frame: (u32, u32),
     /// Every measured generation.
     pub generations: Vec<GenLine>,
     /// The firmware's deadline check of this run (its `DEADLINE` line).
@@ -230,6 +252,8 @@ pub fn parse_output(text: &str) -> Result<Measurement> {
                 capacity: num("cap").or_else(|_| num("p"))?,
                 grid: num("g")?,
                 points_per_camera: num("points_per_camera")?,
+                walked_per_camera: num("walked_per_camera").or_else(|_| num("points_per_camera"))?,
+                frame: (num("width").unwrap_or(0), num("height").unwrap_or(0)),
                 generations: Vec::new(),
                 deadline: DeadlineReport::default(),
             });
@@ -263,18 +287,19 @@ pub fn parse_output(text: &str) -> Result<Measurement> {
             "the timing firmware printed {} `DEADLINE` lines for {} runs (rebuild it: `{}`)",
             checked_runs,
             m.runs.len(),
-            super::BUILD_HINT
+            super::Board::M4.build_hint
         );
     }
     Ok(m)
 }
 
-/// Runs the timing image `elf` under QEMU (log in `workdir/timing-firmware.log`) and parses it.
+/// Runs the timing image `elf` of `board` under QEMU (log in `workdir/timing-firmware.log`)
+/// and parses it.
 ///
 /// # Errors
 /// As [`run_qemu`] and [`parse_output`].
-pub fn measure(qemu: &Path, elf: &Path, workdir: &Path) -> Result<Measurement> {
-    parse_output(&run_qemu(qemu, elf, workdir, "timing-firmware.log", true)?)
+pub fn measure(qemu: &Path, board: &Board, elf: &Path, workdir: &Path) -> Result<Measurement> {
+    parse_output(&run_qemu(qemu, board, elf, workdir, "timing-firmware.log", true)?)
 }
 
 /// Parses `stack high-water mark: N of M bytes` from the firmware's log.
@@ -300,7 +325,13 @@ mod tests {
         assert_eq!(m.read_pair_ticks, 25);
         let s = m.runs[0].stats();
         assert_eq!(s.call.max, 80.0);
+        assert_eq!(m.runs[0].frame, (160, 120));
         assert_eq!(s.points_per_individual, 960);
+        assert_eq!(s.walked_per_individual, 960, "no walked_per_camera= means every model point is walked");
+        let walked = text.replace("points_per_camera=480", "points_per_camera=480 walked_per_camera=384");
+        let s = parse_output(&walked).unwrap().runs[0].stats();
+        assert_eq!((s.points_per_individual, s.walked_per_individual), (960, 768));
+        assert_eq!(s.per_point.max * 960.0, s.per_walked_point.max * 768.0);
         assert_eq!((s.population, s.capacity), (40, 40), "no cap= means the population is the capacity");
         let with_cap = text.replace("RUN name=full p=40", "RUN name=full p=40 cap=64");
         assert_eq!(parse_output(&with_cap).unwrap().runs[0].stats().capacity, 64);

@@ -6,11 +6,7 @@ use evorec_firmware::timing::{NS_PER_TICK, ticks_to_instructions};
 use serde_json::{Value, json};
 
 use super::cycles::assumptions;
-use super::flash::assumptions as flash_assumptions;
-use super::{
-    BUILD_HINT, GENERATION_BUDGET, POINT_TARGET, RAM_BYTES, RATIO_TARGET, Range, Results, STACK_SIZES_HINT,
-    StackAnalysis,
-};
+use super::{GENERATION_BUDGET, POINT_TARGET, RATIO_TARGET, Range, Results, RunStats, STACK_SIZES_HINT, StackAnalysis};
 
 /// Worst-case stack: the static analysis or the painted mark of a generation, whichever is larger.
 fn stack_bytes(r: &Results) -> u32 {
@@ -25,7 +21,7 @@ fn read_instructions(r: &Results) -> f64 {
 /// The flash wait-state part of `timing.json`.
 fn flash_json(r: &Results) -> Value {
     json!({
-        "label": "ESTIMATE (not a measurement): the above plus STM32F4 flash wait states (5 at 168 MHz) behind the ART accelerator",
+        "label": format!("ESTIMATE (not a measurement): the above plus flash wait states behind the caches ({})", r.board.memory.label),
         "cycles_per_generation": r.cyc.flash_cycles.round(),
         "milliseconds_per_generation": round2(r.cyc.flash_microseconds / 1000.0),
         "target_milliseconds_per_frame": FRAME_TARGET_MS,
@@ -35,7 +31,7 @@ fn flash_json(r: &Results) -> Value {
         "milliseconds_if_hot_loop_uncached_and_unknown_point_loads_from_flash": round2(r.cyc.flash_uncached_microseconds / 1000.0),
         "milliseconds_if_branches_cost_2": round2(r.cyc_b2.flash_microseconds / 1000.0),
         "hot_loop_span_bytes": r.mix.hot.span_bytes,
-        "hot_loop_in_art_icache": r.mix.hot.cached,
+        "hot_loop_in_icache": r.mix.hot.cached,
         "flash_loads_per_point": round2(r.mix.point_waits.flash_loads),
         "unknown_base_loads_per_point": round2(r.mix.point_waits.other_loads),
         "rest_static": {
@@ -43,7 +39,41 @@ fn flash_json(r: &Results) -> Value {
             "unknown_base_loads": r.mix.rest_waits.other_loads, "branches": r.mix.rest_waits.branches,
             "sequential_fetch_stall_cycles": r.mix.rest_waits.fetch_stall,
         },
-        "assumptions": flash_assumptions(),
+        "assumptions": r.board.memory.assumptions,
+    })
+}
+
+/// One sweep run in `timing.json`.
+fn sweep_json(s: &RunStats) -> Value {
+    json!({
+        "population": s.population, "points_per_row": s.grid, "points_per_individual": s.points_per_individual,
+        "frames": s.generations,
+        "min": s.call.min.round(), "max": s.call.max.round(), "ratio_max_min": (s.call.ratio() * 1e4).round() / 1e4,
+        "evaluate_max": s.evaluate.max.round(), "feedforward_max": s.feedforward.max.round(), "breed_max": s.breed.max.round(),
+        "instructions_per_point_eval": round2(s.per_point.max),
+        "instructions_per_walked_point": round2(s.per_walked_point.max),
+    })
+}
+
+/// The cycle-estimate part of `timing.json`.
+fn cycle_json(r: &Results) -> Value {
+    json!({
+        "label": format!("ESTIMATE (not a measurement): measured worst-case instruction count x per-class worst-case cycle costs, {}", r.board.part),
+        "clock_mhz": r.board.mhz(),
+        "branch_cycles": r.board.branch_cycles,
+        "cycles_per_generation": r.cyc.cycles.round(),
+        "microseconds_per_generation": round1(r.cyc.microseconds),
+        "evaluate_cycles": r.cyc_eval.cycles.round(),
+        "cycles_per_generation_if_branches_cost_2": r.cyc_b2.cycles.round(),
+        "microseconds_per_generation_if_branches_cost_2": round1(r.cyc_b2.microseconds),
+        "point_cycles_per_point": round2(r.mix.point.cycles),
+        "point_instructions_static": round2(r.mix.point.instructions),
+        "point_windows": r.mix.windows,
+        "rest_cycles_per_instruction": round2(r.mix.rest.cpi()),
+        "point_mix": r.mix.point.classes.iter().map(|(k, v)| ((*k).to_owned(), json!(round2(*v)))).collect::<serde_json::Map<_, _>>(),
+        "rest_mix": r.mix.rest.classes.iter().map(|(k, v)| ((*k).to_owned(), json!(v.round()))).collect::<serde_json::Map<_, _>>(),
+        "assumptions": assumptions(&r.board),
+        "with_flash_wait_states": flash_json(r),
     })
 }
 
@@ -53,10 +83,16 @@ pub(super) fn json(r: &Results) -> Value {
     let ram_check_fw = r.demo_stack.map(|(u, _)| r.fw_mem.static_ram_bytes + u64::from(u));
     let ram_check_timing = r.timing_mem.static_ram_bytes + u64::from(stack_bytes);
     let read_ins = read_instructions(r);
+    let ram_bytes = r.board.ram_bytes;
     json!({
+        "profile": r.board.profile.name,
+        "part": r.board.part,
+        "frame_width": r.board.profile.frame_width,
+        "frame_height": r.board.profile.frame_height,
         "population": r.full.population,
         "population_capacity": r.full.capacity,
         "points_per_individual": r.full.points_per_individual,
+        "walked_points_per_individual": r.full.walked_per_individual,
         "points_per_row": r.full.grid,
         "frames": r.full.generations,
         "frame_source": "generated on the board before each generation (core synth rasterizer + xorshift32 noise); not in the measured window",
@@ -76,6 +112,8 @@ pub(super) fn json(r: &Results) -> Value {
         "instructions_per_point_eval": round2(r.full.per_point.max),
         "instructions_per_point_eval_range": { "min": round2(r.full.per_point.min), "max": round2(r.full.per_point.max) },
         "instructions_per_point_eval_marginal": r.marginal.map(round2),
+        "instructions_per_walked_point": round2(r.full.per_walked_point.max),
+        "point_conventions": "instructions_per_point_eval = Evaluate / (population x model points, 2 x 60 x G: the target's convention, per-pose overhead included); instructions_per_walked_point = Evaluate / (population x points the kernel walks, 2 x 48 x G)",
         "point_eval_target": POINT_TARGET,
         "stack_bytes": stack_bytes,
         "stack": {
@@ -102,38 +140,17 @@ pub(super) fn json(r: &Results) -> Value {
         },
         "static_ram_bytes": r.fw_mem.static_ram_bytes,
         "flash_bytes": r.fw_mem.flash_bytes,
-        "ram_bytes": RAM_BYTES,
+        "ram_bytes": ram_bytes,
         "ram_check": {
             "firmware_static_plus_painted_bytes": ram_check_fw,
             "timing_static_plus_stack_bytes": ram_check_timing,
-            "fits": ram_check_fw.is_none_or(|v| v <= RAM_BYTES) && ram_check_timing <= RAM_BYTES,
+            "fits": ram_check_fw.is_none_or(|v| v <= ram_bytes) && ram_check_timing <= ram_bytes,
         },
         "timing_firmware": { "flash_bytes": r.timing_mem.flash_bytes, "static_ram_bytes": r.timing_mem.static_ram_bytes },
-        "sweep": r.sweep.iter().map(|s| json!({
-            "population": s.population, "points_per_row": s.grid, "points_per_individual": s.points_per_individual,
-            "frames": s.generations,
-            "min": s.call.min.round(), "max": s.call.max.round(), "ratio_max_min": (s.call.ratio() * 1e4).round() / 1e4,
-            "evaluate_max": s.evaluate.max.round(), "feedforward_max": s.feedforward.max.round(), "breed_max": s.breed.max.round(),
-            "instructions_per_point_eval": round2(s.per_point.max),
-        })).collect::<Vec<_>>(),
-        "cycle_estimate_168mhz": {
-            "label": "ESTIMATE (not a measurement): measured worst-case instruction count x per-class worst-case Cortex-M4 cycle costs",
-            "cycles_per_generation": r.cyc.cycles.round(),
-            "microseconds_per_generation": round1(r.cyc.microseconds),
-            "evaluate_cycles": r.cyc_eval.cycles.round(),
-            "cycles_per_generation_if_branches_cost_2": r.cyc_b2.cycles.round(),
-            "microseconds_per_generation_if_branches_cost_2": round1(r.cyc_b2.microseconds),
-            "point_cycles_per_point": round2(r.mix.point.cycles),
-            "point_instructions_static": round2(r.mix.point.instructions),
-            "point_windows": r.mix.windows,
-            "rest_cycles_per_instruction": round2(r.mix.rest.cpi()),
-            "point_mix": r.mix.point.classes.iter().map(|(k, v)| ((*k).to_owned(), json!(round2(*v)))).collect::<serde_json::Map<_, _>>(),
-            "rest_mix": r.mix.rest.classes.iter().map(|(k, v)| ((*k).to_owned(), json!(v.round()))).collect::<serde_json::Map<_, _>>(),
-            "assumptions": assumptions(),
-            "with_flash_wait_states": flash_json(r),
-        },
+        "sweep": r.sweep.iter().map(sweep_json).collect::<Vec<_>>(),
+        "cycle_estimate": cycle_json(r),
         "measurement": {
-            "qemu": "qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -icount shift=10 (1 instruction = 1024 ns virtual)",
+            "qemu": format!("qemu-system-arm {} -icount shift=10 (1 instruction = 1024 ns virtual)", r.board.qemu_machine().join(" ")),
             "timer": format!("CMSDK APB TIMER0 @ 0x40000000, SYSCLK 25 MHz ({NS_PER_TICK} ns/tick): instructions = ticks * 40 / 1024"),
             "timer_read_pair_ticks": r.read_pair_ticks,
             "timer_read_instructions": round2(read_ins),
@@ -148,20 +165,25 @@ pub(super) fn json(r: &Results) -> Value {
 pub(super) fn summary(r: &Results) -> String {
     let f = &r.full;
     format!(
-        "instructions per generation (P = {}, G = {}): min {:.0}, max {:.0} (max/min {:.4}); {:.2} per point; stack {} B; \
-         flash {} B; static RAM {} B; ESTIMATE {:.0} cycles = {:.0} µs at 168 MHz; \
-         deadline {:.0}: {} of {} generations missed (worst {:.0})",
+        "{} at {}: instructions per generation (P = {}, G = {}): min {:.0}, max {:.0} (max/min {:.4}); {:.2} per model point \
+         ({:.2} per walked point); stack {} B; flash {} B; static RAM {} B; ESTIMATE {:.0} cycles = {:.0} µs at {:.0} MHz \
+         ({:.0} µs with flash wait states); deadline {:.0}: {} of {} generations missed (worst {:.0})",
+        r.board.profile.name,
+        r.board.frame_size(),
         f.population,
         f.grid,
         f.call.min,
         f.call.max,
         f.call.ratio(),
         f.per_point.max,
+        f.per_walked_point.max,
         stack_bytes(r),
         r.fw_mem.flash_bytes,
         r.fw_mem.static_ram_bytes,
         r.cyc.cycles,
         r.cyc.microseconds,
+        r.board.mhz(),
+        r.cyc.flash_microseconds,
         r.deadline.limit_instructions,
         r.deadline.missed,
         r.deadline.checked,
@@ -169,7 +191,7 @@ pub(super) fn summary(r: &Results) -> String {
     )
 }
 
-/// Target for the worst-case time of one frame at 168 MHz (half of a 30 fps period).
+/// Target for the worst-case time of one frame (half of a 30 fps period).
 pub const FRAME_TARGET_MS: f64 = 16.0;
 
 /// The flash wait-state part of `timing.md`.
@@ -177,29 +199,32 @@ fn flash_section(s: &mut String, r: &Results) {
     let (c, w, hot) = (&r.cyc, &r.mix.point_waits, &r.mix.hot);
     let ms = c.flash_microseconds / 1000.0;
     let verdict = if ms <= FRAME_TARGET_MS { "✔" } else { "✘" };
+    let mem = &r.board.memory;
     let _ = writeln!(
         s,
-        "\n### With flash wait states (STM32F4, 168 MHz, 5 wait states, ART accelerator)\n\n\
+        "\n### With flash wait states ({})\n\n\
          **≈ {:.0} cycles = {ms:.2} ms per worst-case generation** (target ≤ {FRAME_TARGET_MS} ms per frame {verdict}): \
          {:.0} zero-wait cycles + {:.0} wait cycles at the sample points + {:.0} in the rest.\n",
-        c.flash_cycles, c.cycles, c.flash_point_cycles, c.flash_rest_cycles
+        mem.label, c.flash_cycles, c.cycles, c.flash_point_cycles, c.flash_rest_cycles
     );
     let _ = writeln!(
         s,
-        "- hot loop: the point windows span {} B, {} the 1 KiB ART instruction cache;\n\
-         - per point: {:.2} loads from flash (+5 cycles each), {:.2} loads through registers of unknown provenance \
+        "- hot loop: the point windows span {} B, {} the {} B instruction cache;\n\
+         - per walked point: {:.2} loads from flash (+{} cycles each), {:.2} loads through registers of unknown provenance \
          (SRAM in the estimate);\n\
          - sensitivity: hot loop missing the cache and every unknown point load from flash: {:.2} ms; every branch \
          at 2 cycles: {:.2} ms.\n",
         hot.span_bytes,
         if hot.cached { "inside" } else { "larger than" },
+        mem.icache_bytes,
         w.flash_loads,
+        mem.miss_cycles,
         w.other_loads,
         c.flash_uncached_microseconds / 1000.0,
         r.cyc_b2.flash_microseconds / 1000.0
     );
     let _ = writeln!(s, "Wait-state assumptions:\n");
-    for a in flash_assumptions() {
+    for a in mem.assumptions {
         let _ = writeln!(s, "- {a}");
     }
 }
@@ -210,14 +235,25 @@ pub(super) fn markdown(r: &Results) -> String {
     let (stack_prologue, cyc, cyc_b2, marginal) = (r.stack_prologue.as_ref(), &r.cyc, &r.cyc_b2, r.marginal);
     let (fw, timing, demo_stack, read_ins) = (r.fw_mem, r.timing_mem, r.demo_stack, read_instructions(r));
     let mut s = String::new();
-    let _ = writeln!(s, "# Worst-case timing and memory of one GA generation (Cortex-M4, QEMU `-icount shift=10`)\n");
+    let b = &r.board;
     let _ = writeln!(
         s,
-        "Firmware configuration: population {} (run-time; capacity {}), {} points per row ({} sample points per individual, both cameras), \
-         160×120 frames, feedforward on. {} generations on frames made on the board: every kind below, one tracker \
+        "# Worst-case timing and memory of one GA generation ({}, profile `{}`, QEMU `{}`, `-icount shift=10`)\n",
+        b.part, b.profile.name, b.profile.qemu_machine
+    );
+    let _ = writeln!(
+        s,
+        "Firmware configuration: population {} (run-time; capacity {}), {} points per row ({} model sample points per individual, \
+         both cameras; {} walked), {} frames, feedforward on. {} generations on frames made on the board: every kind below, one tracker \
          running through all of them. Instructions are counted with TIMER0 on QEMU's instruction clock \
          (`ticks · 40 / 1024`, deterministic); a generation is the whole `Tracker::step_probed` call.\n",
-        full.population, full.capacity, full.grid, full.points_per_individual, full.generations
+        full.population,
+        full.capacity,
+        full.grid,
+        full.points_per_individual,
+        full.walked_per_individual,
+        b.frame_size(),
+        full.generations
     );
     let _ = writeln!(s, "| quantity | min | max | mean | target |\n|---|---:|---:|---:|---|");
     let row = |s: &mut String, name: &str, r: &Range, target: &str| {
@@ -241,8 +277,17 @@ pub(super) fn markdown(r: &Results) -> String {
     row(&mut s, "— selection/crossover/mutation (Breed)", &full.breed, "");
     let _ = writeln!(
         s,
-        "| instructions per point evaluation (Evaluate / ({} · {})) | {:.2} | {:.2} | {:.2} | ≤ {POINT_TARGET} |",
+        "| instructions per model point (Evaluate / ({} · {}), the target's convention) | {:.2} | {:.2} | {:.2} | ≤ {POINT_TARGET} |",
         full.population, full.points_per_individual, full.per_point.min, full.per_point.max, full.per_point.mean
+    );
+    let _ = writeln!(
+        s,
+        "| instructions per walked point (Evaluate / ({} · {})) | {:.2} | {:.2} | {:.2} | |",
+        full.population,
+        full.walked_per_individual,
+        full.per_walked_point.min,
+        full.per_walked_point.max,
+        full.per_walked_point.mean
     );
     let _ = writeln!(s);
     let verdict = if full.call.max <= GENERATION_BUDGET {
@@ -259,7 +304,9 @@ pub(super) fn markdown(r: &Results) -> String {
     let _ = writeln!(
         s,
         "- per point: the Evaluate phase divided by the points; it includes the per-pose overhead (ψ → rotation, two \
-         projectors, face choice and visibility, row starts, the GA's best-of bookkeeping). Marginal cost of a point \
+         projectors, face choice and visibility, row starts, the GA's best-of bookkeeping). The model has 60 points per \
+         row length and camera (the target's convention); the kernel walks 48 of them (the outer rows only on the at most \
+         6 silhouette edges, `SurfaceStrips::WALKED_PER_CAMERA`). Marginal cost of a model point \
          (Evaluate at 8 minus 4 points per row, population 40): {}.",
         marginal.map_or("n/a".to_owned(), |v| format!("{v:.2} instructions"))
     );
@@ -284,44 +331,30 @@ pub(super) fn markdown(r: &Results) -> String {
     for (st, n, r) in &full.by_status {
         let _ = writeln!(s, "| {} | {n} | {:.0} | {:.0} |", st.as_str(), r.min, r.max);
     }
-    let _ = writeln!(
-        s,
-        "\n## Sweep: population × points per row ({} frames each, every kind)\n\n\
-         | population | points/row | points/individual | min | max | max/min | Evaluate max | per point (max) |\n\
-         |---:|---:|---:|---:|---:|---:|---:|---:|",
-        sweep.first().map_or(0, |r| r.generations)
-    );
-    for r in sweep {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {:.0} | {:.0} | {:.4} | {:.0} | {:.2} |",
-            r.population,
-            r.grid,
-            r.points_per_individual,
-            r.call.min,
-            r.call.max,
-            r.call.ratio(),
-            r.evaluate.max,
-            r.per_point.max
-        );
+    if sweep.is_empty() {
+        let _ = writeln!(s, "\n(No sweep on this profile: the configuration is chosen on the M4.)");
+    } else {
+        sweep_table(&mut s, full, sweep);
     }
     let _ = writeln!(
         s,
-        "\n## Cycle ESTIMATE for a 168 MHz Cortex-M4F (not a measurement)\n\n\
-         **≈ {:.0} cycles = {:.0} µs per worst-case generation** ({:.0} cycles in the {} sample points at {:.1} cycles \
+        "\n## Cycle ESTIMATE for a {:.0} MHz {} (not a measurement)\n\n\
+         **≈ {:.0} cycles = {:.0} µs per worst-case generation** ({:.0} cycles in the {} walked sample points at {:.1} cycles \
          each, {:.0} in the rest at {:.2} cycles per instruction).\n",
+        b.mhz(),
+        b.part,
         cyc.cycles,
         cyc.microseconds,
         cyc.point_cycles,
-        full.population * full.points_per_individual,
+        full.population * full.walked_per_individual,
         mix.point.cycles,
         cyc.rest_cycles,
         mix.rest.cpi()
     );
     let _ = writeln!(
         s,
-        "Sensitivity: with every branch at 2 cycles instead of 4 (a 1-cycle refill), {:.0} cycles = {:.0} µs.\n",
-        cyc_b2.cycles, cyc_b2.microseconds
+        "Sensitivity: with every branch at 2 cycles instead of {:.0} (a 1-cycle refill), {:.0} cycles = {:.0} µs.\n",
+        b.branch_cycles, cyc_b2.cycles, cyc_b2.microseconds
     );
     let _ = writeln!(
         s,
@@ -333,7 +366,7 @@ pub(super) fn markdown(r: &Results) -> String {
         let _ = writeln!(s, "| {k} | {v:.2} |");
     }
     let _ = writeln!(s, "\nAssumptions:\n");
-    for a in assumptions() {
+    for a in assumptions(b) {
         let _ = writeln!(s, "- {a}");
     }
     flash_section(&mut s, r);
@@ -371,11 +404,12 @@ pub(super) fn markdown(r: &Results) -> String {
     );
     if let Some((u, _)) = demo_stack {
         let total = fw.static_ram_bytes + u64::from(u);
-        let _ = writeln!(s, "| firmware static RAM + painted stack | {total} | of {RAM_BYTES} (memory-m4.x) |");
+        let _ =
+            writeln!(s, "| firmware static RAM + painted stack | {total} | of {} ({}) |", b.ram_bytes, b.memory_map);
     }
     let _ = writeln!(
         s,
-        "| timing firmware flash / static RAM (9 trackers) | {} / {} | ELF section headers |",
+        "| timing firmware flash / static RAM (one tracker slot) | {} / {} | ELF section headers |",
         timing.flash_bytes, timing.static_ram_bytes
     );
     let _ = writeln!(
@@ -389,10 +423,39 @@ pub(super) fn markdown(r: &Results) -> String {
     }
     let _ = writeln!(
         s,
-        "\nReproduce: `{BUILD_HINT}` (and optionally `{STACK_SIZES_HINT}`), then \
-         `cargo run --release -p evorec-sim -- timing --out DIR`."
+        "\nReproduce: `{}` (and optionally `{STACK_SIZES_HINT}`), then \
+         `cargo run --release -p evorec-sim -- timing --out DIR --profile {}`.",
+        b.build_hint, b.profile.name
     );
     s
+}
+
+/// The sweep's table (the `full` run is its population-40, rows-of-8 line).
+fn sweep_table(s: &mut String, full: &RunStats, sweep: &[RunStats]) {
+    let _ = writeln!(
+        s,
+        "\n## Sweep: population × points per row ({} frames each, every kind; P = 40 with rows of 8 is the `full` run)\n\n\
+         | population | points/row | model points/individual | min | max | max/min | Evaluate max | per model point (max) | per walked point (max) |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        sweep.first().map_or(0, |r| r.generations)
+    );
+    let mut rows: Vec<&RunStats> = sweep.iter().chain(std::iter::once(full)).collect();
+    rows.sort_by_key(|r| (r.population, r.grid));
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.0} | {:.0} | {:.4} | {:.0} | {:.2} | {:.2} |",
+            r.population,
+            r.grid,
+            r.points_per_individual,
+            r.call.min,
+            r.call.max,
+            r.call.ratio(),
+            r.evaluate.max,
+            r.per_point.max,
+            r.per_walked_point.max
+        );
+    }
 }
 
 pub(super) fn round1(v: f64) -> f64 {

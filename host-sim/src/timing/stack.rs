@@ -179,7 +179,7 @@ pub(super) fn analyse_stack(objdump: &Path, elf: &Path) -> Result<StackAnalysis>
     };
     let g = Graph { funcs: &funcs, calls: call_graph(&funcs), frame };
     let root =
-        g.find(is_default_generation).ok_or_else(|| anyhow!("no P40G5 generation function in {}", elf.display()))?;
+        g.find(is_default_generation).ok_or_else(|| anyhow!("no P40G8 generation function in {}", elf.display()))?;
     let mut rec = false;
     let generation = g.deepest(root, &mut HashMap::new(), &mut Vec::new(), &mut rec);
     // cortex-m-rt's `Reset` (its `__stext` alias is the name llvm-objdump shows).

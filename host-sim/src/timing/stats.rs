@@ -50,8 +50,10 @@ pub struct RunStats {
     pub capacity: u32,
     /// Points per row.
     pub grid: u32,
-    /// Sample points per individual (both cameras).
+    /// Sample points per individual in the model (both cameras, 2 · 60 · G).
     pub points_per_individual: u32,
+    /// Sample points the kernel walks per individual (both cameras, 2 · 48 · G).
+    pub walked_per_individual: u32,
     /// Generations measured.
     pub generations: usize,
     /// The whole `step_probed` call.
@@ -62,8 +64,11 @@ pub struct RunStats {
     pub evaluate: Range,
     /// Selection, crossover, mutation.
     pub breed: Range,
-    /// Evaluate phase / (population · points per individual).
+    /// Evaluate phase / (population · model points per individual): the convention of the
+    /// per-point target (≤ 25 including the per-pose overhead).
     pub per_point: Range,
+    /// Evaluate phase / (population · walked points per individual).
+    pub per_walked_point: Range,
     /// Largest painted stack high-water mark of a generation (bytes from the top of RAM).
     pub stack: u32,
     /// Whole call per kind of frame.
@@ -78,7 +83,11 @@ impl Run {
         let g = &self.generations;
         let ins = |f: fn(&GenLine) -> u32| Range::of(g.iter().map(|x| ticks_to_instructions(u64::from(f(x)))));
         let points = 2 * self.points_per_camera;
-        let evals = f64::from(self.population) * f64::from(points);
+        let walked = 2 * self.walked_per_camera;
+        let per = |n: u32, r: &Range| {
+            let evals = f64::from(self.population) * f64::from(n);
+            Range { min: r.min / evals, max: r.max / evals, mean: r.mean / evals }
+        };
         let by_kind = CaseKind::ALL
             .into_iter()
             .filter_map(|k| {
@@ -101,12 +110,14 @@ impl Run {
             capacity: self.capacity,
             grid: self.grid,
             points_per_individual: points,
+            walked_per_individual: walked,
             generations: g.len(),
             call: ins(|x| x.call),
             feedforward: ins(|x| x.phases.feedforward),
             evaluate,
             breed: ins(|x| x.phases.breed),
-            per_point: Range { min: evaluate.min / evals, max: evaluate.max / evals, mean: evaluate.mean / evals },
+            per_point: per(points, &evaluate),
+            per_walked_point: per(walked, &evaluate),
             stack: g.iter().map(|x| x.stack).max().unwrap_or(0),
             by_kind,
             by_status,

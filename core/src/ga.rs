@@ -1,6 +1,6 @@
 //! The 1-step GA: one generation per call, a statically sized population of poses.
 //!
-//! One [`Ga::generation`] on the newest frame pair:
+//! One generation on the newest frame pair ([`Ga::evaluate`], then [`Ga::breed`]):
 //! 1. **evaluate** every individual with the caller's fitness;
 //! 2. the **best** (ties keep the lower index, and the elite sits at index 0, so an equally
 //!    good newcomer does not displace it) is the estimate;

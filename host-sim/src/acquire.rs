@@ -1,7 +1,7 @@
 //! `evorec acquire`: Monte-Carlo statistics of acquisition and recovery.
 //!
 //! Each trial `i` (seed `base + i`) places the block at a random pose
-//! ([`crate::motion::random_target_pose`]: centre uniform in the search space, rotation
+//! ([`crate::sim::random_target_pose`]: centre uniform in the search space, rotation
 //! uniform, entirely inside both images for the whole run; the block itself does not move)
 //! and runs two cases, the arm static and motion A at ω = 0.5 rad/s with feedforward:
 //!

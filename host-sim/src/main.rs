@@ -157,7 +157,7 @@ enum Command {
         profile: String,
     },
     /// Track a recorded stereo sequence (`evorec-seq/1` directory): writes DIR/trace.csv,
-    /// DIR/estimate.tum (TUM format), DIR/summary.json, plots and DIR/overlay_<N>.png. Nothing is
+    /// DIR/estimate.tum (TUM format), DIR/summary.json, plots and `DIR/overlay_<N>.png`. Nothing is
     /// written unless the whole sequence was tracked.
     Track {
         /// Sequence directory (holds sequence.toml).

@@ -59,7 +59,7 @@ pub enum Placement {
     #[default]
     #[serde(rename = "fixed")]
     Fixed,
-    /// A pose drawn from the scenario's seed (see [`crate::motion::random_target_pose`]).
+    /// A pose drawn from the scenario's seed (see [`crate::sim::random_target_pose`]).
     #[serde(rename = "random")]
     Random,
 }

@@ -1,7 +1,7 @@
 //! Row sizes of the surface-strips sampling that the host can run.
 //!
 //! The number of sample points per row is a const generic of the core's tracker (`G`), so a
-//! size chosen at run time is dispatched onto one of a few compiled sizes. [`with_rows!`]
+//! size chosen at run time is dispatched onto one of a few compiled sizes. [`with_rows!`](crate::with_rows)
 //! does the dispatch; [`check`] names the accepted sizes in its error.
 
 use anyhow::{Error, Result, anyhow};

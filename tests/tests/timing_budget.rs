@@ -3,7 +3,7 @@
 //! (`hil-stubs/src/bin/evorec-timing.rs`, run through `evorec_sim::timing::measure`), so the
 //! count is deterministic — never wall time.
 //!
-//! Population 40, 5 points per row (the core's defaults), feedforward on, ≥ 100 frames of every kind (blank, target
+//! Population 40, 8 points per row (the core's defaults, `DEFAULT_GRID`), feedforward on, ≥ 100 frames of every kind (blank, target
 //! absent, target filling the image, noise, target under noise, tracked, random poses, fast
 //! arm, and the acquisition's searching and lost frames): the worst generation must take at
 //! most [`GENERATION_BUDGET`] instructions in EVERY tracker status, the worst generation while

@@ -1,5 +1,5 @@
 //! The panic probe (thumbv7em-none-eabihf): a firmware image that contains only the two paths
-//! that see untrusted data — the link decoder ([`read_message`], the firmware's path for
+//! that see untrusted data — the link decoder ([`read_message`](evorec_firmware::protocol::read_message), the firmware's path for
 //! `FRAME` and the other messages) and one GA generation (`Tracker::step`) — behind
 //! `#[inline(never)]` roots, with inputs the optimiser cannot see through.
 //!

@@ -100,7 +100,7 @@ impl Mix {
 #[derive(Debug, Clone)]
 pub struct MixAnalysis {
     /// The mix of one sample point: the instructions between consecutive pixel loads (one per
-    /// point, see [`is_pixel_load`]) of the fitness kernel's integer walk (`walk_edge`,
+    /// point, see `is_pixel_load`) of the fitness kernel's integer walk (`walk_edge`,
     /// unrolled rows), averaged over those windows.
     pub point: Mix,
     /// Number of point windows found.

@@ -62,7 +62,7 @@ pub fn find_image(board: &Board, name: &str) -> Result<PathBuf> {
     )
 }
 
-/// The `.stack_sizes` build of image `name` by [`STACK_SIZES_HINT`], if it exists.
+/// The `.stack_sizes` build of image `name` by [`STACK_SIZES_HINT`](super::STACK_SIZES_HINT), if it exists.
 pub fn find_stack_sizes_image(board: &Board, name: &str) -> Option<PathBuf> {
     target_dirs(board)
         .into_iter()

@@ -4,11 +4,10 @@
 //! of `2·h` degrees (red 0, green 60 ≙ 120°, blue 120 ≙ 240°); [`NO_HUE`] marks pixels too
 //! dark or too grey to have a hue. Bytes `HUE_UNITS..=254` are tolerated and never match.
 //!
-//! Images themselves (hue bytes or raw RGB565 sensor pixels) live in [`crate::image`];
-//! [`HueImage`] and [`ImageError`] are re-exported here.
+//! Images themselves (hue bytes or raw RGB565 sensor pixels, [`HueImage`](crate::image::HueImage))
+//! live in [`crate::image`], which converts pixels with [`rgb_to_hue`].
 
 use crate::config::{HUE_UNITS, MIN_SATURATION, MIN_VALUE, NO_HUE};
-pub use crate::image::{HueImage, ImageError};
 
 /// Converts an 8-bit RGB pixel to a hue byte, with integer arithmetic only (cheap on an MCU).
 ///

@@ -35,7 +35,7 @@
 //! ## Example
 //! ```
 //! use evorec_core::{camera::{Pinhole, StereoRig}, ga::SearchSpace, model::Block, pose::Psi,
-//!     tracker::{Tracker, TrackerConfig, StereoFrame, JointSample, Feedforward}, hue::HueImage,
+//!     tracker::{Tracker, TrackerConfig, StereoFrame, JointSample, Feedforward}, image::HueImage,
 //!     synth, config::NO_HUE};
 //! use nalgebra::Isometry3;
 //!

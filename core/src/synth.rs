@@ -8,7 +8,8 @@
 use nalgebra::{Isometry3, Point2};
 
 use crate::camera::Pinhole;
-use crate::hue::{self, ImageError};
+use crate::hue;
+use crate::image::ImageError;
 use crate::model::{Block, FACES};
 
 /// Paints the faces of `block` at `cam_from_model` (the block's pose in the camera frame) that

@@ -30,10 +30,9 @@
 
 use nalgebra::{Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
-use crate::kinematics::Chain;
+use crate::kinematics::{Chain, JointSample};
 use crate::pose::Psi;
 use crate::status::Status;
-use crate::tracker::JointSample;
 use crate::{math, quat};
 
 /// The target's velocity screw in the world frame `Σ_W` (`^W ψ̇_M` with the angular part as

@@ -16,6 +16,7 @@ use crate::fitness::{Evaluator, Fitness};
 use crate::ga::{Best, Ga, GaError, GaParams, SearchSpace};
 use crate::hue::HueLut;
 use crate::image::{Hue, Image, PixelFormat};
+pub use crate::kinematics::JointSample;
 use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
@@ -33,17 +34,6 @@ pub enum Feedforward {
     /// (`J_m q̇ + J_n ^W ψ̇_M`, eq. 23), the target's velocity from the tracker's
     /// [`TargetFilter`] once it is trusted (until then as [`Feedforward::On`]).
     OnWithTarget,
-}
-
-/// Joint positions (rad) and velocities (rad/s) sampled at `time_us`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct JointSample<const DOF: usize> {
-    /// Joint positions.
-    pub q: [f32; DOF],
-    /// Joint velocities.
-    pub qd: [f32; DOF],
-    /// Sample time (µs, the board's clock).
-    pub time_us: u64,
 }
 
 /// A synchronised stereo pair of images in pixel format `F` (hue bytes by default).

@@ -3,7 +3,7 @@
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::{DEFAULT_POPULATION, NO_HUE, POPULATION_CAPACITY};
 use evorec_core::ga::{GaError, GaParams, SearchSpace};
-use evorec_core::hue::HueImage;
+use evorec_core::image::HueImage;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::tracker::{ConfigError, Estimate, Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};

@@ -4,7 +4,7 @@
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::NO_HUE;
 use evorec_core::ga::SearchSpace;
-use evorec_core::hue::HueImage;
+use evorec_core::image::HueImage;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::target_motion::PredictError;

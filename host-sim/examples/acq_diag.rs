@@ -1,6 +1,6 @@
 //! Diagnostics of one acquisition trial: per frame, the seed's and the estimate's errors.
 use evorec_core::acquire;
-use evorec_core::hue::HueImage;
+use evorec_core::image::HueImage;
 use evorec_core::tracker::StereoFrame;
 use evorec_sim::acquire::{Case, pose_error, scenario};
 use evorec_sim::experiment::{SimTracker, feedforward, tracker_config};

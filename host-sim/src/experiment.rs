@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use evorec_core::board;
 use evorec_core::config::{DEFAULT_GRID, PA10_DOF};
-use evorec_core::ga::{GaParams, SearchSpace};
+use evorec_core::ga::GaParams;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
@@ -25,18 +25,12 @@ pub type SimTracker = Tracker<PA10_DOF, HOST_POPULATION_CAPACITY, DEFAULT_GRID>;
 /// starts "with known initial target's pose"): 2 mm and 0.004 in ε.
 pub const INITIAL_SPREAD: [f32; 6] = [0.002, 0.002, 0.002, 0.004, 0.004, 0.004];
 
-/// The search space in `Σ_CR`: ±0.4 m laterally, 0.3–1.3 m deep.
-pub fn search_space() -> SearchSpace {
-    // The bounds are constants that satisfy the checks.
-    SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap_or_else(|e| unreachable!("{e}"))
-}
-
 /// The tracker configuration of a scenario.
 ///
 /// # Errors
 /// Invalid camera settings.
 pub fn tracker_config(s: &Scenario) -> Result<TrackerConfig<PA10_DOF>> {
-    Ok(TrackerConfig::pa10(sim::rig(s)?, sim::block(s), sim::flange_to_camera(s), search_space())
+    Ok(TrackerConfig::pa10(sim::rig(s)?, sim::block(s), sim::flange_to_camera(s), sim::search_space())
         .with_seed(s.seed)
         .with_ga(GaParams::DEFAULT.with_population(s.ga.population)))
 }

@@ -27,14 +27,13 @@ use anyhow::{Context, Result, bail};
 use indicatif::ProgressBar;
 
 use crate::arm::CONTROL_PERIOD_S;
-use crate::experiment::search_space;
 use crate::motion;
 use crate::render;
 use crate::robot::{ArmModel, PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF};
 use crate::scenario::Scenario;
 use crate::sequence::manifest::{FORMAT, to_rows};
 use crate::sequence::{camera_info, tum};
-use crate::sim::{self, World};
+use crate::sim::{self, World, search_space};
 
 /// What an export wrote.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -18,6 +18,7 @@
 use anyhow::{Context, Result, bail};
 use evorec_core::board::{CameraController, Error as BoardError, ErrorKind, ErrorType, FrameInfo};
 use evorec_core::camera::{Pinhole, StereoRig};
+use evorec_core::ga::SearchSpace;
 use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
@@ -49,6 +50,12 @@ pub fn rig(s: &Scenario) -> Result<StereoRig> {
 /// The block of a scenario.
 pub fn block(s: &Scenario) -> Block {
     Block { size_m: s.target.size_m.map(|v| v as f32), face_hues_deg: s.target.face_hues_deg.map(|v| v as f32) }
+}
+
+/// The search space in `Σ_CR`: ±0.4 m laterally, 0.3–1.3 m deep.
+pub fn search_space() -> SearchSpace {
+    // The bounds are constants that satisfy the checks.
+    SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap_or_else(|e| unreachable!("{e}"))
 }
 
 /// The world of one run: arm, scripted motions, cameras, target, renderer.
@@ -474,7 +481,7 @@ pub const RANDOM_POSE_CHECKS: usize = 40;
 pub const RANDOM_POSE_MARGIN_PX: f32 = 2.0;
 
 /// A random world pose `^W T_M` of the block for the scenario's seed: its centre uniform in
-/// the tracker's search space ([`crate::experiment::search_space`], in `Σ_CR` at `t = 0`), its
+/// the tracker's search space ([`search_space`], in `Σ_CR` at `t = 0`), its
 /// orientation uniform (Shoemake's method), redrawn until every corner is at least
 /// [`RANDOM_POSE_MARGIN_PX`] inside both images at `t = 0` and, when the flange moves, at
 /// [`RANDOM_POSE_CHECKS`] times over the run (along the scripted flange trajectory, with the
@@ -483,7 +490,7 @@ pub const RANDOM_POSE_MARGIN_PX: f32 = 2.0;
 pub fn random_target_pose(s: &Scenario) -> Option<Isometry3<f64>> {
     use rand_core::{Rng, SeedableRng};
     let rig = rig(s).ok()?;
-    let space = crate::experiment::search_space();
+    let space = search_space();
     let block = block(s);
     let trajectory = flange_trajectory(s);
     let mount = motion::flange_to_camera_f64(s.camera.baseline_m);

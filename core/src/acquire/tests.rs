@@ -6,7 +6,7 @@ use crate::camera::Pinhole;
 use crate::camera::StereoRig;
 use crate::config::{DEFAULT_HUE_TOLERANCE, NO_HUE};
 use crate::ga::unit_f32;
-use crate::hue::HueImage;
+use crate::image::HueImage;
 use crate::model::{Block, SurfaceStrips};
 use crate::pose::Psi;
 use crate::synth;

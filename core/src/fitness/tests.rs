@@ -4,7 +4,7 @@
 use super::*;
 use crate::camera::Pinhole;
 use crate::config::DEFAULT_HUE_TOLERANCE;
-use crate::hue::HueImage;
+use crate::image::HueImage;
 use crate::model::{Block, ROW_DISTANCES_M};
 use crate::synth;
 use std::vec;

@@ -31,6 +31,17 @@ mod tests;
 
 pub use dh::{DhLink, PA10, PA10_DH};
 
+/// Joint positions (rad) and velocities (rad/s) sampled at `time_us`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointSample<const DOF: usize> {
+    /// Joint positions.
+    pub q: [f32; DOF],
+    /// Joint velocities.
+    pub qd: [f32; DOF],
+    /// Sample time (µs, the board's clock).
+    pub time_us: u64,
+}
+
 /// Largest deviation of `RᵀR` from `I` (per entry) accepted for a rigid transform.
 pub const RIGID_TOLERANCE: f32 = 1e-4;
 

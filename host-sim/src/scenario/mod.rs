@@ -72,7 +72,7 @@ use serde::Serialize;
 use toml::Table;
 
 use crate::motion::MotionKind;
-use crate::occlusion::{self, Initial, Occlusions, Placement};
+use crate::occlusion::{Initial, Occlusions, Placement};
 
 /// Population capacity of the host's trackers (simulator and `evorec track`): any population
 /// from 3 up to this is accepted at run time. Larger than the firmware's
@@ -432,7 +432,7 @@ impl Scenario {
         let servo = parse_servo(&top.subtable("servo")?)?;
         let tracker_section = top.subtable("tracker")?;
         tracker_section.check_keys(&["initial", "delay_s"])?;
-        let initial = occlusion::parse_initial(tracker_section.get("initial"))?;
+        let initial = acquisition::parse_initial(tracker_section.get("initial"))?;
 
         let seed = top.int("seed", None)?;
         let seed = u64::try_from(seed).map_err(|_| invalid("seed", format!("must be ≥ 0, got {seed}")))?;
@@ -449,7 +449,7 @@ impl Scenario {
         let method = Method::parse(&top.string("method", None)?).map_err(|m| invalid("method", m))?;
         let delay_s = tracker_section.float_in("delay_s", frame_period_s, Bound::Closed(0.0), 1.0)?;
         let tracker = TrackerStart { initial, delay_s };
-        let occlusion = occlusion::parse_occlusions(top.get("occlusion"), duration_s)?;
+        let occlusion = acquisition::parse_occlusions(top.get("occlusion"), duration_s)?;
         Ok(Self { seed, duration_s, frame_period_s, method, camera, target, robot, ga, servo, tracker, occlusion })
     }
 
@@ -556,7 +556,7 @@ fn parse_target(s: &Section<'_>) -> Result<TargetConfig> {
     let amplitude_deg = s.float_in("amplitude_deg", d.amplitude_deg, Bound::Closed(0.0), 180.0)?;
     let omega_rad_s = s.float_in("omega_rad_s", d.omega_rad_s, Bound::Closed(0.0), 10.0)?;
     let yaw0_deg = s.float_in("yaw0_deg", d.yaw0_deg, Bound::Closed(-180.0), 180.0)?;
-    let placement = occlusion::parse_placement(s.get("placement"))?;
+    let placement = acquisition::parse_placement(s.get("placement"))?;
     let base = TargetConfig { size_m, face_hues_deg, distance_m, amplitude_deg, omega_rad_s, yaw0_deg, placement, ..d };
     parse_target_path(s, base)
 }
@@ -699,6 +699,7 @@ fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
     }))
 }
 
+mod acquisition;
 mod section;
 #[cfg(test)]
 mod tests;

@@ -5,7 +5,7 @@
 //! the PNGs ahead of the tracker. The tracker is built from the sequence: the rig from the
 //! calibration, the arm from the URDF chain (any number of joints the dispatch in [`run`]
 //! lists), the hand-eye transform from `flange_to_right`, the block from `[target]`, the search
-//! space from `[search]` (else [`crate::experiment::search_space`]). With an `initial_pose`
+//! space from `[search]` (else [`crate::sim::search_space`]). With an `initial_pose`
 //! the population starts around it as `evorec run` starts around the truth.
 //!
 //! Nothing is written before the input is known good: all metadata is checked and frame 0
@@ -34,8 +34,9 @@ use image::RgbImage;
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::Isometry3;
 
-use crate::experiment::{INITIAL_SPREAD, search_space};
+use crate::experiment::INITIAL_SPREAD;
 use crate::sequence::Sequence;
+use crate::sim::search_space;
 use board::{SensorPixels, SequenceBoard, TrackedFrame};
 use evorec_core::image::{Rgb565, Rgb888};
 

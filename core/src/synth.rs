@@ -83,3 +83,36 @@ pub fn fill_convex(poly: &[Point2<f32>; 4], value: u8, w: usize, h: usize, out: 
         }
     }
 }
+
+/// The stereo pair and frames shared by the core's unit tests (fitness, acquisition).
+#[cfg(test)]
+pub(crate) mod test_scene {
+    use std::vec;
+    use std::vec::Vec;
+
+    use crate::camera::{Pinhole, StereoRig};
+    use crate::config::NO_HUE;
+    use crate::model::Block;
+    use crate::pose::Psi;
+
+    /// Image width of [`rig`]'s cameras.
+    pub(crate) const W: u16 = 640;
+    /// Image height of [`rig`]'s cameras.
+    pub(crate) const H: u16 = 480;
+
+    /// A parallel stereo pair, 0.1 m baseline, `f = 800` px, `W × H` images.
+    pub(crate) fn rig() -> StereoRig {
+        StereoRig::parallel(Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, W, H).unwrap(), 0.1).unwrap()
+    }
+
+    /// The hue frames `(left, right)` of [`Block::PAPER`] at `psi` (in the right camera's frame).
+    pub(crate) fn scene(psi: &Psi) -> (Vec<u8>, Vec<u8>) {
+        let rig = rig();
+        let iso = psi.try_to_isometry().unwrap();
+        let mut right = vec![NO_HUE; usize::from(W) * usize::from(H)];
+        let mut left = right.clone();
+        super::render_block(&Block::PAPER, &rig.right, &iso, &mut right).unwrap();
+        super::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut left).unwrap();
+        (left, right)
+    }
+}

@@ -2,40 +2,21 @@
 
 use super::seed::half_turn;
 use super::*;
-use crate::camera::Pinhole;
-use crate::camera::StereoRig;
 use crate::config::{DEFAULT_HUE_TOLERANCE, NO_HUE};
 use crate::ga::unit_f32;
 use crate::image::HueImage;
 use crate::model::{Block, SurfaceStrips};
 use crate::pose::Psi;
-use crate::synth;
+use crate::synth::test_scene::{H, W, rig, scene};
 use nalgebra::{Matrix3, Vector3};
 use rand_core::Rng;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 use std::vec;
 
-const W: u16 = 640;
-const H: u16 = 480;
-
-fn rig() -> StereoRig {
-    StereoRig::parallel(Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, W, H).unwrap(), 0.1).unwrap()
-}
-
 fn lut() -> HueLut {
     let model = SurfaceStrips::<4>::new(&Block::PAPER).unwrap();
     HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE)
-}
-
-fn scene(psi: &Psi) -> (std::vec::Vec<u8>, std::vec::Vec<u8>) {
-    let rig = rig();
-    let iso = psi.try_to_isometry().unwrap();
-    let mut right = vec![NO_HUE; usize::from(W) * usize::from(H)];
-    let mut left = right.clone();
-    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut right).unwrap();
-    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut left).unwrap();
-    (left, right)
 }
 
 /// Smallest rotation angle between `r` and `truth` over the colour symmetry's half turns.

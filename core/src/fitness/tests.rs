@@ -2,29 +2,11 @@
 //! kernel, the affine walk against the projected rows, and the host walk against the board's.
 
 use super::*;
-use crate::camera::Pinhole;
 use crate::config::DEFAULT_HUE_TOLERANCE;
 use crate::image::HueImage;
 use crate::model::{Block, ROW_DISTANCES_M};
-use crate::synth;
+use crate::synth::test_scene::{H, W, rig, scene};
 use std::vec;
-
-const W: u16 = 640;
-const H: u16 = 480;
-
-fn rig() -> StereoRig {
-    StereoRig::parallel(Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, W, H).unwrap(), 0.1).unwrap()
-}
-
-fn scene(psi: &Psi) -> (std::vec::Vec<u8>, std::vec::Vec<u8>) {
-    let rig = rig();
-    let iso = psi.try_to_isometry().unwrap();
-    let mut right = vec![NO_HUE; usize::from(W) * usize::from(H)];
-    let mut left = right.clone();
-    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut right).unwrap();
-    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut left).unwrap();
-    (left, right)
-}
 
 #[test]
 fn true_pose_scores_exactly_one_and_perturbations_score_less() {

@@ -364,6 +364,25 @@ impl TargetFilter {
         self.update(measured, time_us, fitness)
     }
 
+    /// Feeds the tracker's estimate `psi` (with its `fitness` and `status`) of the frame captured
+    /// with `joints`: the estimate in the world frame ([`world_pose`] of `chain` at `joints.q`
+    /// and `flange_to_camera`) at `joints.time_us`, through
+    /// [`TargetFilter::update_with_status`]. The tracker feeds its own filter with this call;
+    /// a board that receives only the estimates feeds its copy with the same call on the same
+    /// numbers, so its predictions are the tracker's.
+    pub fn update_from_estimate<const DOF: usize>(
+        &mut self,
+        chain: &Chain<DOF>,
+        flange_to_camera: &Isometry3<f32>,
+        joints: &JointSample<DOF>,
+        psi: &Psi,
+        fitness: f32,
+        status: Status,
+    ) -> UpdateOutcome {
+        let world = world_pose(chain, &joints.q, flange_to_camera, psi);
+        self.update_with_status(&world, joints.time_us, fitness, status)
+    }
+
     /// What the last [`TargetFilter::update`] did (`None` before the first).
     pub fn last_outcome(&self) -> Option<UpdateOutcome> {
         self.last_outcome

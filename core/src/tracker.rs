@@ -21,7 +21,7 @@ use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
 use crate::status::{Status, StatusConfig, StatusError, StatusMonitor};
-use crate::target_motion::{self, PredictError, Prediction, TargetFilter};
+use crate::target_motion::{PredictError, Prediction, TargetFilter};
 
 /// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -562,9 +562,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // The target filter (one forward kinematics and a data-dependent update) runs only in the
         // mode that uses it, so the other modes keep the paper's constant work per generation.
         if feedforward == Feedforward::OnWithTarget {
-            let world =
-                target_motion::world_pose(&self.config.arm, &joints.q, &self.config.flange_to_camera, &best.psi);
-            self.target.update_with_status(&world, joints.time_us, best.fitness, status);
+            let (arm, mount) = (&self.config.arm, &self.config.flange_to_camera);
+            self.target.update_from_estimate(arm, mount, joints, &best.psi, best.fitness, status);
         }
         probe.mark(Phase::Done);
 

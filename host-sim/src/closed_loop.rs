@@ -421,9 +421,9 @@ struct Capture {
 /// and renders the frame pair as the cameras' RGB565 pixels (the bytes the firmware receives
 /// too); [`CameraController::publish`] queues the frame's estimate until it reaches the servo
 /// and records the frame's rows. The "ff+target" hand-over predicts with the board's own copy of
-/// the core's [`TargetFilter`], fed exactly as the tracker feeds its own (the same code on the
-/// same numbers, only with [`Feedforward::OnWithTarget`]), because the firmware publishes the
-/// estimate only.
+/// the core's [`TargetFilter`], fed as the tracker feeds its own
+/// ([`TargetFilter::update_from_estimate`]: the same code on the same numbers, only with
+/// [`Feedforward::OnWithTarget`]), because the firmware publishes the estimate only.
 pub struct ServoBoard {
     world: World,
     ctl: Controller,
@@ -549,8 +549,7 @@ impl CameraController<DOF> for ServoBoard {
     fn publish(&mut self, _frame: &FrameInfo, est: &Estimate) -> Result<(), SimError> {
         let Some(Capture { t, joints, occluded, steady }) = self.current.take() else { return Ok(()) };
         if self.feedforward == Feedforward::OnWithTarget {
-            let world = target_motion::world_pose(&PA10, &joints.q, &self.ctl.mount, &est.psi);
-            self.filter.update_with_status(&world, joints.time_us, est.fitness, est.status);
+            self.filter.update_from_estimate(&PA10, &self.ctl.mount, &joints, &est.psi, est.fitness, est.status);
         }
         let tracking = est.status == Status::Tracking;
         let released = Released { psi: est.psi, q: joints.q, filter: self.filter, tracking };

@@ -10,9 +10,9 @@
 //! ## Hand-over
 //! The board also plays the consumer of the estimates (a visual-servo loop): the estimate of
 //! the frame captured at `t` is output at `t + delay_s` (`[tracker] delay_s`). The board feeds
-//! every published estimate to its own copy of the core's [`TargetFilter`] (the same code and
-//! the same inputs as the tracker's filter, so it works for the firmware too, which publishes
-//! the estimate only) and asks it for the pose at the output time with the arm's joint sample
+//! every published estimate to its own copy of the core's [`TargetFilter`] with the tracker's
+//! own call, [`TargetFilter::update_from_estimate`] (the same code and the same inputs as the
+//! tracker's filter, so it works for the firmware too, which publishes the estimate only) and asks it for the pose at the output time with the arm's joint sample
 //! of that time ([`TargetFilter::predict`]). Each row records the truth at the output time, the
 //! held estimate and the prediction ([`Handover`]).
 use anyhow::{Context, Result, bail};
@@ -23,7 +23,7 @@ use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
-use evorec_core::target_motion::{self, TargetFilter, TargetVelocity};
+use evorec_core::target_motion::{TargetFilter, TargetVelocity};
 use evorec_core::tracker::{Estimate, JointSample};
 use nalgebra::Isometry3;
 use rand_core::SeedableRng;
@@ -398,8 +398,14 @@ impl SimBoard {
         true_velocity: TargetVelocity,
     ) -> Handover {
         let feedforward = self.filter.feedforward_velocity();
-        let world = target_motion::world_pose(&PA10, &joints.q, &self.flange_to_camera, &estimate.psi);
-        self.filter.update_with_status(&world, joints.time_us, estimate.fitness, estimate.status);
+        self.filter.update_from_estimate(
+            &PA10,
+            &self.flange_to_camera,
+            joints,
+            &estimate.psi,
+            estimate.fitness,
+            estimate.status,
+        );
         let t_out = t + self.world.scenario().tracker.delay_s;
         let (truth_out, joints_out) = self.world.look_ahead(t_out);
         let t_out_us = (t_out * 1e6).round() as u64;

@@ -31,7 +31,7 @@
 
 use std::format;
 use std::fs::{self, File, OpenOptions};
-use std::io::{self, Read, Write};
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::string::{String, ToString};
@@ -45,12 +45,20 @@ use evorec_core::Tracker;
 use evorec_core::tracker::Estimate;
 
 use crate::BoardProfile;
-use crate::faults::{FaultConfig, FaultCounts, FaultInjector, MessageSplitter};
+use crate::faults::{FaultConfig, FaultCounts, FaultInjector};
 use crate::protocol::{
-    ByteSink, ByteSource, DecodeError, Done, DropCounts, Envelope, ErrorCode, FLAG_NEWER_FOLLOWS, Frame, LinkReader,
-    Message, MsgType, ReadError, Setup, WriteError, read_message, write_message_with_flags,
+    Done, DropCounts, Envelope, FLAG_NEWER_FOLLOWS, Frame, Message, Setup, WriteError, write_message_with_flags,
 };
-use crate::setup::SetupError;
+
+mod error;
+mod firmware;
+mod link;
+
+pub use error::HilError;
+use error::io_error;
+pub use firmware::{build_firmware, default_firmware_path, profile_target_dir};
+pub use link::IoLink;
+use link::{Incoming, make_fifo, spawn_reader};
 
 /// How to install QEMU on Debian/Ubuntu.
 pub const QEMU_INSTALL_HINT: &str = "apt-get update && apt-get install -y qemu-system-arm";
@@ -66,64 +74,6 @@ pub const FIRMWARE_TO_HOST: &str = "evorec-f2h.fifo";
 pub const LOG_FILE: &str = "firmware.log";
 /// With faults: how often `CONFIG` and `END` are sent before the session gives up waiting.
 pub const HANDSHAKE_TRIES: u32 = 8;
-
-/// Where `cargo build --release` in `hil-stubs/` puts the firmware: `$EVOREC_FIRMWARE_ELF` if
-/// set, else `$CARGO_TARGET_DIR` (relative paths taken from the workspace root) or the
-/// workspace's `target/`, then `thumbv7em-none-eabihf/release/evorec-firmware`.
-pub fn default_firmware_path() -> PathBuf {
-    if let Some(p) = std::env::var_os(FIRMWARE_ENV) {
-        return PathBuf::from(p);
-    }
-    elf_in(&profile_target_dir(BoardProfile::M4))
-}
-
-/// The target directory the firmware of `profile` is built into: the workspace's (or
-/// `$CARGO_TARGET_DIR`, relative paths taken from the workspace root) for the M4, its `m7/`
-/// subdirectory for the M7 (the two images differ only in features and memory map).
-pub fn profile_target_dir(profile: BoardProfile) -> PathBuf {
-    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let target = match std::env::var_os("CARGO_TARGET_DIR") {
-        Some(dir) => workspace.join(dir), // `join` keeps an absolute `dir` as it is
-        None => workspace.join("target"),
-    };
-    if profile == BoardProfile::M7 { target.join("m7") } else { target }
-}
-
-fn elf_in(target_dir: &Path) -> PathBuf {
-    target_dir.join("thumbv7em-none-eabihf").join("release").join("evorec-firmware")
-}
-
-/// Builds the firmware images of `profile` (`evorec-firmware`, `evorec-timing`, …) with
-/// `cargo build --release` in `hil-stubs/` — a no-op when they are up to date — and returns
-/// the path of `evorec-firmware`, so tests and tools run the firmware of the checked-out
-/// source. For the M4, `$EVOREC_FIRMWARE_ELF` (if set) names a prebuilt image and nothing is
-/// built.
-///
-/// # Errors
-/// [`HilError::Io`] when cargo cannot be started or the build fails (with cargo's last lines).
-pub fn build_firmware(profile: BoardProfile) -> Result<PathBuf, HilError> {
-    if profile == BoardProfile::M4
-        && let Some(p) = std::env::var_os(FIRMWARE_ENV)
-    {
-        return Ok(PathBuf::from(p));
-    }
-    let target_dir = profile_target_dir(profile);
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    let mut cmd = Command::new(cargo);
-    cmd.current_dir(env!("CARGO_MANIFEST_DIR")).args(["build", "--release"]).env("CARGO_TARGET_DIR", &target_dir);
-    if profile == BoardProfile::M7 {
-        cmd.args(["--features", "m7"]);
-    }
-    let what = format!("build the {} firmware (`cd hil-stubs && cargo build --release`)", profile.name);
-    let out = cmd.output().map_err(io_error(what.clone()))?;
-    if !out.status.success() {
-        let log = String::from_utf8_lossy(&out.stderr);
-        let tail: Vec<&str> = log.lines().rev().take(15).collect();
-        let tail: Vec<&str> = tail.into_iter().rev().collect();
-        return Err(HilError::Io { what, source: io::Error::other(tail.join(" | ")) });
-    }
-    Ok(elf_in(&target_dir))
-}
 
 /// Session settings; [`HilOptions::default`] states the defaults.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -163,167 +113,6 @@ impl Default for HilOptions {
     }
 }
 
-/// Why a session failed. The `Display` text says what to do where there is something to do.
-#[derive(Debug)]
-#[non_exhaustive]
-pub enum HilError {
-    /// The QEMU executable was not found.
-    QemuNotFound {
-        /// The program that was looked for.
-        program: PathBuf,
-    },
-    /// The firmware ELF does not exist.
-    FirmwareNotFound {
-        /// The path that was looked at.
-        path: PathBuf,
-    },
-    /// A file-system or process operation failed.
-    Io {
-        /// What was being done.
-        what: String,
-        /// The error.
-        source: io::Error,
-    },
-    /// The setup gives no tracker (checked on the host before QEMU starts).
-    Setup(SetupError),
-    /// The firmware refused the `CONFIG` (its `ACK` status).
-    ConfigRefused {
-        /// The status code (see [`SetupError::describe_code`]).
-        code: u32,
-    },
-    /// The firmware sent `ERROR` and stops.
-    Firmware {
-        /// The code (see [`ErrorCode`]).
-        code: u32,
-        /// The end of the firmware's log.
-        log_tail: String,
-    },
-    /// QEMU exited (or closed the link) before the conversation ended.
-    QemuExited {
-        /// Its exit status, if it has exited.
-        status: Option<ExitStatus>,
-        /// The end of its log.
-        log_tail: String,
-    },
-    /// Nothing arrived in time; QEMU was killed.
-    Timeout {
-        /// What was awaited.
-        waiting_for: &'static str,
-        /// How long.
-        after: Duration,
-        /// The end of QEMU's log.
-        log_tail: String,
-    },
-    /// The firmware sent a malformed message.
-    Protocol(DecodeError),
-    /// The firmware sent a valid message that does not fit the conversation.
-    Unexpected {
-        /// What arrived.
-        got: MsgType,
-        /// Its sequence number.
-        sequence: u32,
-        /// What was awaited.
-        expected: &'static str,
-    },
-    /// A frame's images are not `width · height · 2` bytes (RGB565) each.
-    BadFrame {
-        /// `width · height · 2`.
-        expected: usize,
-        /// Left image length.
-        left: usize,
-        /// Right image length.
-        right: usize,
-    },
-}
-
-impl std::fmt::Display for HilError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::QemuNotFound { program } => {
-                write!(f, "{} not found: install it with `{QEMU_INSTALL_HINT}`", program.display())
-            }
-            Self::FirmwareNotFound { path } => write!(
-                f,
-                "firmware image {} not found: build it with `{FIRMWARE_BUILD_HINT}` \
-                 (or point {FIRMWARE_ENV} at an ELF)",
-                path.display()
-            ),
-            Self::Io { what, source } => write!(f, "{what}: {source}"),
-            Self::Setup(e) => write!(f, "setup gives no tracker: {e}"),
-            Self::ConfigRefused { code } => {
-                write!(f, "firmware refused the CONFIG: status {code} ({})", SetupError::describe_code(*code))
-            }
-            Self::Firmware { code, log_tail } => {
-                let what = match ErrorCode::from_u32(*code) {
-                    Some(ErrorCode::Link) => "link failure",
-                    Some(ErrorCode::Decode) => "malformed message",
-                    Some(ErrorCode::Unexpected) => "unexpected message",
-                    _ => "other failure",
-                };
-                write!(f, "firmware stopped with error {code} ({what}); its log ends:\n{log_tail}")
-            }
-            Self::QemuExited { status, log_tail } => match status {
-                Some(s) => write!(f, "QEMU exited early ({s}); its log ends:\n{log_tail}"),
-                None => write!(f, "QEMU closed the link early; its log ends:\n{log_tail}"),
-            },
-            Self::Timeout { waiting_for, after, log_tail } => {
-                write!(
-                    f,
-                    "no {waiting_for} from the firmware within {after:?} (QEMU killed); its log ends:\n{log_tail}"
-                )
-            }
-            Self::Protocol(e) => write!(f, "malformed message from the firmware: {e}"),
-            Self::Unexpected { got, sequence, expected } => {
-                write!(f, "expected {expected} from the firmware, got {got:?} (sequence {sequence})")
-            }
-            Self::BadFrame { expected, left, right } => {
-                write!(f, "frame images have {left} and {right} bytes, width x height x 2 (RGB565) is {expected}")
-            }
-        }
-    }
-}
-
-impl std::error::Error for HilError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            Self::Io { source, .. } => Some(source),
-            Self::Setup(e) => Some(e),
-            Self::Protocol(e) => Some(e),
-            _ => None,
-        }
-    }
-}
-
-fn io_error(what: impl Into<String>) -> impl FnOnce(io::Error) -> HilError {
-    let what = what.into();
-    move |source| HilError::Io { what, source }
-}
-
-/// A [`ByteSource`]/[`ByteSink`] over any `std::io` reader or writer.
-#[derive(Debug)]
-pub struct IoLink<T>(pub T);
-
-impl<T: Read> ByteSource for IoLink<T> {
-    type Error = io::Error;
-    fn read_some(&mut self, buf: &mut [u8]) -> Result<usize, io::Error> {
-        loop {
-            match self.0.read(buf) {
-                Ok(0) if !buf.is_empty() => return Err(io::ErrorKind::UnexpectedEof.into()),
-                Ok(n) => return Ok(n),
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(e),
-            }
-        }
-    }
-}
-
-impl<T: Write> ByteSink for IoLink<T> {
-    type Error = io::Error;
-    fn write_all(&mut self, bytes: &[u8]) -> Result<(), io::Error> {
-        self.0.write_all(bytes)
-    }
-}
-
 /// The firmware's answer to a frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Reply {
@@ -351,18 +140,6 @@ pub struct Summary {
     pub faults_sent: FaultCounts,
     /// Faults injected into the firmware → host direction.
     pub faults_received: FaultCounts,
-}
-
-/// What the reader thread hands over (one at a time, so the large variant is not boxed).
-#[derive(Debug)]
-#[allow(clippy::large_enum_variant)]
-enum Incoming {
-    /// A valid message.
-    Message(Envelope<'static>),
-    /// A damaged message (dropped).
-    Damaged(DecodeError),
-    /// The link closed or failed.
-    Closed(HilError),
 }
 
 /// A running firmware under QEMU with an open link; see the [module docs](self).
@@ -719,106 +496,4 @@ impl Drop for HilSession {
 
 fn unexpected(env: &Envelope<'_>, expected: &'static str) -> HilError {
     HilError::Unexpected { got: env.message.kind(), sequence: env.sequence, expected }
-}
-
-/// Replaces whatever is at `path` with a fresh FIFO.
-fn make_fifo(path: &Path) -> Result<(), HilError> {
-    match fs::remove_file(path) {
-        Ok(()) => {}
-        Err(e) if e.kind() == io::ErrorKind::NotFound => {}
-        Err(e) => return Err(HilError::Io { what: format!("remove {}", path.display()), source: e }),
-    }
-    let status =
-        Command::new("mkfifo").arg(path).status().map_err(io_error(format!("run mkfifo {}", path.display())))?;
-    if status.success() {
-        Ok(())
-    } else {
-        Err(HilError::Io { what: format!("mkfifo {}", path.display()), source: io::Error::other(status.to_string()) })
-    }
-}
-
-/// The firmware → host stream as the host sees it: the FIFO, with faults injected message
-/// by message when a [`FaultInjector`] is given (never into `ACK` and `DONE`, which the
-/// firmware does not repeat).
-struct ReplyStream {
-    file: File,
-    faults: Option<FaultInjector>,
-    counts: Arc<Mutex<FaultCounts>>,
-    splitter: MessageSplitter,
-    queue: std::collections::VecDeque<u8>,
-}
-
-impl ByteSource for ReplyStream {
-    type Error = io::Error;
-    fn read_some(&mut self, buf: &mut [u8]) -> Result<usize, io::Error> {
-        let mut chunk = [0u8; 4096];
-        while self.queue.is_empty() {
-            let n = self.file.read(&mut chunk)?;
-            if n == 0 {
-                return Err(io::ErrorKind::UnexpectedEof.into());
-            }
-            let data = chunk.get(..n).unwrap_or_default();
-            let Some(faults) = self.faults.as_mut() else {
-                self.queue.extend(data);
-                continue;
-            };
-            let queue = &mut self.queue;
-            self.splitter.push(data, |m| {
-                let handshake = matches!(
-                    crate::protocol::decode(&m, &mut [], &mut []),
-                    Ok((Envelope { message: Message::Ack(_) | Message::Done(_), .. }, _))
-                );
-                if handshake {
-                    queue.extend(faults.release());
-                    queue.extend(m);
-                } else {
-                    queue.extend(faults.pass(&m));
-                }
-            });
-            if let Ok(mut c) = self.counts.lock() {
-                *c = faults.counts();
-            }
-        }
-        let n = buf.len().min(self.queue.len());
-        for (dst, src) in buf.iter_mut().zip(self.queue.drain(..n)) {
-            *dst = src;
-        }
-        Ok(n)
-    }
-}
-
-/// Reads messages from the firmware until the link closes; each goes to the channel.
-fn spawn_reader(file: File, faults: Option<FaultInjector>, counts: Arc<Mutex<FaultCounts>>) -> Receiver<Incoming> {
-    let (tx, rx) = mpsc::channel();
-    thread::spawn(move || {
-        let stream =
-            ReplyStream { file, faults, counts, splitter: MessageSplitter::default(), queue: Default::default() };
-        let mut src = LinkReader::new(stream);
-        loop {
-            let item = match read_message(&mut src, &mut [], &mut []) {
-                Ok(env) => match env.message.detach() {
-                    Some(message) => Incoming::Message(Envelope {
-                        sequence: env.sequence,
-                        capture_time_us: env.capture_time_us,
-                        message,
-                    }),
-                    None => Incoming::Closed(HilError::Unexpected {
-                        got: MsgType::Frame,
-                        sequence: env.sequence,
-                        expected: "a reply",
-                    }),
-                },
-                Err(ReadError::Decode(e)) => Incoming::Damaged(e),
-                // End of file (QEMU closed the FIFO) or a read error: the link is gone.
-                Err(ReadError::Link(_)) => {
-                    Incoming::Closed(HilError::QemuExited { status: None, log_tail: String::new() })
-                }
-            };
-            let stop = matches!(item, Incoming::Closed(_));
-            if tx.send(item).is_err() || stop {
-                break;
-            }
-        }
-    });
-    rx
 }

@@ -161,6 +161,20 @@ pub(super) fn json(r: &Results) -> Value {
     })
 }
 
+/// The max/min line of `timing.md`: over every frame, which mixes the tracker's statuses (a
+/// searching or lost generation leaves idle individuals unevaluated), and per status.
+fn ratio_line(full: &RunStats, verdict: &str) -> String {
+    let per_status: Vec<String> =
+        full.by_status.iter().map(|(st, n, r)| format!("{} {:.4} ({n} frames)", st.as_str(), r.ratio())).collect();
+    format!(
+        "- max/min over every frame, all statuses mixed: **{:.4}** (target ≤ {RATIO_TARGET}); per status: {}; \
+         worst case {:.0} instructions: {verdict}.",
+        full.call.ratio(),
+        if per_status.is_empty() { "none".to_owned() } else { per_status.join(", ") },
+        full.call.max
+    )
+}
+
 /// The line printed at the end of a run.
 pub(super) fn summary(r: &Results) -> String {
     let f = &r.full;
@@ -295,12 +309,7 @@ pub(super) fn markdown(r: &Results) -> String {
     } else {
         format!("**over budget by {:.1} %**", (full.call.max / GENERATION_BUDGET - 1.0) * 100.0)
     };
-    let _ = writeln!(
-        s,
-        "- max/min over the frames: **{:.4}** (target ≤ {RATIO_TARGET}); worst case {:.0} instructions: {verdict}.",
-        full.call.ratio(),
-        full.call.max
-    );
+    let _ = writeln!(s, "{}", ratio_line(full, &verdict));
     let _ = writeln!(
         s,
         "- per point: the Evaluate phase divided by the points; it includes the per-pose overhead (ψ → rotation, two \
@@ -464,4 +473,37 @@ pub(super) fn round1(v: f64) -> f64 {
 
 pub(super) fn round2(v: f64) -> f64 {
     (v * 100.0).round() / 100.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use evorec_core::status::Status;
+
+    #[test]
+    fn the_ratio_line_names_the_mix_and_gives_each_status() {
+        let range = |min: f64, max: f64| Range { min, max, mean: 0.5 * (min + max) };
+        let full = RunStats {
+            population: 40,
+            capacity: 40,
+            grid: 8,
+            points_per_individual: 960,
+            walked_per_individual: 768,
+            generations: 30,
+            call: range(100.0, 130.0),
+            feedforward: range(1.0, 1.0),
+            evaluate: range(90.0, 120.0),
+            breed: range(9.0, 9.0),
+            per_point: range(0.1, 0.1),
+            per_walked_point: range(0.1, 0.1),
+            stack: 0,
+            by_kind: Vec::new(),
+            by_status: vec![(Status::Tracking, 20, range(125.0, 130.0)), (Status::Searching, 10, range(100.0, 104.0))],
+        };
+        assert_eq!(
+            ratio_line(&full, "within budget"),
+            "- max/min over every frame, all statuses mixed: **1.3000** (target ≤ 1.05); per status: tracking 1.0400 \
+             (20 frames), searching 1.0400 (10 frames); worst case 130 instructions: within budget."
+        );
+    }
 }

@@ -77,6 +77,24 @@ pub fn write_png(path: &Path, img: &image::RgbImage) -> Result<()> {
     write_atomic(path, |w| Ok(img.write_with_encoder(image::codecs::png::PngEncoder::new(w))?))
 }
 
+/// Writes a table as `STEM.csv` in `out` (header `columns`, then `records`) and as `STEM.md`
+/// (`markdown`), both atomically ([`write_atomic`]), creating `out` first.
+///
+/// # Errors
+/// I/O and CSV errors.
+pub fn write_table(out: &Path, stem: &str, columns: &[&str], records: &[Vec<String>], markdown: &str) -> Result<()> {
+    std::fs::create_dir_all(out)?;
+    write_atomic(&out.join(format!("{stem}.csv")), |file| {
+        let mut w = csv::Writer::from_writer(file);
+        w.write_record(columns)?;
+        for rec in records {
+            w.write_record(rec)?;
+        }
+        Ok(w.flush()?)
+    })?;
+    write_bytes(&out.join(format!("{stem}.md")), markdown.as_bytes())
+}
+
 /// Header of `trace.csv`.
 pub fn trace_header() -> Vec<String> {
     let mut h = vec!["t".to_owned()];
@@ -194,6 +212,17 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap_or_else(|e| unreachable!("{e}"));
         dir
+    }
+
+    #[test]
+    fn a_table_is_written_as_csv_and_markdown() {
+        let dir = scratch("table").join("sub");
+        let records = vec![vec!["A".to_owned(), "0.5".to_owned()], vec!["B, C".to_owned(), "1".to_owned()]];
+        write_table(&dir, "t", &["name", "x"], &records, "| name |\n").unwrap_or_else(|e| unreachable!("{e}"));
+        let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(read("t.csv"), "name,x\nA,0.5\n\"B, C\",1\n");
+        assert_eq!(read("t.md"), "| name |\n");
+        assert_eq!(entries(&dir), ["t.csv", "t.md"]);
     }
 
     fn entries(dir: &Path) -> Vec<String> {

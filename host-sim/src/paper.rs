@@ -167,21 +167,17 @@ pub const COLUMNS: [&str; 10] =
 /// # Errors
 /// I/O errors.
 pub fn write_tables(results: &[(Cell, Accuracy)], out: &Path) -> Result<()> {
-    std::fs::create_dir_all(out)?;
-    crate::io::write_atomic(&out.join("paper_table.csv"), |file| {
-        let mut w = csv::Writer::from_writer(file);
-        w.write_record(COLUMNS)?;
-        for (cell, acc) in results {
+    let records: Vec<Vec<String>> = results
+        .iter()
+        .map(|(cell, acc)| {
             let mut rec = vec![cell.motion_name().to_owned(), cell.method_name().to_owned(), format!("{}", cell.omega)];
             rec.extend(
                 values(acc).iter().enumerate().map(|(i, v)| if i == 0 { format!("{v:.4}") } else { format!("{v:.6}") }),
             );
-            w.write_record(&rec)?;
-        }
-        Ok(w.flush()?)
-    })?;
-    crate::io::write_bytes(&out.join("paper_table.md"), markdown(results).as_bytes())?;
-    Ok(())
+            rec
+        })
+        .collect();
+    crate::io::write_table(out, "paper_table", &COLUMNS, &records, &markdown(results))
 }
 
 /// The comparison table: every cell as "ours (paper)".

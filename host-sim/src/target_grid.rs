@@ -154,20 +154,16 @@ fn values(s: &Summary) -> [f64; 14] {
 /// # Errors
 /// I/O errors.
 pub fn write_tables(results: &[(Cell, Summary)], out: &Path) -> Result<()> {
-    std::fs::create_dir_all(out)?;
-    crate::io::write_atomic(&out.join("target_table.csv"), |file| {
-        let mut w = csv::Writer::from_writer(file);
-        w.write_record(COLUMNS)?;
-        for (cell, summary) in results {
+    let records: Vec<Vec<String>> = results
+        .iter()
+        .map(|(cell, summary)| {
             let mut rec =
                 vec![format!("{}", cell.speed_m_s), format!("{}", cell.omega_o), cell.method_name().to_owned()];
             rec.extend(values(summary).iter().map(|v| format!("{v:.6}")));
-            w.write_record(&rec)?;
-        }
-        Ok(w.flush()?)
-    })?;
-    crate::io::write_bytes(&out.join("target_table.md"), markdown(results).as_bytes())?;
-    Ok(())
+            rec
+        })
+        .collect();
+    crate::io::write_table(out, "target_table", &COLUMNS, &records, &markdown(results))
 }
 
 /// The grid as a Markdown table.

@@ -427,20 +427,20 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
     r: &Matrix3<f32>,
     t: &Vector3<f32>,
 ) -> Counts {
-    counts_walking(model, lut, cam, image, r, t, CONSTANT_WORK)
+    counts_walking::<G, B, F, CONSTANT_WORK>(model, lut, cam, image, r, t)
 }
 
-/// [`camera_counts`], walking every row (`walk_all`, the board's constant work) or only the
-/// rows that count: the same counts either way.
-#[inline(always)]
-fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
+/// [`camera_counts`], walking every row (`WALK_ALL`, the board's constant work) or only the
+/// rows that count: the same counts either way. Out of line, as `camera_counts` itself was
+/// (the wrapper inlines, this does not, so the board's code stays in one place per instance).
+#[inline(never)]
+fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat, const WALK_ALL: bool>(
     model: &SurfaceStrips<G>,
     lut: &HueLut,
     cam: &Pinhole,
     image: &Image<B, F>,
     r: &Matrix3<f32>,
     t: &Vector3<f32>,
-    walk_all: bool,
 ) -> Counts {
     let view = View::of(image);
     let half = model.half_size();
@@ -490,24 +490,24 @@ fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
         }
     }
 
-    let faces = FacePlan { chosen, visible_mask, front: core::array::from_fn(|k| front(k as u8)), walk_all };
+    let faces = FacePlan { chosen, visible_mask, front: core::array::from_fn(|k| front(k as u8)) };
     let (fx, fy) = (cam.fx(), cam.fy());
     if cam.distortion().is_none() {
         // K with the pixel coordinates in 16.16 fixed point (scaled by 2¹⁶, exactly).
         let proj = Projector::new([fx * FIX_ONE, fy * FIX_ONE, cam.cx() * FIX_ONE, cam.cy() * FIX_ONE], r, t);
-        count_faces(model, lut, &Affine { view: &view }, &proj, &faces)
+        count_faces::<G, WALK_ALL>(model, lut, &Affine { view: &view }, &proj, &faces)
     } else {
         // Normalised coordinates, then the lens, then K'. Beyond `r2_max` the plumb_bob
         // polynomial is outside the calibrated field (and may fold back into the image):
         // such points read as outside.
-        distorted_counts(model, lut, &view, cam, r, t, &faces)
+        distorted_counts::<G, F, WALK_ALL>(model, lut, &view, cam, r, t, &faces)
     }
 }
 
 /// [`count_faces`] through the lens of `cam` (kept out of line so the plain kernel's code and
 /// its unrolling do not change with it).
 #[inline(never)]
-fn distorted_counts<const G: usize, F: PixelFormat>(
+fn distorted_counts<const G: usize, F: PixelFormat, const WALK_ALL: bool>(
     model: &SurfaceStrips<G>,
     lut: &HueLut,
     view: &View<'_, F>,
@@ -525,7 +525,7 @@ fn distorted_counts<const G: usize, F: PixelFormat>(
         let (xd, yd) = d.apply(xn, yn);
         if xn * xn + yn * yn <= r2_max { (fx * xd + cx1, fy * yd + cy1) } else { (-1.0, -1.0) }
     };
-    count_faces(model, lut, &Lens { view, to_pixel }, &proj, faces)
+    count_faces::<G, WALK_ALL>(model, lut, &Lens { view, to_pixel }, &proj, faces)
 }
 
 /// The squared normalised radius within which a distorted camera's model is used: twice the
@@ -543,8 +543,6 @@ struct FacePlan {
     chosen: [usize; 3],
     visible_mask: u8,
     front: [bool; FACES],
-    /// Walk every row, those whose counts are discarded included (see [`CONSTANT_WORK`]).
-    walk_all: bool,
 }
 
 /// Whether every pose walks the same rows, [`SurfaceStrips::WALKED_PER_CAMERA`] points per
@@ -554,9 +552,10 @@ struct FacePlan {
 /// work bounded by the same constant.
 const CONSTANT_WORK: bool = cfg!(target_arch = "arm");
 
-/// The counts of the planned faces, with `walk` counting the rows.
+/// The counts of the planned faces, with `walk` counting the rows (every row with
+/// `WALK_ALL`, see [`CONSTANT_WORK`]).
 #[inline(always)]
-fn count_faces<const G: usize>(
+fn count_faces<const G: usize, const WALK_ALL: bool>(
     model: &SurfaceStrips<G>,
     lut: &HueLut,
     walk: &impl RowWalk,
@@ -595,7 +594,7 @@ fn count_faces<const G: usize>(
                 // The inward direction is −side on the + side, +side on the − side.
                 let at = |d: &[f32; 3]| if positive { sub(base, *d) } else { add(base, *d) };
                 // The inner rows of a hidden face do not count: only the board walks them.
-                if visible || faces.walk_all {
+                if visible || WALK_ALL {
                     let rows = EdgeRows { starts: s.inner.each_ref().map(at), step: l.step, span: l.span };
                     inner += walk.count_rows::<G, { INNER_INSETS_M.len() }>(&rows, scores.inner);
                 }
@@ -616,7 +615,7 @@ fn count_faces<const G: usize>(
     }
     // Constant work (the board): the outer rows of the edges that did not count are walked on
     // a fixed row (and discarded), so every pose walks `MAX_OUTER_EDGES` edges' outer rows.
-    if faces.walk_all {
+    if WALK_ALL {
         let [x, ..] = &axes;
         let pad = EdgeRows { starts: x.outer.map(|d| add(proj.c, d)), step: x.step, span: x.span };
         for _ in outer_edges..MAX_OUTER_EDGES {

@@ -261,8 +261,8 @@ fn walking_only_the_rows_that_count_gives_the_same_counts() {
         }
         let rot = p.rotation_unchecked();
         let (cam, t) = (if k % 4 == 0 { &barrel } else { &plain }, p.translation());
-        let some = counts_walking(&model, &lut, cam, &image, &rot, &t, false);
-        let all = counts_walking(&model, &lut, cam, &image, &rot, &t, true);
+        let some = counts_walking::<8, _, _, false>(&model, &lut, cam, &image, &rot, &t);
+        let all = counts_walking::<8, _, _, true>(&model, &lut, cam, &image, &rot, &t);
         assert_eq!(some, all, "{p:?}");
         faces_seen[some.visible.count_ones() as usize] += 1;
     }

@@ -3,8 +3,10 @@
 //! time on a shared machine is not.
 //!
 //! `cargo build --release -p evorec-core --example fitness_probe &&
-//!  valgrind --tool=callgrind --callgrind-out-file=/dev/null target/release/examples/fitness_probe 20000 [G]`
-//! with `G` one of 4, 8 (default), 16.
+//!  valgrind --tool=callgrind --callgrind-out-file=/dev/null target/release/examples/fitness_probe 20000 [G] [corner]`
+//! with `G` one of 4, 8 (default), 16. The default pose shows each camera two faces (and four
+//! silhouette edges); `corner` turns a corner of the block to the cameras, so three faces and
+//! six silhouette edges count (the most rows a pose walks).
 
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, NO_HUE};
@@ -22,8 +24,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (w, h) = (640u16, 480u16);
     let cam = Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, w, h)?;
     let rig = StereoRig::parallel(cam, 0.1)?;
-    let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1))?;
-    let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
+    let corner = std::env::args().nth(3).is_some_and(|a| a == "corner");
+    let truth = if corner {
+        let q = quat::from_angle_axis(2.0, &Vector3::new(-1.0, 1.0, 0.1))?;
+        Psi::from_parts(&Vector3::new(0.02, -0.01, 0.75), &q)
+    } else {
+        let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1))?;
+        Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q)
+    };
     let iso = truth.try_to_isometry()?;
     let px = usize::from(w) * usize::from(h);
     let (mut l, mut r) = (vec![NO_HUE; px], vec![NO_HUE; px]);
@@ -31,12 +39,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l)?;
     let (left, right) = (HueImage::new_checked(&l[..], w, h)?, HueImage::new_checked(&r[..], w, h)?);
     let grid = std::env::args().nth(2).unwrap_or_else(|| DEFAULT_GRID.to_string());
-    let (points, mean) = match grid.as_str() {
+    let (points, mean, faces) = match grid.as_str() {
         "4" => probe::<4>(n, &rig, &truth, &left, &right)?,
         "16" => probe::<16>(n, &rig, &truth, &left, &right)?,
         _ => probe::<DEFAULT_GRID>(n, &rig, &truth, &left, &right)?,
     };
-    println!("{n} evaluations x {points} sample points (G = {grid}), mean F {mean:.4}");
+    println!("{n} evaluations x {points} sample points (G = {grid}), mean F {mean:.4}, visible faces {faces:?}");
     Ok(())
 }
 
@@ -46,7 +54,7 @@ fn probe<const G: usize>(
     truth: &Psi,
     left: &HueImage<&[u8]>,
     right: &HueImage<&[u8]>,
-) -> Result<(usize, f32), Box<dyn std::error::Error>> {
+) -> Result<(usize, f32, [u32; 2]), Box<dyn std::error::Error>> {
     let model = SurfaceStrips::<G>::new(&Block::PAPER)?;
     let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
     let eval = Evaluator::new(&model, &lut, rig);
@@ -56,5 +64,7 @@ fn probe<const G: usize>(
         p.0[0] += (i % 7) as f32 * 1e-4;
         acc += eval.evaluate_psi(black_box(&p), left, right).total;
     }
-    Ok((2 * SurfaceStrips::<G>::POINTS_PER_CAMERA, acc / n as f32))
+    let f = eval.evaluate_psi(truth, left, right);
+    let faces = [f.left.visible.count_ones(), f.right.visible.count_ones()];
+    Ok((2 * SurfaceStrips::<G>::POINTS_PER_CAMERA, acc / n as f32, faces))
 }

@@ -15,14 +15,17 @@
 //! camera.
 //!
 //! **Bounded work.** Of each pair of opposite faces exactly one can face a camera, so each
-//! camera evaluates three faces (the one of each pair on the camera's side): their inner rows
+//! camera evaluates three faces (the one of each pair on the camera's side): on the board their inner rows
 //! always, whether or not a face is visible (the visibility only masks the counts), and the
 //! outer rows only where they count, on the silhouette edges of visible faces. Those are at
 //! most [`MAX_OUTER_EDGES`] = 6 edges per camera, and the walk is padded to that many, so every
 //! pose walks [`SurfaceStrips::WALKED_PER_CAMERA`] points per camera (48·G, 80 % of
 //! [`SurfaceStrips::POINTS_PER_CAMERA`]; the outer rows of the other edges used to be walked
-//! and discarded). Points outside the image read as "no hue"; nothing is ever read out of
-//! bounds.
+//! and discarded). That constant work is the board's (so the measured worst case is every
+//! case); the host walks only the rows that count, the inner rows of visible faces and the
+//! outer rows of their silhouette edges (at most as many: the same counts, less work for a
+//! pose that shows fewer than three faces or silhouette edges; see `CONSTANT_WORK`). Points
+//! outside the image read as "no hue"; nothing is ever read out of bounds.
 //!
 //! **Per row** (plain pinhole): the perspective division of its two end points, and the step
 //! between its points in 16.16 fixed point (see `Affine` for why the affine walk between
@@ -121,6 +124,19 @@ impl<'a, F: PixelFormat> View<'a, F> {
         }
     }
 
+    /// The index of the pixel under the fixed-point point `(u, v)`, `row · width + col`
+    /// (wrapping), or `u32::MAX` when the column is outside the image: `u >> 16` is `⌊u⌋`
+    /// (arithmetic shift), the column, and as an unsigned number it is `≥ width` left of the
+    /// image too. The row needs no compare of its own: for any `i32` `v`, `|v >> 16| ≤ 2¹⁵`,
+    /// so with a column inside the image the index is `< len` exactly when `0 ≤ row < height`
+    /// (a negative row wraps to at least `2³² − 2²⁶ > len`).
+    #[inline(always)]
+    fn index(&self, u: i32, v: i32) -> u32 {
+        let col = (u >> FIX_BITS) as u32;
+        let index = ((v >> FIX_BITS) as u32).wrapping_mul(self.width).wrapping_add(col);
+        if col < self.width { index } else { u32::MAX }
+    }
+
     /// `Σ plane[hue]` over the `G` points of a fixed-point row (the pinhole kernel's inner
     /// loop; `pixels` must not be empty, see [`walk_edge`]; `plane` maps [`NO_HUE`] to 0, as
     /// every plane of a [`HueLut`] does).
@@ -137,8 +153,8 @@ impl<'a, F: PixelFormat> View<'a, F> {
         hits
     }
 
-    /// The host's walk: the column test selects an index past the end, and the slice's
-    /// checked read gives [`PixelFormat::NONE`] (no hue, 0 in every plane) for every point
+    /// The host's walk: the index ([`View::index`]) of a point outside is past the end, and
+    /// the slice's checked read gives [`PixelFormat::NONE`] (no hue, 0 in every plane) for every point
     /// outside the image. The same index and the same pixel as [`View::walk_selected`] for a
     /// point inside, and 0 for a point outside, so the same sum; here the read is a bounds
     /// check and a load (a branch that only a change between inside and outside mispredicts).
@@ -148,9 +164,7 @@ impl<'a, F: PixelFormat> View<'a, F> {
         let (mut u, mut v) = (row.u, row.v);
         let mut hits = 0u32;
         for _ in 0..G {
-            let col = (u >> FIX_BITS) as u32;
-            let index = ((v >> FIX_BITS) as u32).wrapping_mul(self.width).wrapping_add(col);
-            let index = if col < self.width { index } else { u32::MAX };
+            let index = self.index(u, v);
             let px = self.pixels.get(index as usize).copied().unwrap_or(F::NONE);
             hits += u32::from(plane[usize::from(F::hue(px))]);
             u = u.wrapping_add(row.du);
@@ -159,12 +173,9 @@ impl<'a, F: PixelFormat> View<'a, F> {
         hits
     }
 
-    /// The board's walk (see [`View::walk`]). Per point: `u >> 16` is `⌊u⌋` (arithmetic shift), the column; as an unsigned number it
-    /// is `≥ width` left of the image too, and such a column moves the index to `u32::MAX`.
-    /// The row needs no compare of its own: for any `i32` `v`, `|v >> 16| ≤ 2¹⁵`, so with a
-    /// column inside the image the wrapping index `row · width + col` is `< len` exactly when
-    /// `0 ≤ row < height` (a negative row wraps to at least `2³² − 2²⁶ > len`). That compare
-    /// is the image test. A point outside reads pixel 0 instead and its score is not added:
+    /// The board's walk (see [`View::walk`]). Per point: the index ([`View::index`]) and
+    /// its compare with the length, which is the image test. A point outside reads pixel 0
+    /// instead and its score is not added:
     /// the same instructions inside and outside the image and no branch (the index and the
     /// addition are selected, the loads always happen), so every point costs the same.
     #[cfg_attr(not(any(target_arch = "arm", test)), allow(dead_code))]
@@ -173,9 +184,7 @@ impl<'a, F: PixelFormat> View<'a, F> {
         let (mut u, mut v) = (row.u, row.v);
         let mut hits = 0u32;
         for _ in 0..G {
-            let col = (u >> FIX_BITS) as u32;
-            let index = ((v >> FIX_BITS) as u32).wrapping_mul(self.width).wrapping_add(col);
-            let index = if col < self.width { index } else { u32::MAX };
+            let index = self.index(u, v);
             let inside = (index as usize) < self.pixels.len();
             // In bounds either way (pixel 0 exists), so the `None` arm is never taken.
             let px = self.pixels.get(if inside { index as usize } else { 0 }).copied().unwrap_or(F::NONE);
@@ -408,8 +417,24 @@ fn min_finite(a: f32, b: f32) -> f32 {
 
 /// Counts of one camera for the model at `(r, t)` in that camera's frame.
 ///
-/// The work is the same for every pose: see the module docs.
+/// The work is bounded by the same constant for every pose (on the board it is that
+/// constant): see the module docs.
 pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
+    model: &SurfaceStrips<G>,
+    lut: &HueLut,
+    cam: &Pinhole,
+    image: &Image<B, F>,
+    r: &Matrix3<f32>,
+    t: &Vector3<f32>,
+) -> Counts {
+    counts_walking::<G, B, F, CONSTANT_WORK>(model, lut, cam, image, r, t)
+}
+
+/// [`camera_counts`], walking every row (`WALK_ALL`, the board's constant work) or only the
+/// rows that count: the same counts either way. Out of line, as `camera_counts` itself was
+/// (the wrapper inlines, this does not, so the board's code stays in one place per instance).
+#[inline(never)]
+fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat, const WALK_ALL: bool>(
     model: &SurfaceStrips<G>,
     lut: &HueLut,
     cam: &Pinhole,
@@ -470,19 +495,19 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
     if cam.distortion().is_none() {
         // K with the pixel coordinates in 16.16 fixed point (scaled by 2¹⁶, exactly).
         let proj = Projector::new([fx * FIX_ONE, fy * FIX_ONE, cam.cx() * FIX_ONE, cam.cy() * FIX_ONE], r, t);
-        count_faces(model, lut, &Affine { view: &view }, &proj, &faces)
+        count_faces::<G, WALK_ALL>(model, lut, &Affine { view: &view }, &proj, &faces)
     } else {
         // Normalised coordinates, then the lens, then K'. Beyond `r2_max` the plumb_bob
         // polynomial is outside the calibrated field (and may fold back into the image):
         // such points read as outside.
-        distorted_counts(model, lut, &view, cam, r, t, &faces)
+        distorted_counts::<G, F, WALK_ALL>(model, lut, &view, cam, r, t, &faces)
     }
 }
 
 /// [`count_faces`] through the lens of `cam` (kept out of line so the plain kernel's code and
 /// its unrolling do not change with it).
 #[inline(never)]
-fn distorted_counts<const G: usize, F: PixelFormat>(
+fn distorted_counts<const G: usize, F: PixelFormat, const WALK_ALL: bool>(
     model: &SurfaceStrips<G>,
     lut: &HueLut,
     view: &View<'_, F>,
@@ -500,7 +525,7 @@ fn distorted_counts<const G: usize, F: PixelFormat>(
         let (xd, yd) = d.apply(xn, yn);
         if xn * xn + yn * yn <= r2_max { (fx * xd + cx1, fy * yd + cy1) } else { (-1.0, -1.0) }
     };
-    count_faces(model, lut, &Lens { view, to_pixel }, &proj, faces)
+    count_faces::<G, WALK_ALL>(model, lut, &Lens { view, to_pixel }, &proj, faces)
 }
 
 /// The squared normalised radius within which a distorted camera's model is used: twice the
@@ -520,9 +545,17 @@ struct FacePlan {
     front: [bool; FACES],
 }
 
-/// The counts of the planned faces, with `walk` counting the rows.
+/// Whether every pose walks the same rows, [`SurfaceStrips::WALKED_PER_CAMERA`] points per
+/// camera, those whose counts are discarded included: on the board, so that the measured worst
+/// case is every case (`evorec timing`). The host walks only the rows that count (the inner
+/// rows of visible faces and the outer rows of their silhouette edges): the same counts, with
+/// work bounded by the same constant.
+const CONSTANT_WORK: bool = cfg!(target_arch = "arm");
+
+/// The counts of the planned faces, with `walk` counting the rows (every row with
+/// `WALK_ALL`, see [`CONSTANT_WORK`]).
 #[inline(always)]
-fn count_faces<const G: usize>(
+fn count_faces<const G: usize, const WALK_ALL: bool>(
     model: &SurfaceStrips<G>,
     lut: &HueLut,
     walk: &impl RowWalk,
@@ -560,8 +593,11 @@ fn count_faces<const G: usize>(
                 };
                 // The inward direction is −side on the + side, +side on the − side.
                 let at = |d: &[f32; 3]| if positive { sub(base, *d) } else { add(base, *d) };
-                let rows = EdgeRows { starts: s.inner.each_ref().map(at), step: l.step, span: l.span };
-                inner += walk.count_rows::<G, { INNER_INSETS_M.len() }>(&rows, scores.inner);
+                // The inner rows of a hidden face do not count: only the board walks them.
+                if visible || WALK_ALL {
+                    let rows = EdgeRows { starts: s.inner.each_ref().map(at), step: l.step, span: l.span };
+                    inner += walk.count_rows::<G, { INNER_INSETS_M.len() }>(&rows, scores.inner);
+                }
                 // Outer rows count only on silhouette edges (the face across is hidden) of
                 // visible faces: the others are not walked.
                 if visible && !faces.front.get(neighbour).copied().unwrap_or(false) {
@@ -577,12 +613,14 @@ fn count_faces<const G: usize>(
             counts.strip_matched += outer;
         }
     }
-    // Constant work: the outer rows of the edges that did not count are walked on a fixed row
-    // (and discarded), so every pose walks `MAX_OUTER_EDGES` edges' outer rows.
-    let [x, ..] = &axes;
-    let pad = EdgeRows { starts: x.outer.map(|d| add(proj.c, d)), step: x.step, span: x.span };
-    for _ in outer_edges..MAX_OUTER_EDGES {
-        core::hint::black_box(walk.count_rows::<G, { OUTER_OFFSETS_M.len() }>(&pad, lut.any(visible_mask)));
+    // Constant work (the board): the outer rows of the edges that did not count are walked on
+    // a fixed row (and discarded), so every pose walks `MAX_OUTER_EDGES` edges' outer rows.
+    if WALK_ALL {
+        let [x, ..] = &axes;
+        let pad = EdgeRows { starts: x.outer.map(|d| add(proj.c, d)), step: x.step, span: x.span };
+        for _ in outer_edges..MAX_OUTER_EDGES {
+            core::hint::black_box(walk.count_rows::<G, { OUTER_OFFSETS_M.len() }>(&pad, lut.any(visible_mask)));
+        }
     }
     counts
 }

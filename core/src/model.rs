@@ -217,9 +217,9 @@ impl<const G: usize> SurfaceStrips<G> {
     /// Sample points of the three faces a camera evaluates (one of each opposite pair), every
     /// row of every edge.
     pub const POINTS_PER_CAMERA: usize = 3 * (Self::INNER_PER_FACE + Self::OUTER_PER_FACE);
-    /// Sample points the fitness walks per camera for one pose, whatever the pose: the inner
-    /// rows of the three faces and the outer rows of [`MAX_OUTER_EDGES`] edges (see
-    /// `crate::fitness`).
+    /// Sample points the fitness walks per camera for one pose on the board, whatever the
+    /// pose: the inner rows of the three faces and the outer rows of [`MAX_OUTER_EDGES`] edges
+    /// (see `crate::fitness`); the host's bound (it walks only the rows that count).
     pub const WALKED_PER_CAMERA: usize = 3 * Self::INNER_PER_FACE + MAX_OUTER_EDGES * OUTER_OFFSETS_M.len() * G;
 
     /// The model of nothing (every sample at the block's centre, size 0), to be

@@ -1,5 +1,6 @@
 //! Tests of the fitness kernel (`super`): exact scores, RGB565 against hue frames, the lens
-//! kernel, the affine walk against the projected rows, and the host walk against the board's.
+//! kernel, the affine walk against the projected rows, and the host walk (and the rows it
+//! walks) against the board's.
 
 use super::*;
 use crate::config::DEFAULT_HUE_TOLERANCE;
@@ -209,6 +210,45 @@ fn host_and_board_walks_count_the_same() {
         }
     }
     assert!(inside > 1000 && outside > 1000, "{inside} / {outside}");
+}
+
+#[test]
+fn walking_only_the_rows_that_count_gives_the_same_counts() {
+    // The host walks the rows that count, the board every row (constant work): over poses
+    // around a scene showing one, two or three faces, plain and distorted, the same counts.
+    use crate::camera::Distortion;
+    let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
+    let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
+    let q = crate::quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
+    let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
+    let (_, img) = scene(&truth);
+    let image = HueImage::new_checked(&img[..], W, H).unwrap();
+    let plain = rig().right;
+    let barrel = plain.with_distortion(Distortion::plumb_bob([-0.3, 0.1, 0.0, 0.0, 0.0]).unwrap());
+    let mut x = 0x9e37_79b9u32;
+    let mut unit = move || {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        x as f32 / u32::MAX as f32 * 2.0 - 1.0
+    };
+    let mut faces_seen = [0usize; 4];
+    for k in 0..3000 {
+        let mut p = truth;
+        for (g, gene) in p.0.iter_mut().enumerate() {
+            *gene += unit() * if g < 3 { 0.05 } else { 0.9 };
+        }
+        if p.validate().is_err() {
+            continue;
+        }
+        let rot = p.rotation_unchecked();
+        let (cam, t) = (if k % 4 == 0 { &barrel } else { &plain }, p.translation());
+        let some = counts_walking::<8, _, _, false>(&model, &lut, cam, &image, &rot, &t);
+        let all = counts_walking::<8, _, _, true>(&model, &lut, cam, &image, &rot, &t);
+        assert_eq!(some, all, "{p:?}");
+        faces_seen[some.visible.count_ones() as usize] += 1;
+    }
+    assert!(faces_seen[1..].iter().all(|&n| n > 50), "{faces_seen:?}");
 }
 
 #[test]

@@ -20,7 +20,7 @@ use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
 use crate::status::{Status, StatusConfig, StatusError, StatusMonitor};
-use crate::target_motion::{self, PredictError, Prediction, TargetFilter};
+use crate::target_motion::{FilterParamsError, PredictError, Prediction, TargetFilter, TargetFilterParams};
 
 /// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -409,6 +409,14 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         &self.target
     }
 
+    /// Sets the parameters of the target filter (which forgets its track).
+    ///
+    /// # Errors
+    /// [`FilterParamsError`] for invalid parameters (the tracker is then unchanged).
+    pub fn set_target_filter_params(&mut self, params: TargetFilterParams) -> Result<(), FilterParamsError> {
+        self.target.set_params(params)
+    }
+
     /// Hands the latest estimate over to time `t_us` (e.g. when a controller acts on it):
     /// see [`TargetFilter::predict`]. `joints` is the newest joint sample.
     ///
@@ -539,8 +547,11 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             Feedforward::OnWithTarget => {
                 let motion =
                     feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
-                let target =
-                    feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &self.target.feedforward_velocity());
+                // The line of sight to the elite (index 0 after the last breed), in the world.
+                let elite = self.ga.individuals().first().copied().unwrap_or(Psi::IDENTITY);
+                let sight = motion.r_wc * elite.translation();
+                let velocity = self.target.feedforward_velocity_seen_along(&sight);
+                let target = feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &velocity);
                 let shift = |psi: &mut Psi| {
                     let rate = feedforward::psi_rate_moving(&motion.twist, &target, psi);
                     feedforward::shift(psi, &rate, dt_s);
@@ -572,9 +583,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // The target filter (one forward kinematics and a data-dependent update) runs only in the
         // mode that uses it, so the other modes keep the paper's constant work per generation.
         if feedforward == Feedforward::OnWithTarget {
-            let world =
-                target_motion::world_pose(&self.config.arm, &joints.q, &self.config.flange_to_camera, &best.psi);
-            self.target.update_with_status(&world, joints.time_us, best.fitness, status);
+            let (arm, mount) = (&self.config.arm, &self.config.flange_to_camera);
+            self.target.observe(arm, &joints.q, mount, &best.psi, joints.time_us, best.fitness, status);
         }
         probe.mark(Phase::Done);
 

@@ -549,8 +549,7 @@ impl CameraController<DOF> for ServoBoard {
     fn publish(&mut self, _frame: &FrameInfo, est: &Estimate) -> Result<(), SimError> {
         let Some(Capture { t, joints, occluded, steady }) = self.current.take() else { return Ok(()) };
         if self.feedforward == Feedforward::OnWithTarget {
-            let world = target_motion::world_pose(&PA10, &joints.q, &self.ctl.mount, &est.psi);
-            self.filter.update_with_status(&world, joints.time_us, est.fitness, est.status);
+            self.filter.observe(&PA10, &joints.q, &self.ctl.mount, &est.psi, joints.time_us, est.fitness, est.status);
         }
         let tracking = est.status == Status::Tracking;
         let released = Released { psi: est.psi, q: joints.q, filter: self.filter, tracking };

@@ -22,7 +22,7 @@ use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
-use evorec_core::target_motion::{self, TargetFilter, TargetVelocity};
+use evorec_core::target_motion::{TargetFilter, TargetVelocity};
 use evorec_core::tracker::{Estimate, JointSample};
 use nalgebra::Isometry3;
 use rand_core::SeedableRng;
@@ -391,8 +391,8 @@ impl SimBoard {
         true_velocity: TargetVelocity,
     ) -> Handover {
         let feedforward = self.filter.feedforward_velocity();
-        let world = target_motion::world_pose(&PA10, &joints.q, &self.flange_to_camera, &estimate.psi);
-        self.filter.update_with_status(&world, joints.time_us, estimate.fitness, estimate.status);
+        let (q, mount) = (&joints.q, &self.flange_to_camera);
+        self.filter.observe(&PA10, q, mount, &estimate.psi, joints.time_us, estimate.fitness, estimate.status);
         let t_out = t + self.world.scenario().tracker.delay_s;
         let (truth_out, joints_out) = self.world.look_ahead(t_out);
         let t_out_us = (t_out * 1e6).round() as u64;

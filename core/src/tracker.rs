@@ -21,7 +21,7 @@ use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
 use crate::status::{Status, StatusConfig, StatusError, StatusMonitor};
-use crate::target_motion::{PredictError, Prediction, TargetFilter};
+use crate::target_motion::{FilterParamsError, PredictError, Prediction, TargetFilter, TargetFilterParams};
 
 /// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -399,6 +399,14 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         &self.target
     }
 
+    /// Sets the parameters of the target filter (which forgets its track).
+    ///
+    /// # Errors
+    /// [`FilterParamsError`] for invalid parameters (the tracker is then unchanged).
+    pub fn set_target_filter_params(&mut self, params: TargetFilterParams) -> Result<(), FilterParamsError> {
+        self.target.set_params(params)
+    }
+
     /// Hands the latest estimate over to time `t_us` (e.g. when a controller acts on it):
     /// see [`TargetFilter::predict`]. `joints` is the newest joint sample.
     ///
@@ -529,8 +537,11 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             Feedforward::OnWithTarget => {
                 let motion =
                     feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
-                let target =
-                    feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &self.target.feedforward_velocity());
+                // The line of sight to the elite (index 0 after the last breed), in the world.
+                let elite = self.ga.individuals().first().copied().unwrap_or(Psi::IDENTITY);
+                let sight = motion.r_wc * elite.translation();
+                let velocity = self.target.feedforward_velocity_seen_along(&sight);
+                let target = feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &velocity);
                 let shift = |psi: &mut Psi| {
                     let rate = feedforward::psi_rate_moving(&motion.twist, &target, psi);
                     feedforward::shift(psi, &rate, dt_s);

@@ -21,8 +21,16 @@
 //! innovation on any axis exceeds [`TargetFilterParams::gate_sigma`] standard deviations. The
 //! velocity is **trusted** once [`TargetFilterParams::converge_updates`] consecutive updates
 //! have been accepted with the velocity's standard deviation below
-//! [`TargetFilterParams::trusted_speed_sd_m_s`] and [`TargetFilterParams::trusted_rate_sd_rad_s`],
-//! and stays trusted until the filter restarts or is reset.
+//! [`TargetFilterParams::trusted_speed_sd_m_s`] and [`TargetFilterParams::trusted_rate_sd_rad_s`]
+//! (the bound of a position axis grows with its measurement noise), and stays trusted until the
+//! filter restarts or is reset.
+//!
+//! The tracker feeds it through [`TargetFilter::update_from_estimate`], which knows the camera: stereo
+//! depth is far noisier than the position across the view, so a position is weighed with
+//! [`TargetFilterParams::depth_noise_m`] along the line of sight and
+//! [`TargetFilterParams::position_noise_m`] across it, and the velocity fed forward
+//! ([`TargetFilter::feedforward_velocity_seen_along`]) keeps only
+//! [`TargetFilterParams::depth_feedforward`] of its part along the line of sight.
 //!
 //! [`TargetFilter::predict`] hands the pose over to a later time `t`: the last accepted
 //! measurement moved by the trusted velocity over `t − t_capture`, seen from the camera at the
@@ -53,8 +61,13 @@ impl TargetVelocity {
 /// Tuning of a [`TargetFilter`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TargetFilterParams {
-    /// Standard deviation of a position measurement (m).
+    /// Standard deviation of a position measurement across the line of sight (m); the whole
+    /// measurement's when no line of sight is known ([`TargetFilter::update`]).
     pub position_noise_m: f32,
+    /// Standard deviation of a position measurement along the camera's line of sight to the
+    /// block (m, [`TargetFilter::update_from_estimate`]): stereo depth is far noisier than the position
+    /// across the view.
+    pub depth_noise_m: f32,
     /// Standard deviation of an orientation measurement (rad, per axis).
     pub rotation_noise_rad: f32,
     /// Spectral density of the white acceleration noise of the position axes (m²/s³).
@@ -88,29 +101,51 @@ pub struct TargetFilterParams {
     /// velocity inside the filter's `significance_sigma`-σ ellipsoid around zero cannot be told
     /// from a target at rest, and feeding its noise forward drags the population along it.
     pub significance_sigma: f32,
+    /// Once the linear velocity has been fed forward, keep feeding it forward (without the
+    /// significance test and the dead band) until the filter restarts: a block that moved
+    /// keeps moving, and its speed passes zero at every reversal.
+    pub hold_motion: bool,
+    /// Share (0..=1) of the linear velocity along the line of sight that
+    /// [`TargetFilter::feedforward_velocity_seen_along`] feeds forward: a velocity in depth is
+    /// mostly the difference of noisy stereo depths, and fed forward it drags the population
+    /// along the viewing ray.
+    pub depth_feedforward: f32,
 }
 
 impl TargetFilterParams {
     /// Defaults for the simulator's set-up (33 ms frames, estimates good to a few mm and a few
     /// mrad). The dead bands are about one frame's shift at the estimates' own noise floor
     /// (0.01 m/s · 33 ms = 0.33 mm; 0.05 rad/s · 33 ms = 1.7 mrad ≈ 0.0008 in ε).
+    ///
+    /// The linear part is tuned for a block that starts, stops and reverses on a conveyor
+    /// (0.2 m/s, reversals at 0.54 m/s², `scenarios/conveyor_ff_target.toml`): a fast filter
+    /// (white acceleration 0.2 m²/s³, 1.5 mm across the line of sight, 8 mm along it) that
+    /// follows a reversal within a few frames, trusted once its velocity is known to 0.1 m/s,
+    /// reset only when the fitness falls below 0.3 (or the tracker's status leaves
+    /// *tracking*); once fed forward its velocity is held through the reversals
+    /// ([`TargetFilterParams::hold_motion`]) and its part along the line of sight is not fed
+    /// forward ([`TargetFilterParams::depth_feedforward`] 0). The significance test still
+    /// decides whether a block moves at all, so a block at rest is tracked as with FF alone.
     pub const DEFAULT: TargetFilterParams = TargetFilterParams {
-        position_noise_m: 0.003,
+        position_noise_m: 0.0015,
+        depth_noise_m: 0.008,
         rotation_noise_rad: 0.02,
-        acceleration_psd: 0.002,
+        acceleration_psd: 0.2,
         angular_acceleration_psd: 0.01,
         initial_speed_sd_m_s: 0.5,
         initial_rate_sd_rad_s: 2.0,
         gate_sigma: 6.0,
         max_outliers: 3,
         converge_updates: 10,
-        trusted_speed_sd_m_s: 0.03,
+        trusted_speed_sd_m_s: 0.1,
         trusted_rate_sd_rad_s: 0.15,
-        lost_fitness: 0.5,
+        lost_fitness: 0.3,
         max_gap_s: 0.5,
         deadband_m_s: 0.01,
         deadband_rad_s: 0.05,
         significance_sigma: 2.0,
+        hold_motion: true,
+        depth_feedforward: 0.0,
     };
 
     /// Checks that every value is finite and positive (counts at least 1).
@@ -120,6 +155,7 @@ impl TargetFilterParams {
     pub fn validate(&self) -> Result<(), FilterParamsError> {
         let positive = [
             (self.position_noise_m, "position_noise_m"),
+            (self.depth_noise_m, "depth_noise_m"),
             (self.rotation_noise_rad, "rotation_noise_rad"),
             (self.acceleration_psd, "acceleration_psd"),
             (self.angular_acceleration_psd, "angular_acceleration_psd"),
@@ -141,6 +177,9 @@ impl TargetFilterParams {
         ];
         if let Some((_, name)) = non_negative.iter().find(|(v, _)| !(v.is_finite() && *v >= 0.0)) {
             return Err(FilterParamsError(name));
+        }
+        if !(self.depth_feedforward >= 0.0 && self.depth_feedforward <= 1.0) {
+            return Err(FilterParamsError("depth_feedforward"));
         }
         if self.max_outliers == 0 {
             return Err(FilterParamsError("max_outliers"));
@@ -230,6 +269,9 @@ struct Track {
     outliers: u16,
     /// Set once the track has converged; cleared only by a restart.
     converged: bool,
+    /// Set once the converged linear velocity was fed forward with
+    /// [`TargetFilterParams::hold_motion`]; cleared only by a restart.
+    moving: bool,
 }
 
 /// Constant-velocity Kalman filter of the target's world pose (see the module docs).
@@ -329,6 +371,17 @@ impl TargetFilter {
         &self.params
     }
 
+    /// Replaces the parameters and forgets the track.
+    ///
+    /// # Errors
+    /// [`FilterParamsError`] for invalid parameters (the filter is then unchanged).
+    pub fn set_params(&mut self, params: TargetFilterParams) -> Result<(), FilterParamsError> {
+        params.validate()?;
+        self.params = params;
+        self.track = None;
+        Ok(())
+    }
+
     /// Forgets the track (the tracker lost or re-seeded the target).
     pub fn reset(&mut self) {
         self.track = None;
@@ -341,7 +394,7 @@ impl TargetFilter {
 
     /// Feeds one estimate `measured = ^W T_M` captured at `time_us` with fitness `fitness`.
     pub fn update(&mut self, measured: &Isometry3<f32>, time_us: u64, fitness: f32) -> UpdateOutcome {
-        let outcome = self.update_inner(measured, time_us, fitness);
+        let outcome = self.update_inner(measured, time_us, fitness, None);
         self.last_outcome = Some(outcome);
         outcome
     }
@@ -364,25 +417,6 @@ impl TargetFilter {
         self.update(measured, time_us, fitness)
     }
 
-    /// Feeds the tracker's estimate `psi` (with its `fitness` and `status`) of the frame captured
-    /// with `joints`: the estimate in the world frame ([`world_pose`] of `chain` at `joints.q`
-    /// and `flange_to_camera`) at `joints.time_us`, through
-    /// [`TargetFilter::update_with_status`]. The tracker feeds its own filter with this call;
-    /// a board that receives only the estimates feeds its copy with the same call on the same
-    /// numbers, so its predictions are the tracker's.
-    pub fn update_from_estimate<const DOF: usize>(
-        &mut self,
-        chain: &Chain<DOF>,
-        flange_to_camera: &Isometry3<f32>,
-        joints: &JointSample<DOF>,
-        psi: &Psi,
-        fitness: f32,
-        status: Status,
-    ) -> UpdateOutcome {
-        let world = world_pose(chain, &joints.q, flange_to_camera, psi);
-        self.update_with_status(&world, joints.time_us, fitness, status)
-    }
-
     /// What the last [`TargetFilter::update`] did (`None` before the first).
     pub fn last_outcome(&self) -> Option<UpdateOutcome> {
         self.last_outcome
@@ -394,7 +428,45 @@ impl TargetFilter {
         self.last_innovation
     }
 
-    fn update_inner(&mut self, measured: &Isometry3<f32>, time_us: u64, fitness: f32) -> UpdateOutcome {
+    /// Feeds the tracker's estimate `psi` (`^CR ψ_M`, with its `fitness` and `status`) of the
+    /// frame captured with `joints`: the estimate taken into the world through `chain` at
+    /// `joints.q` and `flange_to_camera` ([`world_pose`]) at `joints.time_us`. The position is
+    /// weighed with [`TargetFilterParams::position_noise_m`] across the camera's line of sight
+    /// to the block and [`TargetFilterParams::depth_noise_m`] along it (per world axis
+    /// `σ² = σ_across² + (σ_depth² − σ_across²) uᵢ²`, `u` the unit line of sight), otherwise as
+    /// [`TargetFilter::update_with_status`]. The tracker feeds its own filter with this call; a
+    /// board that receives only the estimates feeds its copy with the same call on the same
+    /// numbers, so its predictions are the tracker's.
+    pub fn update_from_estimate<const DOF: usize>(
+        &mut self,
+        chain: &Chain<DOF>,
+        flange_to_camera: &Isometry3<f32>,
+        joints: &JointSample<DOF>,
+        psi: &Psi,
+        fitness: f32,
+        status: Status,
+    ) -> UpdateOutcome {
+        let time_us = joints.time_us;
+        if status != Status::Tracking {
+            return self.update_with_status(&Isometry3::identity(), time_us, fitness, status);
+        }
+        let camera = chain.forward(&joints.q) * flange_to_camera;
+        let measured = camera_to_world(&camera, psi);
+        let sight = measured.translation.vector - camera.translation.vector;
+        let n2 = sight.dot(&sight);
+        let los = if n2 > 1e-12 { Some(sight / math::sqrt(n2)) } else { None };
+        let outcome = self.update_inner(&measured, time_us, fitness, los);
+        self.last_outcome = Some(outcome);
+        outcome
+    }
+
+    fn update_inner(
+        &mut self,
+        measured: &Isometry3<f32>,
+        time_us: u64,
+        fitness: f32,
+        los: Option<Vector3<f32>>,
+    ) -> UpdateOutcome {
         // A fitness drop stands for a lost target here; `update_with_status` also resets on the
         // tracker's status.
         let found = fitness >= self.params.lost_fitness; // false for NaN
@@ -402,17 +474,18 @@ impl TargetFilter {
             self.track = None;
             return UpdateOutcome::Lost;
         }
+        let r_pos = self.position_variance(los);
         let Some(track) = self.track.as_mut() else {
-            self.start(measured, time_us);
+            self.start(measured, time_us, los);
             return UpdateOutcome::Started;
         };
         let dt = if time_us >= track.time_us { (time_us - track.time_us) as f32 * 1e-6 } else { -1.0 };
         if !(dt >= 0.0 && dt <= self.params.max_gap_s) {
-            self.start(measured, time_us);
+            self.start(measured, time_us, los);
             return UpdateOutcome::Started;
         }
         let p = &self.params;
-        let (r_pos, r_rot) = (p.position_noise_m * p.position_noise_m, p.rotation_noise_rad * p.rotation_noise_rad);
+        let r_rot = p.rotation_noise_rad * p.rotation_noise_rad;
         let mut predicted = *track;
         predicted.pos.iter_mut().for_each(|a| a.predict(dt, p.acceleration_psd));
         predicted.rot.iter_mut().for_each(|a| a.predict(dt, p.angular_acceleration_psd));
@@ -425,20 +498,21 @@ impl TargetFilter {
         let y_pos = [t.x - predicted.pos[0].x, t.y - predicted.pos[1].x, t.z - predicted.pos[2].x];
         let y_rot = log_rotation(&(measured.rotation * predicted.orientation.inverse()));
         self.last_innovation = [y_pos[0], y_pos[1], y_pos[2], y_rot.x, y_rot.y, y_rot.z];
-        let inlier = predicted.pos.iter().zip(y_pos.iter()).all(|(a, y)| a.inlier(*y, r_pos, p.gate_sigma))
-            && predicted.rot.iter().zip(y_rot.iter()).all(|(a, y)| a.inlier(*y, r_rot, p.gate_sigma));
+        let inlier =
+            predicted.pos.iter().zip(y_pos.iter()).zip(r_pos.iter()).all(|((a, y), r)| a.inlier(*y, *r, p.gate_sigma))
+                && predicted.rot.iter().zip(y_rot.iter()).all(|(a, y)| a.inlier(*y, r_rot, p.gate_sigma));
         if !inlier {
             predicted.streak = 0;
             predicted.outliers = predicted.outliers.saturating_add(1);
             if predicted.outliers >= p.max_outliers {
-                self.start(measured, time_us);
+                self.start(measured, time_us, los);
                 return UpdateOutcome::Started;
             }
             *track = predicted;
             return UpdateOutcome::Rejected;
         }
-        for (a, y) in predicted.pos.iter_mut().zip(y_pos.iter()) {
-            a.update(*y, r_pos);
+        for ((a, y), r) in predicted.pos.iter_mut().zip(y_pos.iter()).zip(r_pos.iter()) {
+            a.update(*y, *r);
         }
         for (a, y) in predicted.rot.iter_mut().zip(y_rot.iter()) {
             a.update(*y, r_rot);
@@ -452,21 +526,35 @@ impl TargetFilter {
         predicted.outliers = 0;
         let (sv, sw) =
             (p.trusted_speed_sd_m_s * p.trusted_speed_sd_m_s, p.trusted_rate_sd_rad_s * p.trusted_rate_sd_rad_s);
+        // An axis along the line of sight is measured worse: its bound grows in proportion.
+        let r_across = p.position_noise_m * p.position_noise_m;
         predicted.converged |= predicted.streak >= p.converge_updates
-            && predicted.pos.iter().all(|a| a.p[2] <= sv)
+            && predicted.pos.iter().zip(r_pos.iter()).all(|(a, r)| a.p[2] <= sv * (r / r_across))
             && predicted.rot.iter().all(|a| a.p[2] <= sw);
         *track = predicted;
+        if p.hold_motion && track.converged && !track.moving {
+            track.moving = Self::significant(p, &track.pos, p.deadband_m_s) != Vector3::zeros();
+        }
         UpdateOutcome::Accepted
     }
 
-    fn start(&mut self, measured: &Isometry3<f32>, time_us: u64) {
+    /// Variance of a position measurement per world axis for the unit line of sight `los`.
+    fn position_variance(&self, los: Option<Vector3<f32>>) -> [f32; 3] {
         let p = &self.params;
-        let (r_pos, r_rot) = (p.position_noise_m * p.position_noise_m, p.rotation_noise_rad * p.rotation_noise_rad);
+        let r_across = p.position_noise_m * p.position_noise_m;
+        let r_depth = p.depth_noise_m * p.depth_noise_m - r_across;
+        core::array::from_fn(|i| r_across + los.map_or(0.0, |u| r_depth * u[i] * u[i]))
+    }
+
+    fn start(&mut self, measured: &Isometry3<f32>, time_us: u64, los: Option<Vector3<f32>>) {
+        let r_pos = self.position_variance(los);
+        let p = &self.params;
+        let r_rot = p.rotation_noise_rad * p.rotation_noise_rad;
         let (v0, w0) =
             (p.initial_speed_sd_m_s * p.initial_speed_sd_m_s, p.initial_rate_sd_rad_s * p.initial_rate_sd_rad_s);
         let t = measured.translation.vector;
         self.track = Some(Track {
-            pos: [Axis::start(t.x, r_pos, v0), Axis::start(t.y, r_pos, v0), Axis::start(t.z, r_pos, v0)],
+            pos: [Axis::start(t.x, r_pos[0], v0), Axis::start(t.y, r_pos[1], v0), Axis::start(t.z, r_pos[2], v0)],
             rot: [Axis::start(0.0, r_rot, w0); 3],
             orientation: measured.rotation,
             time_us,
@@ -475,6 +563,7 @@ impl TargetFilter {
             streak: 0,
             outliers: 0,
             converged: false,
+            moving: false,
         });
     }
 
@@ -503,13 +592,29 @@ impl TargetFilter {
     pub fn feedforward_velocity(&self) -> TargetVelocity {
         let Some(track) = self.track.as_ref().filter(|t| t.converged) else { return TargetVelocity::ZERO };
         let p = &self.params;
-        let part = |axes: &[Axis; 3], deadband: f32| {
-            let v = Vector3::new(axes[0].v, axes[1].v, axes[2].v);
-            let sigmas2: f32 = axes.iter().map(|a| a.v * a.v / a.p[2].max(f32::MIN_POSITIVE)).sum();
-            let significant = sigmas2 >= p.significance_sigma * p.significance_sigma;
-            if significant && v.dot(&v) >= deadband * deadband { v } else { Vector3::zeros() }
-        };
-        TargetVelocity { v: part(&track.pos, p.deadband_m_s), w: part(&track.rot, p.deadband_rad_s) }
+        let v = if track.moving { velocity_of(&track.pos) } else { Self::significant(p, &track.pos, p.deadband_m_s) };
+        TargetVelocity { v, w: Self::significant(p, &track.rot, p.deadband_rad_s) }
+    }
+
+    /// The velocity of `axes` if it is outside the dead band and significant, else zero.
+    fn significant(p: &TargetFilterParams, axes: &[Axis; 3], deadband: f32) -> Vector3<f32> {
+        let v = velocity_of(axes);
+        let sigmas2: f32 = axes.iter().map(|a| a.v * a.v / a.p[2].max(f32::MIN_POSITIVE)).sum();
+        let significant = sigmas2 >= p.significance_sigma * p.significance_sigma;
+        if significant && v.dot(&v) >= deadband * deadband { v } else { Vector3::zeros() }
+    }
+
+    /// [`TargetFilter::feedforward_velocity`] with only [`TargetFilterParams::depth_feedforward`]
+    /// of its linear part along the unit line of sight `sight` (world frame, camera to block)
+    /// kept: `v − (1 − d)(v·u) u`.
+    pub fn feedforward_velocity_seen_along(&self, sight: &Vector3<f32>) -> TargetVelocity {
+        let mut vel = self.feedforward_velocity();
+        let n2 = sight.dot(sight);
+        if n2 > 1e-12 && vel.v != Vector3::zeros() {
+            let u = sight / math::sqrt(n2);
+            vel.v -= u * (vel.v.dot(&u) * (1.0 - self.params.depth_feedforward));
+        }
+        vel
     }
 
     /// Hands the pose over to time `t_us`: the last accepted estimate moved by the trusted
@@ -551,6 +656,11 @@ impl Default for TargetFilter {
     }
 }
 
+/// The velocity `[ẋ₀, ẋ₁, ẋ₂]` of three axes.
+fn velocity_of(axes: &[Axis; 3]) -> Vector3<f32> {
+    Vector3::new(axes[0].v, axes[1].v, axes[2].v)
+}
+
 /// `t1 − t0` in seconds (negative when `t1 < t0`).
 fn seconds_between(t0_us: u64, t1_us: u64) -> f32 {
     if t1_us >= t0_us { (t1_us - t0_us) as f32 * 1e-6 } else { -((t0_us - t1_us) as f32 * 1e-6) }
@@ -566,246 +676,4 @@ pub fn camera_from_world_rotation(camera: &Isometry3<f32>) -> Matrix3<f32> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::kinematics::PA10;
-
-    const DT_US: u64 = 33_000;
-
-    /// A block moving with `v` and turning with `w` (world) from `p0`, at frame `k`.
-    fn moving(k: u64, v: Vector3<f32>, w: Vector3<f32>) -> Isometry3<f32> {
-        let t = (k * DT_US) as f32 * 1e-6;
-        let q0 = quat::from_angle_axis(0.4, &Vector3::new(0.3, 1.0, 0.2)).unwrap();
-        Isometry3::from_parts(Translation3::from(Vector3::new(0.8, -0.1, 0.3) + v * t), exp_rotation(&(w * t)) * q0)
-    }
-
-    /// Deterministic pseudo-noise in [−1, 1].
-    fn noise(k: u64, axis: u64) -> f32 {
-        let x = (k.wrapping_mul(2654435761).wrapping_add(axis.wrapping_mul(40503)) % 2001) as f32;
-        x / 1000.0 - 1.0
-    }
-
-    fn noisy(iso: Isometry3<f32>, k: u64, amp_m: f32, amp_rad: f32) -> Isometry3<f32> {
-        let dp = Vector3::new(noise(k, 1), noise(k, 2), noise(k, 3)) * amp_m;
-        let dr = Vector3::new(noise(k, 4), noise(k, 5), noise(k, 6)) * amp_rad;
-        Isometry3::from_parts(Translation3::from(iso.translation.vector + dp), exp_rotation(&dr) * iso.rotation)
-    }
-
-    #[test]
-    fn constant_velocity_is_recovered() {
-        let (v, w) = (Vector3::new(0.0, 0.2, -0.05), Vector3::new(0.0, 0.1, 0.5));
-        let mut f = TargetFilter::with_defaults();
-        let mut trusted_at = None;
-        for k in 0..120 {
-            let out = f.update(&noisy(moving(k, v, w), k, 0.002, 0.004), k * DT_US, 0.95);
-            assert_ne!(out, UpdateOutcome::Lost);
-            if trusted_at.is_none() && f.is_trusted() {
-                trusted_at = Some(k);
-            }
-        }
-        let k = trusted_at.unwrap();
-        assert!(k >= u64::from(TargetFilterParams::DEFAULT.converge_updates), "trusted too early at {k}");
-        assert!(k <= 40, "trusted only at {k}");
-        let est = f.velocity().unwrap();
-        assert!((est.v - v).norm() < 0.01, "v {} vs {}", est.v, v);
-        assert!((est.w - w).norm() < 0.05, "w {} vs {}", est.w, w);
-    }
-
-    #[test]
-    fn not_trusted_before_convergence() {
-        let mut f = TargetFilter::with_defaults();
-        for k in 0..5 {
-            f.update(&moving(k, Vector3::new(0.1, 0.0, 0.0), Vector3::zeros()), k * DT_US, 0.95);
-            assert!(!f.is_trusted());
-            assert_eq!(f.velocity(), None);
-            assert_eq!(f.feedforward_velocity(), TargetVelocity::ZERO);
-        }
-    }
-
-    #[test]
-    fn a_reset_forgets() {
-        let v = Vector3::new(0.3, 0.0, 0.0);
-        let mut f = TargetFilter::with_defaults();
-        for k in 0..60 {
-            f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95);
-        }
-        assert!(f.is_trusted());
-        // A fitness drop means the target is lost.
-        assert_eq!(f.update(&moving(60, v, Vector3::zeros()), 60 * DT_US, 0.2), UpdateOutcome::Lost);
-        assert!(!f.has_track() && !f.is_trusted());
-        assert_eq!(f.velocity_estimate(), None);
-        // It starts again from nothing: a still target now reads as still.
-        let still = moving(0, Vector3::zeros(), Vector3::zeros());
-        for k in 61..120 {
-            f.update(&still, k * DT_US, 0.95);
-        }
-        assert!(f.velocity().unwrap().v.norm() < 1e-3);
-        f.reset();
-        assert!(!f.has_track());
-        assert_eq!(f.update(&still, 200 * DT_US, 0.95), UpdateOutcome::Started);
-    }
-
-    #[test]
-    fn outliers_are_bounded() {
-        let v = Vector3::new(0.0, 0.1, 0.0);
-        let mut f = TargetFilter::with_defaults();
-        for k in 0..60 {
-            f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95);
-        }
-        let before = f.velocity().unwrap();
-        // A wild estimate (half a metre and 90° off) is rejected and changes no velocity.
-        let mut wild = moving(60, v, Vector3::zeros());
-        wild.translation.vector.x += 0.5;
-        wild.rotation = exp_rotation(&Vector3::new(1.57, 0.0, 0.0)) * wild.rotation;
-        assert_eq!(f.update(&wild, 60 * DT_US, 0.95), UpdateOutcome::Rejected);
-        assert_eq!(f.velocity_estimate().unwrap(), before);
-        assert!(f.is_trusted(), "a single outlier does not undo convergence");
-        // The track resumes.
-        for k in 61..80 {
-            assert_eq!(f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95), UpdateOutcome::Accepted);
-        }
-        assert!((f.velocity().unwrap().v - v).norm() < 0.005);
-        // A run of outliers restarts the filter at the newest measurement.
-        for k in 80..83 {
-            let mut m = moving(k, v, Vector3::zeros());
-            m.translation.vector.z += 1.0;
-            let out = f.update(&m, k * DT_US, 0.95);
-            assert!(out == if k < 82 { UpdateOutcome::Rejected } else { UpdateOutcome::Started }, "{k}: {out:?}");
-        }
-        assert!(!f.is_trusted());
-    }
-
-    #[test]
-    fn time_gaps_and_bad_input_restart() {
-        let mut f = TargetFilter::with_defaults();
-        let m = moving(0, Vector3::zeros(), Vector3::zeros());
-        assert_eq!(f.update(&m, 1_000_000, 0.9), UpdateOutcome::Started);
-        assert_eq!(f.update(&m, 1_033_000, 0.9), UpdateOutcome::Accepted);
-        assert_eq!(f.update(&m, 900_000, 0.9), UpdateOutcome::Started, "time ran backwards");
-        assert_eq!(f.update(&m, 2_000_000, 0.9), UpdateOutcome::Started, "gap above max_gap_s");
-        assert_eq!(f.update(&m, 2_033_000, f32::NAN), UpdateOutcome::Lost);
-        let mut bad = m;
-        bad.translation.vector.x = f32::INFINITY;
-        assert_eq!(f.update(&bad, 2_066_000, 0.9), UpdateOutcome::Lost);
-        let mut p = TargetFilterParams::DEFAULT;
-        p.gate_sigma = 0.0;
-        assert_eq!(TargetFilter::new(p), Err(FilterParamsError("gate_sigma")));
-        p = TargetFilterParams::DEFAULT;
-        p.significance_sigma = -1.0;
-        assert_eq!(TargetFilter::new(p), Err(FilterParamsError("significance_sigma")));
-        p = TargetFilterParams::DEFAULT;
-        p.converge_updates = 0;
-        assert_eq!(TargetFilter::new(p), Err(FilterParamsError("converge_updates")));
-    }
-
-    #[test]
-    fn deadband_zeroes_slow_motion_only() {
-        let mut f = TargetFilter::with_defaults();
-        let (v, w) = (Vector3::new(0.005, 0.0, 0.0), Vector3::new(0.0, 0.0, 0.3));
-        for k in 0..80 {
-            f.update(&moving(k, v, w), k * DT_US, 0.95);
-        }
-        let ff = f.feedforward_velocity();
-        assert_eq!(ff.v, Vector3::zeros());
-        assert!((ff.w - w).norm() < 0.02);
-    }
-
-    #[test]
-    fn noise_of_a_still_target_is_not_fed_forward_but_slow_real_motion_is() {
-        // Estimates of a target at rest with uniform noise of ±5 mm and ±0.02 rad: the
-        // filter's velocity wanders above the dead bands, but never reaches significance.
-        let mut f = TargetFilter::with_defaults();
-        let still = Vector3::zeros();
-        let mut above_deadband = 0;
-        for k in 0..600 {
-            f.update(&noisy(moving(k, still, still), k, 0.005, 0.02), k * DT_US, 0.95);
-            if let Some(vel) = f.velocity() {
-                above_deadband += usize::from(vel.v.norm() >= TargetFilterParams::DEFAULT.deadband_m_s);
-                assert_eq!(f.feedforward_velocity(), TargetVelocity::ZERO, "frame {k}: {vel:?}");
-            }
-        }
-        assert!(above_deadband > 0, "the dead band alone would have let noise through");
-        // A slow conveyor (0.05 m/s) with the same noise is fed forward once converged.
-        let mut f = TargetFilter::with_defaults();
-        let v = Vector3::new(0.0, 0.05, 0.0);
-        for k in 0..200 {
-            f.update(&noisy(moving(k, v, still), k, 0.005, 0.02), k * DT_US, 0.95);
-        }
-        assert!((f.feedforward_velocity().v - v).norm() < 0.02, "{:?}", f.feedforward_velocity());
-    }
-
-    #[test]
-    fn a_status_other_than_tracking_resets() {
-        let v = Vector3::new(0.2, 0.0, 0.0);
-        let mut f = TargetFilter::with_defaults();
-        for k in 0..60 {
-            assert_ne!(f.update_with_status(&moving(k, v, v), k * DT_US, 0.95, Status::Tracking), UpdateOutcome::Lost);
-        }
-        assert!(f.is_trusted());
-        // The tracker lost the block: its estimate (fitness still high, carried along) is no
-        // measurement.
-        for status in [Status::Lost, Status::Searching] {
-            assert_eq!(f.update_with_status(&moving(60, v, v), 60 * DT_US, 0.95, status), UpdateOutcome::Lost);
-            assert!(!f.has_track() && f.feedforward_velocity() == TargetVelocity::ZERO);
-            assert_eq!(f.last_outcome(), Some(UpdateOutcome::Lost));
-        }
-        assert_eq!(f.update_with_status(&moving(61, v, v), 61 * DT_US, 0.95, Status::Tracking), UpdateOutcome::Started);
-    }
-
-    #[test]
-    fn predict_moves_the_target_and_follows_the_camera() {
-        let q = [0.1f32, -0.4, 0.3, 1.2, -0.5, 0.7, 0.2];
-        let qd = [0.2f32, 0.1, -0.1, 0.05, 0.0, 0.3, -0.2];
-        let mount = Isometry3::translation(0.05, 0.0, 0.06);
-        let (v, w) = (Vector3::new(0.1, -0.05, 0.0), Vector3::new(0.0, 0.0, 0.4));
-        let mut f = TargetFilter::with_defaults();
-        let no_joints = JointSample { q, qd, time_us: 0 };
-        assert_eq!(f.predict(&PA10, &mount, &no_joints, 0), Err(PredictError::NoTrack));
-        for k in 0..80 {
-            f.update(&moving(k, v, w), k * DT_US, 0.95);
-        }
-        let t_capture = 79 * DT_US;
-        let t_out = t_capture + 50_000;
-        let joints = JointSample { q, qd, time_us: t_capture };
-        let p = f.predict(&PA10, &mount, &joints, t_out).unwrap();
-        assert!(p.trusted && p.base_time_us == t_capture);
-        let tau = 0.05f32;
-        let q_out: [f32; 7] = core::array::from_fn(|i| q[i] + qd[i] * tau);
-        let cam_out = PA10.forward(&q_out) * mount;
-        let truth_world = moving(79, v, w);
-        let truth_world = Isometry3::from_parts(
-            Translation3::from(truth_world.translation.vector + v * tau),
-            exp_rotation(&(w * tau)) * truth_world.rotation,
-        );
-        let truth = Psi::from_isometry(&(cam_out.inverse() * truth_world));
-        for i in 0..6 {
-            assert!((p.psi.0[i] - truth.0[i]).abs() < 2e-4, "[{i}] {} vs {}", p.psi.0[i], truth.0[i]);
-        }
-        let mut nan = joints;
-        nan.qd[3] = f32::NAN;
-        assert_eq!(f.predict(&PA10, &mount, &nan, t_out), Err(PredictError::NonFiniteJoint));
-    }
-
-    #[test]
-    fn world_pose_round_trips_through_the_camera() {
-        let q = [0.3f32, 0.2, -0.1, 1.0, 0.4, -0.3, 0.5];
-        let mount = Isometry3::translation(0.05, 0.0, 0.06);
-        let psi = Psi::new([0.02, -0.03, 0.7], [0.1, -0.05, 0.2]);
-        let w = world_pose(&PA10, &q, &mount, &psi);
-        let cam = PA10.forward(&q) * mount;
-        let back = Psi::from_isometry(&(cam.inverse() * w));
-        for i in 0..6 {
-            assert!((back.0[i] - psi.0[i]).abs() < 1e-5);
-        }
-        let r = camera_from_world_rotation(&cam);
-        assert!((r * (w.translation.vector - cam.translation.vector) - psi.translation()).norm() < 1e-5);
-    }
-
-    #[test]
-    fn log_and_exp_are_inverse() {
-        for phi in [Vector3::new(0.3, -0.2, 0.1), Vector3::new(0.0, 0.0, 2.5), Vector3::new(1e-8, 0.0, 0.0)] {
-            let back = log_rotation(&exp_rotation(&phi));
-            assert!((back - phi).norm() < 1e-5, "{phi} -> {back}");
-        }
-    }
-}
+mod tests;

@@ -1,0 +1,327 @@
+//! Tests of the target filter.
+
+use super::*;
+use crate::kinematics::PA10;
+
+const DT_US: u64 = 33_000;
+
+/// A block moving with `v` and turning with `w` (world) from `p0`, at frame `k`.
+fn moving(k: u64, v: Vector3<f32>, w: Vector3<f32>) -> Isometry3<f32> {
+    let t = (k * DT_US) as f32 * 1e-6;
+    let q0 = quat::from_angle_axis(0.4, &Vector3::new(0.3, 1.0, 0.2)).unwrap();
+    Isometry3::from_parts(Translation3::from(Vector3::new(0.8, -0.1, 0.3) + v * t), exp_rotation(&(w * t)) * q0)
+}
+
+/// Deterministic pseudo-noise in [−1, 1].
+fn noise(k: u64, axis: u64) -> f32 {
+    let x = (k.wrapping_mul(2654435761).wrapping_add(axis.wrapping_mul(40503)) % 2001) as f32;
+    x / 1000.0 - 1.0
+}
+
+fn noisy(iso: Isometry3<f32>, k: u64, amp_m: f32, amp_rad: f32) -> Isometry3<f32> {
+    let dp = Vector3::new(noise(k, 1), noise(k, 2), noise(k, 3)) * amp_m;
+    let dr = Vector3::new(noise(k, 4), noise(k, 5), noise(k, 6)) * amp_rad;
+    Isometry3::from_parts(Translation3::from(iso.translation.vector + dp), exp_rotation(&dr) * iso.rotation)
+}
+
+/// The linear part tuned slow (the first tuning: 3 mm noise, 0.002 m²/s³, trusted at
+/// 0.03 m/s, no hold), for comparison with the default's fast one.
+const SLOW: TargetFilterParams = TargetFilterParams {
+    position_noise_m: 0.003,
+    depth_noise_m: 0.003,
+    acceleration_psd: 0.002,
+    trusted_speed_sd_m_s: 0.03,
+    lost_fitness: 0.5,
+    hold_motion: false,
+    ..TargetFilterParams::DEFAULT
+};
+
+#[test]
+fn constant_velocity_is_recovered() {
+    let (v, w) = (Vector3::new(0.0, 0.2, -0.05), Vector3::new(0.0, 0.1, 0.5));
+    let mut f = TargetFilter::new(SLOW).unwrap();
+    let mut trusted_at = None;
+    for k in 0..120 {
+        let out = f.update(&noisy(moving(k, v, w), k, 0.002, 0.004), k * DT_US, 0.95);
+        assert_ne!(out, UpdateOutcome::Lost);
+        if trusted_at.is_none() && f.is_trusted() {
+            trusted_at = Some(k);
+        }
+    }
+    let k = trusted_at.unwrap();
+    assert!(k >= u64::from(TargetFilterParams::DEFAULT.converge_updates), "trusted too early at {k}");
+    assert!(k <= 40, "trusted only at {k}");
+    let est = f.velocity().unwrap();
+    assert!((est.v - v).norm() < 0.01, "v {} vs {}", est.v, v);
+    assert!((est.w - w).norm() < 0.05, "w {} vs {}", est.w, w);
+}
+
+#[test]
+fn not_trusted_before_convergence() {
+    let mut f = TargetFilter::with_defaults();
+    for k in 0..5 {
+        f.update(&moving(k, Vector3::new(0.1, 0.0, 0.0), Vector3::zeros()), k * DT_US, 0.95);
+        assert!(!f.is_trusted());
+        assert_eq!(f.velocity(), None);
+        assert_eq!(f.feedforward_velocity(), TargetVelocity::ZERO);
+    }
+}
+
+#[test]
+fn a_reset_forgets() {
+    let v = Vector3::new(0.3, 0.0, 0.0);
+    let mut f = TargetFilter::with_defaults();
+    for k in 0..60 {
+        f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95);
+    }
+    assert!(f.is_trusted());
+    // A fitness drop means the target is lost.
+    assert_eq!(f.update(&moving(60, v, Vector3::zeros()), 60 * DT_US, 0.2), UpdateOutcome::Lost);
+    assert!(!f.has_track() && !f.is_trusted());
+    assert_eq!(f.velocity_estimate(), None);
+    // It starts again from nothing: a still target now reads as still.
+    let still = moving(0, Vector3::zeros(), Vector3::zeros());
+    for k in 61..120 {
+        f.update(&still, k * DT_US, 0.95);
+    }
+    assert!(f.velocity().unwrap().v.norm() < 1e-3);
+    f.reset();
+    assert!(!f.has_track());
+    assert_eq!(f.update(&still, 200 * DT_US, 0.95), UpdateOutcome::Started);
+}
+
+#[test]
+fn outliers_are_bounded() {
+    let v = Vector3::new(0.0, 0.1, 0.0);
+    let mut f = TargetFilter::with_defaults();
+    for k in 0..60 {
+        f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95);
+    }
+    let before = f.velocity().unwrap();
+    // A wild estimate (half a metre and 90° off) is rejected and changes no velocity.
+    let mut wild = moving(60, v, Vector3::zeros());
+    wild.translation.vector.x += 0.5;
+    wild.rotation = exp_rotation(&Vector3::new(1.57, 0.0, 0.0)) * wild.rotation;
+    assert_eq!(f.update(&wild, 60 * DT_US, 0.95), UpdateOutcome::Rejected);
+    assert_eq!(f.velocity_estimate().unwrap(), before);
+    assert!(f.is_trusted(), "a single outlier does not undo convergence");
+    // The track resumes.
+    for k in 61..80 {
+        assert_eq!(f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95), UpdateOutcome::Accepted);
+    }
+    assert!((f.velocity().unwrap().v - v).norm() < 0.005);
+    // A run of outliers restarts the filter at the newest measurement.
+    for k in 80..83 {
+        let mut m = moving(k, v, Vector3::zeros());
+        m.translation.vector.z += 1.0;
+        let out = f.update(&m, k * DT_US, 0.95);
+        assert!(out == if k < 82 { UpdateOutcome::Rejected } else { UpdateOutcome::Started }, "{k}: {out:?}");
+    }
+    assert!(!f.is_trusted());
+}
+
+#[test]
+fn time_gaps_and_bad_input_restart() {
+    let mut f = TargetFilter::with_defaults();
+    let m = moving(0, Vector3::zeros(), Vector3::zeros());
+    assert_eq!(f.update(&m, 1_000_000, 0.9), UpdateOutcome::Started);
+    assert_eq!(f.update(&m, 1_033_000, 0.9), UpdateOutcome::Accepted);
+    assert_eq!(f.update(&m, 900_000, 0.9), UpdateOutcome::Started, "time ran backwards");
+    assert_eq!(f.update(&m, 2_000_000, 0.9), UpdateOutcome::Started, "gap above max_gap_s");
+    assert_eq!(f.update(&m, 2_033_000, f32::NAN), UpdateOutcome::Lost);
+    let mut bad = m;
+    bad.translation.vector.x = f32::INFINITY;
+    assert_eq!(f.update(&bad, 2_066_000, 0.9), UpdateOutcome::Lost);
+    let mut p = TargetFilterParams::DEFAULT;
+    p.gate_sigma = 0.0;
+    assert_eq!(TargetFilter::new(p), Err(FilterParamsError("gate_sigma")));
+    p = TargetFilterParams::DEFAULT;
+    p.significance_sigma = -1.0;
+    assert_eq!(TargetFilter::new(p), Err(FilterParamsError("significance_sigma")));
+    p = TargetFilterParams::DEFAULT;
+    p.converge_updates = 0;
+    assert_eq!(TargetFilter::new(p), Err(FilterParamsError("converge_updates")));
+}
+
+#[test]
+fn deadband_zeroes_slow_motion_only() {
+    let mut f = TargetFilter::with_defaults();
+    let (v, w) = (Vector3::new(0.005, 0.0, 0.0), Vector3::new(0.0, 0.0, 0.3));
+    for k in 0..80 {
+        f.update(&moving(k, v, w), k * DT_US, 0.95);
+    }
+    let ff = f.feedforward_velocity();
+    assert_eq!(ff.v, Vector3::zeros());
+    assert!((ff.w - w).norm() < 0.02);
+}
+
+#[test]
+fn noise_of_a_still_target_is_not_fed_forward_but_slow_real_motion_is() {
+    // Estimates of a target at rest with uniform noise of ±2.5 mm (σ 1.4 mm, the filter's
+    // 1.5 mm) and ±0.02 rad: the filter's velocity wanders above the dead bands, but never
+    // reaches significance.
+    let mut f = TargetFilter::with_defaults();
+    let still = Vector3::zeros();
+    let mut above_deadband = 0;
+    for k in 0..600 {
+        f.update(&noisy(moving(k, still, still), k, 0.0025, 0.02), k * DT_US, 0.95);
+        if let Some(vel) = f.velocity() {
+            above_deadband += usize::from(vel.v.norm() >= TargetFilterParams::DEFAULT.deadband_m_s);
+            assert_eq!(f.feedforward_velocity(), TargetVelocity::ZERO, "frame {k}: {vel:?}");
+        }
+    }
+    assert!(above_deadband > 0, "the dead band alone would have let noise through");
+    // A conveyor with the same noise is fed forward once converged: at 0.1 m/s by the fast
+    // default (its velocity's σ at this noise is ~0.04 m/s, so 0.05 m/s is not significant
+    // here), at 0.05 m/s by the slow tuning (σ ~0.015 m/s).
+    for (params, speed, tol) in [(TargetFilterParams::DEFAULT, 0.1, 0.06), (SLOW, 0.05, 0.02)] {
+        let mut f = TargetFilter::new(params).unwrap();
+        let v = Vector3::new(0.0, speed, 0.0);
+        for k in 0..200 {
+            f.update(&noisy(moving(k, v, still), k, 0.0025, 0.02), k * DT_US, 0.95);
+        }
+        let fed = f.feedforward_velocity().v;
+        assert!(fed != Vector3::zeros() && (fed - v).norm() < tol, "{speed}: {fed}");
+    }
+}
+
+#[test]
+fn a_status_other_than_tracking_resets() {
+    let v = Vector3::new(0.2, 0.0, 0.0);
+    let mut f = TargetFilter::with_defaults();
+    for k in 0..60 {
+        assert_ne!(f.update_with_status(&moving(k, v, v), k * DT_US, 0.95, Status::Tracking), UpdateOutcome::Lost);
+    }
+    assert!(f.is_trusted());
+    // The tracker lost the block: its estimate (fitness still high, carried along) is no
+    // measurement.
+    for status in [Status::Lost, Status::Searching] {
+        assert_eq!(f.update_with_status(&moving(60, v, v), 60 * DT_US, 0.95, status), UpdateOutcome::Lost);
+        assert!(!f.has_track() && f.feedforward_velocity() == TargetVelocity::ZERO);
+        assert_eq!(f.last_outcome(), Some(UpdateOutcome::Lost));
+    }
+    assert_eq!(f.update_with_status(&moving(61, v, v), 61 * DT_US, 0.95, Status::Tracking), UpdateOutcome::Started);
+}
+
+#[test]
+fn predict_moves_the_target_and_follows_the_camera() {
+    let q = [0.1f32, -0.4, 0.3, 1.2, -0.5, 0.7, 0.2];
+    let qd = [0.2f32, 0.1, -0.1, 0.05, 0.0, 0.3, -0.2];
+    let mount = Isometry3::translation(0.05, 0.0, 0.06);
+    let (v, w) = (Vector3::new(0.1, -0.05, 0.0), Vector3::new(0.0, 0.0, 0.4));
+    let mut f = TargetFilter::with_defaults();
+    let no_joints = JointSample { q, qd, time_us: 0 };
+    assert_eq!(f.predict(&PA10, &mount, &no_joints, 0), Err(PredictError::NoTrack));
+    for k in 0..80 {
+        f.update(&moving(k, v, w), k * DT_US, 0.95);
+    }
+    let t_capture = 79 * DT_US;
+    let t_out = t_capture + 50_000;
+    let joints = JointSample { q, qd, time_us: t_capture };
+    let p = f.predict(&PA10, &mount, &joints, t_out).unwrap();
+    assert!(p.trusted && p.base_time_us == t_capture);
+    let tau = 0.05f32;
+    let q_out: [f32; 7] = core::array::from_fn(|i| q[i] + qd[i] * tau);
+    let cam_out = PA10.forward(&q_out) * mount;
+    let truth_world = moving(79, v, w);
+    let truth_world = Isometry3::from_parts(
+        Translation3::from(truth_world.translation.vector + v * tau),
+        exp_rotation(&(w * tau)) * truth_world.rotation,
+    );
+    let truth = Psi::from_isometry(&(cam_out.inverse() * truth_world));
+    for i in 0..6 {
+        assert!((p.psi.0[i] - truth.0[i]).abs() < 2e-4, "[{i}] {} vs {}", p.psi.0[i], truth.0[i]);
+    }
+    let mut nan = joints;
+    nan.qd[3] = f32::NAN;
+    assert_eq!(f.predict(&PA10, &mount, &nan, t_out), Err(PredictError::NonFiniteJoint));
+}
+
+#[test]
+fn world_pose_round_trips_through_the_camera() {
+    let q = [0.3f32, 0.2, -0.1, 1.0, 0.4, -0.3, 0.5];
+    let mount = Isometry3::translation(0.05, 0.0, 0.06);
+    let psi = Psi::new([0.02, -0.03, 0.7], [0.1, -0.05, 0.2]);
+    let w = world_pose(&PA10, &q, &mount, &psi);
+    let cam = PA10.forward(&q) * mount;
+    let back = Psi::from_isometry(&(cam.inverse() * w));
+    for i in 0..6 {
+        assert!((back.0[i] - psi.0[i]).abs() < 1e-5);
+    }
+    let r = camera_from_world_rotation(&cam);
+    assert!((r * (w.translation.vector - cam.translation.vector) - psi.translation()).norm() < 1e-5);
+}
+
+#[test]
+fn log_and_exp_are_inverse() {
+    for phi in [Vector3::new(0.3, -0.2, 0.1), Vector3::new(0.0, 0.0, 2.5), Vector3::new(1e-8, 0.0, 0.0)] {
+        let back = log_rotation(&exp_rotation(&phi));
+        assert!((back - phi).norm() < 1e-5, "{phi} -> {back}");
+    }
+}
+
+/// A block on a conveyor along world y: at `speed` until frame 60, then reversing with a
+/// half-cosine velocity profile over `reversal_frames`. Its pose and velocity at frame `k`.
+fn shuttle(k: u64, speed: f32, reversal_frames: u64) -> (Isometry3<f32>, f32) {
+    let dt = DT_US as f32 * 1e-6;
+    let vel = |j: u64| -> f32 {
+        match j.checked_sub(60) {
+            None => speed,
+            Some(i) if i < reversal_frames => {
+                speed * math::cos(core::f32::consts::PI * i as f32 / reversal_frames as f32)
+            }
+            Some(_) => -speed,
+        }
+    };
+    let y: f32 = (0..k).map(|j| 0.5 * (vel(j) + vel(j + 1)) * dt).sum();
+    let base = moving(0, Vector3::zeros(), Vector3::zeros());
+    let pose =
+        Isometry3::from_parts(Translation3::from(base.translation.vector + Vector3::new(0.0, y, 0.0)), base.rotation);
+    (pose, vel(k))
+}
+
+/// The worst error of the fed-forward speed along y through a reversal at 0.2 m/s over 22
+/// frames (0.85 m/s² at its peak), and whether anything was fed forward in every frame from
+/// the first trusted one on.
+fn reversal_lag(params: TargetFilterParams) -> (f32, bool) {
+    let mut f = TargetFilter::new(params).unwrap();
+    let (mut worst, mut fed_throughout, mut trusted) = (0.0f32, true, false);
+    for k in 0..130 {
+        let (pose, v) = shuttle(k, 0.2, 22);
+        f.update(&noisy(pose, k, 0.0005, 0.004), k * DT_US, 0.95);
+        trusted |= f.is_trusted();
+        if trusted && k >= 40 {
+            let ff = f.feedforward_velocity().v;
+            fed_throughout &= ff != Vector3::zeros();
+            worst = worst.max((ff.y - v).abs());
+        }
+    }
+    (worst, fed_throughout)
+}
+
+#[test]
+fn the_default_follows_a_reversal_the_slow_tuning_lags() {
+    let (fast, fed) = reversal_lag(TargetFilterParams::DEFAULT);
+    let (slow, slow_fed) = reversal_lag(SLOW);
+    assert!(fed, "the motion is held through the speed's zero crossing");
+    assert!(!slow_fed, "without hold_motion the slow speed around the reversal is not significant");
+    assert!(fast < 0.5 * slow, "worst speed error {fast} m/s against the slow tuning's {slow}");
+    assert!(fast < 0.06, "worst speed error {fast} m/s");
+}
+
+#[test]
+fn depth_is_not_fed_forward() {
+    let v = Vector3::new(0.1, 0.15, 0.0);
+    let mut f = TargetFilter::with_defaults();
+    for k in 0..60 {
+        f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95);
+    }
+    let all = f.feedforward_velocity().v;
+    assert!((all - v).norm() < 0.01, "{all}");
+    // Seen along world x: the part along the line of sight is dropped, the rest kept.
+    let seen = f.feedforward_velocity_seen_along(&Vector3::new(2.0, 0.0, 0.0)).v;
+    assert!(seen.x.abs() < 1e-6 && (seen.y - all.y).abs() < 1e-6 && seen.z == all.z, "{seen}");
+    let mut p = TargetFilterParams::DEFAULT;
+    p.depth_feedforward = 1.5;
+    assert_eq!(TargetFilter::new(p), Err(FilterParamsError("depth_feedforward")));
+}

@@ -45,12 +45,12 @@ fn target_section(s: &mut String, r: &Results) {
     let f = &r.full;
     let _ = writeln!(
         s,
-        "## Feedforward of the target's motion (`ff+target`, the `target` run)
-
-         The same {} frames, population and rows, with `Feedforward::OnWithTarget`: the target filter is updated in every          generation, and once it trusts a significant velocity (the conveyor frames: {} m/s along world y) every          individual is shifted by the target's twist too. **{} of {} generations fed a non-zero target velocity forward**          (`tshift=1` in the `GEN` lines).
-
-         | quantity (instructions) | ff: max | ff+target: max | ff+target: mean |
-|---|---:|---:|---:|",
+        "## Feedforward of the target's motion (`ff+target`, the `target` run)\n\n\
+         The same {} frames, population and rows, with `Feedforward::OnWithTarget`: the target filter is updated in \
+         every generation, and once it trusts a significant velocity (the conveyor frames: {} m/s along world y) \
+         every individual is shifted by the target's twist too. **{} of {} generations fed a non-zero target \
+         velocity forward** (`tshift=1` in the `GEN` lines).\n\n\
+         | quantity (instructions) | ff: max | ff+target: max | ff+target: mean |\n|---|---:|---:|---:|",
         t.generations,
         evorec_firmware::timing::CONVEYOR_SPEED_M_S,
         t.target_shifts,
@@ -69,9 +69,9 @@ fn target_section(s: &mut String, r: &Results) {
     let worst = f.call.max.max(t.call.max);
     let _ = writeln!(
         s,
-        "
-Worst generation of both methods: {worst:.0} instructions ({}, budget {GENERATION_BUDGET:.0}); ff+target:          {:.2} instructions per model point, painted stack {} B, deadline missed by {} of {} generations{}.
-",
+        "\nWorst generation of both methods: {worst:.0} instructions ({}, budget {GENERATION_BUDGET:.0}); \
+         ff+target: {:.2} instructions per model point, painted stack {} B, deadline missed by {} of {} \
+         generations{}.\n",
         if worst <= GENERATION_BUDGET { "within budget" } else { "**over budget**" },
         t.per_point.max,
         t.stack,

@@ -258,8 +258,8 @@ pub const RGB565_EXTREMES: [u16; 5] = [0x0000, 0xFFFF, 0xF800, 0x07E0, 0x001F];
 
 /// The kind of frame `k` of a run of `frames` frames: blocks of consecutive frames of one
 /// kind (so the tracker's state evolves as in operation: it loses the target on blank
-/// frames and re-acquires it), every kind in equal share but the conveyor (three shares, see
-/// [`SLOTS`]), tracking first.
+/// frames and re-acquires it), every kind in equal share but the conveyor (three shares in a row),
+/// tracking first.
 pub fn schedule(k: u32, frames: u32) -> CaseKind {
     let slots = SLOTS.len() as u32;
     let block = frames.div_ceil(slots).max(1);

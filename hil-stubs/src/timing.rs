@@ -38,7 +38,7 @@ use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 use evorec_core::synth;
-use evorec_core::tracker::{JointSample, Phase, PhaseProbe};
+use evorec_core::tracker::{Feedforward, JointSample, Phase, PhaseProbe};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
 /// `-icount` shift the numbers assume (2^10 ns of virtual time per instruction).
@@ -120,6 +120,11 @@ impl<C: DownCounter> PhaseProbe for PhaseTimer<'_, C> {
 pub enum CaseKind {
     /// The target on a smooth path, tracked (the normal case).
     Tracking,
+    /// The target carried by a conveyor: [`CONVEYOR_SPEED_M_S`] along world y, back and forth
+    /// over [`CONVEYOR_TRAVEL_M`], while the arm moves as in [`CaseKind::Tracking`]; a block
+    /// long enough for the target filter to converge, so that `ff+target` feeds the target's
+    /// velocity forward to every individual (the schedule gives it three blocks in a row).
+    Conveyor,
     /// The target at a fresh random pose every frame.
     RandomPose,
     /// Every pixel `NO_HUE`.
@@ -150,8 +155,9 @@ pub enum CaseKind {
 
 impl CaseKind {
     /// Every kind, in schedule order.
-    pub const ALL: [CaseKind; 12] = [
+    pub const ALL: [CaseKind; 13] = [
         Self::Tracking,
+        Self::Conveyor,
         Self::Blank,
         Self::Absent,
         Self::Filling,
@@ -169,6 +175,7 @@ impl CaseKind {
     pub fn name(self) -> &'static str {
         match self {
             Self::Tracking => "tracking",
+            Self::Conveyor => "conveyor",
             Self::RandomPose => "random_pose",
             Self::Blank => "blank",
             Self::Absent => "absent",
@@ -200,10 +207,50 @@ impl CaseKind {
     }
 }
 
-/// Frames of the default configuration's run (11 of every kind).
-pub const FULL_FRAMES: u32 = 132;
-/// Frames of each configuration of the sweep (every kind three times).
-pub const SWEEP_FRAMES: u32 = 36;
+/// Frames of the default configuration's runs (11 of every kind, 33 of the conveyor).
+pub const FULL_FRAMES: u32 = 165;
+/// Frames of each configuration of the sweep (every kind three times, the conveyor nine).
+pub const SWEEP_FRAMES: u32 = 45;
+
+/// Speed of the conveyor of [`CaseKind::Conveyor`] (m/s, along world y).
+pub const CONVEYOR_SPEED_M_S: f32 = 0.1;
+/// Length the conveyor carries the target back and forth over (m).
+pub const CONVEYOR_TRAVEL_M: f32 = 0.12;
+
+/// The blocks of a run in order: every kind once, [`CaseKind::Conveyor`] three times in a row
+/// (the target filter needs about ten accepted estimates before it is trusted).
+const SLOTS: [CaseKind; 15] = [
+    CaseKind::Tracking,
+    CaseKind::Conveyor,
+    CaseKind::Conveyor,
+    CaseKind::Conveyor,
+    CaseKind::Blank,
+    CaseKind::Absent,
+    CaseKind::Filling,
+    CaseKind::UniformHue,
+    CaseKind::Noise,
+    CaseKind::NoisyTarget,
+    CaseKind::Rgb565Extremes,
+    CaseKind::RandomPose,
+    CaseKind::Searching,
+    CaseKind::Lost,
+    CaseKind::FastArm,
+];
+
+/// The name of a feedforward mode in [`GenLine`]s and reports (`ga`, `ff`, `ff+target`, as the
+/// scenarios' `method`).
+pub fn method_name(feedforward: Feedforward) -> &'static str {
+    match feedforward {
+        Feedforward::Off => "ga",
+        Feedforward::On => "ff",
+        Feedforward::OnWithTarget => "ff+target",
+    }
+}
+
+/// The feedforward mode named `name` by [`method_name`].
+pub fn method_from_name(name: &str) -> Option<Feedforward> {
+    [Feedforward::Off, Feedforward::On, Feedforward::OnWithTarget].into_iter().find(|f| method_name(*f) == name)
+}
 
 /// The pixels of [`CaseKind::Rgb565Extremes`]: black and white (the hue table's first and last
 /// entries, no hue) and pure red, green and blue (every colour field at its extreme).
@@ -211,12 +258,13 @@ pub const RGB565_EXTREMES: [u16; 5] = [0x0000, 0xFFFF, 0xF800, 0x07E0, 0x001F];
 
 /// The kind of frame `k` of a run of `frames` frames: blocks of consecutive frames of one
 /// kind (so the tracker's state evolves as in operation: it loses the target on blank
-/// frames and re-acquires it), every kind in equal share, tracking first and last.
+/// frames and re-acquires it), every kind in equal share but the conveyor (three shares in a row),
+/// tracking first.
 pub fn schedule(k: u32, frames: u32) -> CaseKind {
-    let kinds = CaseKind::ALL.len() as u32;
-    let block = frames.div_ceil(kinds).max(1);
-    let i = (k / block).min(kinds - 1);
-    CaseKind::ALL.get(i as usize).copied().unwrap_or(CaseKind::Tracking)
+    let slots = SLOTS.len() as u32;
+    let block = frames.div_ceil(slots).max(1);
+    let i = (k / block).min(slots - 1);
+    SLOTS.get(i as usize).copied().unwrap_or(CaseKind::Tracking)
 }
 
 /// The timing runs' stereo rig at `width × height` (the board profile's frame size): f = 200 px
@@ -275,6 +323,8 @@ pub struct CaseGen {
     width: usize,
     height: usize,
     rng: XorShift32,
+    /// The first frame of the current conveyor block (its motion starts there).
+    conveyor_from: Option<u32>,
 }
 
 impl CaseGen {
@@ -290,20 +340,46 @@ impl CaseGen {
         let (width, height) = (usize::from(rig.right.width()), usize::from(rig.right.height()));
         let cam0 = PA10.forward(&Self::joints(0, false).q) * flange_to_camera;
         let start = Self::START.try_to_isometry().map_err(|_| FrameError)?;
-        Ok(Self { rig, flange_to_camera, world_from_block: cam0 * start, width, height, rng: XorShift32::new(seed) })
+        Ok(Self {
+            rig,
+            flange_to_camera,
+            world_from_block: cam0 * start,
+            width,
+            height,
+            rng: XorShift32::new(seed),
+            conveyor_from: None,
+        })
     }
 
     /// The target's true pose in `Σ_CR` at frame `k` (arm at [`CaseGen::joints`]`(k, fast)`):
     /// fixed in the world but for a slow drift (a few cm, a few degrees).
     pub fn truth(&self, k: u32, fast: bool) -> Psi {
+        let cam = PA10.forward(&Self::joints(k, fast).q) * self.flange_to_camera;
+        Psi::from_isometry(&(cam.inverse() * self.drifting(k)))
+    }
+
+    /// `^W T_M` of the target fixed in the world but for the slow drift at frame `k`.
+    fn drifting(&self, k: u32) -> Isometry3<f32> {
         let t = k as f32 * (FRAME_PERIOD_US as f32 * 1e-6);
         let s = |w: f32| evorec_core::math::sin(w * t);
         let drift = Isometry3::from_parts(
             Translation3::new(0.03 * s(1.1), 0.02 * s(0.7), 0.05 * s(0.5)),
             UnitQuaternion::from_scaled_axis(Vector3::new(0.1 * s(0.9), 0.15 * s(0.6), 0.2 * s(0.4))),
         );
-        let cam = PA10.forward(&Self::joints(k, fast).q) * self.flange_to_camera;
-        Psi::from_isometry(&(cam.inverse() * self.world_from_block * drift))
+        self.world_from_block * drift
+    }
+
+    /// The target's true pose in `Σ_CR` at frame `k` of a conveyor block that began at frame
+    /// `from`: [`CaseGen::truth`] moved along world y by the conveyor, at
+    /// [`CONVEYOR_SPEED_M_S`] back and forth over [`CONVEYOR_TRAVEL_M`] (0 at `from`, so the
+    /// block continues the path of the frames before it).
+    pub fn truth_on_conveyor(&self, k: u32, from: u32) -> Psi {
+        let t = k.saturating_sub(from) as f32 * (FRAME_PERIOD_US as f32 * 1e-6);
+        let period = 2.0 * CONVEYOR_TRAVEL_M / CONVEYOR_SPEED_M_S;
+        let phase = CONVEYOR_SPEED_M_S * (t - period * evorec_core::math::floor(t / period));
+        let y = if phase <= CONVEYOR_TRAVEL_M { phase } else { 2.0 * CONVEYOR_TRAVEL_M - phase };
+        let cam = PA10.forward(&Self::joints(k, false).q) * self.flange_to_camera;
+        Psi::from_isometry(&(cam.inverse() * Translation3::new(0.0, y, 0.0) * self.drifting(k)))
     }
 
     /// Joint sample of frame `k`: a sinusoid about a bent PA-10 pose, `q̇ ≠ 0`; `fast`
@@ -381,6 +457,9 @@ impl CaseGen {
     ///
     /// # Errors
     /// [`FrameError`] if a buffer is too small.
+    // Never inlined: the frame's temporaries stay out of the caller's frame, which is on the
+    // stack during the measured generation.
+    #[inline(never)]
     pub fn frame(
         &mut self,
         k: u32,
@@ -391,6 +470,9 @@ impl CaseGen {
         let n = self.width * self.height;
         let (left, right) = (left.get_mut(..2 * n).ok_or(FrameError)?, right.get_mut(..2 * n).ok_or(FrameError)?);
         let kind = image_kind(k, kind);
+        if kind != CaseKind::Conveyor {
+            self.conveyor_from = None;
+        }
         self.draw_hues(k, kind, left, right)?;
         expand_hue_to_rgb565(left, n).map_err(|_| FrameError)?;
         expand_hue_to_rgb565(right, n).map_err(|_| FrameError)?;
@@ -424,6 +506,11 @@ impl CaseGen {
             CaseKind::Searching | CaseKind::Lost => {}
             CaseKind::Tracking | CaseKind::FastArm => {
                 let p = self.truth(k, kind == CaseKind::FastArm);
+                self.render(&p, left, right)?;
+            }
+            CaseKind::Conveyor => {
+                let from = *self.conveyor_from.get_or_insert(k);
+                let p = self.truth_on_conveyor(k, from);
                 self.render(&p, left, right)?;
             }
             CaseKind::RandomPose => {
@@ -533,10 +620,13 @@ impl fmt::Display for DeadlineReport {
 
 /// One measured generation, as printed by the firmware and parsed by the host.
 ///
-/// `GEN p=40 g=8 k=3 kind=blank status=lost call=… ff=… eval=… breed=… stack=… fitness=…`:
-/// the status the generation started in, ticks of the whole `step_probed` call and of its
-/// three phases, the painted stack high-water mark of the generation (bytes below the top of
-/// RAM) and the estimate's fitness.
+/// `GEN p=40 g=8 k=3 kind=blank status=lost method=ff+target tshift=1 call=… ff=… eval=… breed=…
+/// stack=… fitness=…`: the status the generation started in, the feedforward mode
+/// ([`method_name`]) and whether the generation fed a non-zero target velocity forward
+/// (`tshift`: the tracker's target filter held a trusted, significant velocity when the
+/// generation began), ticks of the whole `step_probed` call and of its three phases, the painted
+/// stack high-water mark of the generation (bytes below the top of RAM) and the estimate's
+/// fitness.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GenLine {
     /// Population size.
@@ -549,6 +639,10 @@ pub struct GenLine {
     pub kind: CaseKind,
     /// The tracker's status when the generation started.
     pub status: Status,
+    /// The feedforward mode of the generation.
+    pub method: Feedforward,
+    /// Whether the generation shifted every individual by a non-zero target velocity too.
+    pub target_shift: bool,
     /// Ticks of the whole `step_probed` call (input checks included).
     pub call: u32,
     /// Ticks of each phase.
@@ -563,12 +657,15 @@ impl fmt::Display for GenLine {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "GEN p={} g={} k={} kind={} status={} call={} ff={} eval={} breed={} stack={} fitness={}",
+            "GEN p={} g={} k={} kind={} status={} method={} tshift={} call={} ff={} eval={} breed={} stack={} \
+             fitness={}",
             self.population,
             self.grid,
             self.frame,
             self.kind.name(),
             self.status.as_str(),
+            method_name(self.method),
+            u8::from(self.target_shift),
             self.call,
             self.phases.feedforward,
             self.phases.evaluate,
@@ -592,6 +689,8 @@ impl GenLine {
             frame: 0,
             kind: CaseKind::Tracking,
             status: Status::Tracking,
+            method: Feedforward::On,
+            target_shift: false,
             call: 0,
             phases: PhaseTicks::default(),
             stack: 0,
@@ -624,130 +723,28 @@ impl GenLine {
                     seen |= 1 << 10;
                     continue;
                 }
+                "method" => {
+                    g.method = method_from_name(value)?;
+                    seen |= 1 << 11;
+                    continue;
+                }
+                "tshift" => {
+                    g.target_shift = match value {
+                        "0" => false,
+                        "1" => true,
+                        _ => return None,
+                    };
+                    seen |= 1 << 12;
+                    continue;
+                }
                 _ => continue,
             };
             *slot = value.parse().ok()?;
             seen |= 1 << bit;
         }
-        (seen == 0x7ff).then_some(g)
+        (seen == 0x1fff).then_some(g)
     }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use core::cell::Cell;
-    use evorec_core::image::{PixelFormat, Rgb565, Rgb565Image};
-    use std::format;
-    use std::vec;
-
-    struct Fake(Cell<u32>);
-
-    impl DownCounter for Fake {
-        fn read(&self) -> u32 {
-            let v = self.0.get();
-            self.0.set(v.wrapping_sub(7));
-            v
-        }
-    }
-
-    #[test]
-    fn probe_measures_each_phase_across_a_wrap() {
-        let clock = Fake(Cell::new(10));
-        let mut p = PhaseTimer::new(&clock);
-        assert_eq!(p.phases(), None);
-        for ph in [Phase::Feedforward, Phase::Evaluate, Phase::Breed, Phase::Done] {
-            p.mark(ph);
-        }
-        assert_eq!(p.phases(), Some(PhaseTicks { feedforward: 7, evaluate: 7, breed: 7 }));
-    }
-
-    #[test]
-    fn ticks_convert_at_shift_10() {
-        // 1024 ns per instruction, 40 ns per tick: 128 ticks = 5 instructions.
-        assert_eq!(ticks_to_instructions(128), 5.0);
-    }
-
-    #[test]
-    fn schedule_covers_every_kind_evenly() {
-        for frames in [FULL_FRAMES, SWEEP_FRAMES] {
-            for kind in CaseKind::ALL {
-                let n = (0..frames).filter(|&k| schedule(k, frames) == kind).count() as u32;
-                let kinds = CaseKind::ALL.len() as u32;
-                assert!(n >= frames / kinds - 1 && n >= 2, "{kind:?}: {n} of {frames}");
-            }
-        }
-        assert_eq!(schedule(0, FULL_FRAMES), CaseKind::Tracking);
-        assert_eq!(schedule(FULL_FRAMES - 1, FULL_FRAMES), CaseKind::FastArm);
-    }
-
-    #[test]
-    fn gen_lines_round_trip() {
-        let g = GenLine {
-            population: 40,
-            grid: 8,
-            frame: 3,
-            kind: CaseKind::NoisyTarget,
-            status: Status::Lost,
-            call: 123_456,
-            phases: PhaseTicks { feedforward: 1, evaluate: 2, breed: 3 },
-            stack: 2048,
-            fitness: 0.8125,
-        };
-        assert_eq!(GenLine::parse(&format!("{g}")), Some(g));
-        assert_eq!(GenLine::parse("GEN p=40 g=8"), None);
-        assert_eq!(GenLine::parse("[INFO ] hello"), None);
-    }
-
-    #[test]
-    fn rig_for_scales_the_selftest_view() {
-        // At 160×120 the rig is the self-test's; at 320×240 the focal length doubles.
-        assert_eq!(rig_for(160, 120).unwrap(), crate::selftest::rig().unwrap());
-        let m7 = rig_for(320, 240).unwrap();
-        assert_eq!((m7.right.width(), m7.right.height()), (320, 240));
-        assert!(rig_for(0, 240).is_err());
-    }
-
-    #[test]
-    fn frames_of_every_kind_are_made() {
-        let config = crate::selftest::tracker_config().unwrap();
-        let mut cases = CaseGen::new(config.rig, config.flange_to_camera, 5).unwrap();
-        let (mut l, mut r) = (vec![0u8; 2 * 160 * 120], vec![0u8; 2 * 160 * 120]);
-        for (k, kind) in CaseKind::ALL.into_iter().enumerate() {
-            let k = 13 * k as u32 + 12;
-            let j = cases.frame(k, kind, &mut l, &mut r).unwrap();
-            let img = Rgb565Image::new_checked(&l[..], 160, 120).unwrap();
-            let painted = img.pixels().iter().filter(|&&px| Rgb565::hue(px) != NO_HUE).count();
-            match kind {
-                CaseKind::Blank => assert_eq!(painted, 0),
-                CaseKind::Filling | CaseKind::UniformHue => assert!(painted > 150 * 110, "{kind:?}: {painted}"),
-                // Random RGB565 values: most have a hue (not too dark, not too grey).
-                CaseKind::Noise => assert!(painted > 160 * 120 / 2, "{kind:?}: {painted}"),
-                // Three of the five extremes are pure primaries.
-                CaseKind::Rgb565Extremes => {
-                    assert!(painted.abs_diff(160 * 120 * 3 / 5) < 600, "{kind:?}: {painted}");
-                    assert!(img.pixels().iter().all(|px| RGB565_EXTREMES.contains(&u16::from_le_bytes(*px))));
-                }
-                // Fast arm motion may carry the target out of view: only the speed is checked.
-                CaseKind::FastArm => assert!(j.qd.iter().any(|v| v.abs() > 0.2), "{:?}", j.qd),
-                _ => assert!(painted > 100, "{kind:?}: {painted}"),
-            }
-            assert!(j.qd.iter().any(|v| *v != 0.0));
-        }
-        assert!(cases.frame(0, CaseKind::Blank, &mut l[..10], &mut r).is_err());
-        // Hue-sized buffers are too small for RGB565 frames.
-        assert!(cases.frame(0, CaseKind::Blank, &mut l[..160 * 120], &mut r).is_err());
-    }
-
-    #[test]
-    fn deadline_report_counts_misses_and_round_trips() {
-        assert_eq!(DEADLINE_TICKS, 25_600_000); // 10⁶ instructions · 2¹⁰ ns / 40 ns
-        let mut r = DeadlineReport::default();
-        assert!(r.check(DEADLINE_TICKS));
-        assert!(!r.check(DEADLINE_TICKS + 1));
-        assert!(r.check(5));
-        assert_eq!(r, DeadlineReport { checked: 3, missed: 1, worst: DEADLINE_TICKS + 1 });
-        assert_eq!(DeadlineReport::parse(&format!("{r}")), Some(r));
-        assert_eq!(DeadlineReport::parse("GEN p=1"), None);
-    }
-}
+mod tests;

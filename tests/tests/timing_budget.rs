@@ -20,6 +20,7 @@
 use std::path::Path;
 
 use evorec_core::status::Status;
+use evorec_core::tracker::Feedforward;
 use evorec_firmware::timing::CaseKind;
 use evorec_sim::timing::{self, GENERATION_BUDGET, RATIO_TARGET};
 use evorec_tests::Failure;
@@ -117,6 +118,44 @@ fn default_generation_stays_within_the_instruction_budget() -> Result<(), Failur
         s.evaluate.max,
         s.per_point.max
     );
+    target_run_stays_within_the_budget(&m)
+}
+
+/// The `target` run (`ff+target`: the target's motion fed forward too, the target filter
+/// updated every generation) on the same frames: every generation within the budget and the
+/// deadline, and the target path really exercised — the conveyor frames make the filter trust
+/// a significant velocity, so some generations shift every individual by it (`tshift=1`).
+fn target_run_stays_within_the_budget(m: &timing::Measurement) -> Result<(), Failure> {
+    let run = m.runs.iter().find(|r| r.name == "target").ok_or_else(|| Failure("no target (ff+target) run".into()))?;
+    let t = run.stats();
+    println!(
+        "timing_budget: ff+target: {} generations, {:.0}..{:.0} instructions, feedforward ≤ {:.0}, breed ≤ {:.0}; \
+         {} generations shifted by the target's velocity (worst {:.0})",
+        t.generations,
+        t.call.min,
+        t.call.max,
+        t.feedforward.max,
+        t.breed.max,
+        t.target_shifts,
+        t.target_shift_call.map_or(0.0, |c| c.max)
+    );
+    assert!(
+        run.generations.iter().all(|g| g.method == Feedforward::OnWithTarget),
+        "a target-run generation not ff+target"
+    );
+    assert!(t.generations >= 100, "only {} ff+target generations measured", t.generations);
+    assert!(t.call.max <= GENERATION_BUDGET, "worst ff+target generation: {:.0} > {GENERATION_BUDGET:.0}", t.call.max);
+    let d = m.deadlines("target");
+    assert_eq!((d.checked as usize, d.missed), (t.generations, 0), "{d:?} {:?}", m.missed_lines);
+    // The path was exercised: generations on the conveyor, tracking, with the target twist applied.
+    let shifted: Vec<_> = run.generations.iter().filter(|g| g.target_shift).collect();
+    assert!(!shifted.is_empty(), "no ff+target generation fed a target velocity forward");
+    assert!(
+        shifted.iter().any(|g| g.kind == CaseKind::Conveyor && g.status == Status::Tracking),
+        "no shifted generation on the conveyor frames"
+    );
+    // The plain ff run never feeds a target velocity forward.
+    assert!(m.runs.iter().filter(|r| r.name != "target").flat_map(|r| &r.generations).all(|g| !g.target_shift));
     Ok(())
 }
 
@@ -148,6 +187,10 @@ fn m7_profile_timing_table_is_written() -> Result<(), Failure> {
     assert_eq!(num(&["cycle_estimate", "clock_mhz"]), 480.0);
     assert!(num(&["frames"]) >= 100.0);
     assert!(num(&["instructions_per_generation", "max"]) <= GENERATION_BUDGET);
+    // The ff+target run: within the budget, and the target path exercised on the larger frames too.
+    assert!(num(&["ff_target", "instructions_per_generation", "max"]) <= GENERATION_BUDGET);
+    assert!(num(&["ff_target", "generations_with_target_shift"]) >= 1.0);
+    assert_eq!(num(&["ff_target", "deadline", "missed"]), 0.0);
     assert_eq!(num(&["deadline", "missed"]), 0.0);
     // Both point conventions: 960 model points, 768 walked per individual at rows of 8.
     let (model, walked) = (num(&["instructions_per_point_eval"]), num(&["instructions_per_walked_point"]));

@@ -4,12 +4,17 @@
 //!
 //! Runs, in order: the default configuration (population 40, 8 points per row) on
 //! `timing::FULL_FRAMES` RGB565 frames of every kind (the hue of every sampled pixel is
-//! looked up in the core's `RGB565_HUE` table inside the measured window), then, on the M4
+//! looked up in the core's `RGB565_HUE` table inside the measured window) with feedforward on
+//! (`full`, method `ff`), the same frames with the target's motion fed forward too (`target`,
+//! method `ff+target`: the target filter's update in every generation, and, once the filter
+//! trusts the conveyor's velocity, the target twist applied to every individual; each `GEN`
+//! line says whether it was, `tshift=1`), then, on the M4
 //! profile, the sweep (populations 20/40/60 × rows of 4/8/12 points, and population 40 with
 //! rows of 5, 6 and 7, `Tracker<7, P, G>` monomorphised for each; population 40 with rows of 8
 //! is the `full` run) on `timing::SWEEP_FRAMES` frames each. The M7 profile (feature `m7`,
-//! 320×240) runs the `full` run only: the same code on larger frames. Every frame is made on the board before its generation, so the measured window
-//! holds only `Tracker::step_probed` (feedforward on). Before each generation the tracker is
+//! 320×240) runs the `full` and `target` runs only: the same code on larger frames. Every frame
+//! is made on the board before its generation, so the measured window holds only
+//! `Tracker::step_probed`. Before each generation the tracker is
 //! put in the status of its frame kind (`CaseKind::forced_status`: searching or lost for those
 //! kinds, tracking for all others), which decides the generation's work. Before each generation the free stack
 //! is painted again, and its high-water mark after the generation is printed too.
@@ -33,12 +38,13 @@ mod firmware {
     use cortex_m_semihosting::hprintln;
     use evorec_core::image::{Rgb565, Rgb565Image};
     use evorec_core::model::SurfaceStrips;
+    use evorec_core::target_motion::TargetVelocity;
     use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker};
     use evorec_firmware::cmsdk_timer::{self, Timer0};
     use evorec_firmware::protocol::Setup;
     use evorec_firmware::timing::{
         BANNER, CaseGen, DeadlineReport, DownCounter, FRAME_PERIOD_US, FULL_FRAMES, GenLine, PhaseTicks, PhaseTimer,
-        SWEEP_FRAMES, rig_for, schedule,
+        SWEEP_FRAMES, method_name, rig_for, schedule,
     };
     use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, PROFILE, rt, selftest, sys};
     use static_cell::ConstStaticCell;
@@ -63,6 +69,7 @@ mod firmware {
             frame: &StereoFrame<'_, Rgb565>,
             joints: &JointSample<7>,
             dt_s: f32,
+            feedforward: Feedforward,
             timer: &Timer0,
         ) -> Option<(u32, PhaseTicks, f32)>;
     }
@@ -102,9 +109,10 @@ mod firmware {
                         frame: &StereoFrame<'_, Rgb565>,
                         joints: &JointSample<7>,
                         dt_s: f32,
+                        feedforward: Feedforward,
                         timer: &Timer0,
                     ) -> Option<(u32, PhaseTicks, f32)> {
-                        timed_generation(tracker, frame, joints, dt_s, timer)
+                        timed_generation(tracker, frame, joints, dt_s, feedforward, timer)
                     }
                 }
             )*
@@ -121,27 +129,31 @@ mod firmware {
     static SLOT: ConstStaticCell<Slot> = ConstStaticCell::new(Slot::Empty);
 
     /// The body of every [`Timed::generation`]: TIMER0 read before and after
-    /// `Tracker::step_probed` (feedforward on), and at each phase boundary by the probe.
+    /// `Tracker::step_probed` (in mode `feedforward`), and at each phase boundary by the probe.
     #[inline(always)]
     fn timed_generation<const P: usize, const G: usize>(
         tracker: &mut Tracker<7, P, G>,
         frame: &StereoFrame<'_, Rgb565>,
         joints: &JointSample<7>,
         dt_s: f32,
+        feedforward: Feedforward,
         timer: &Timer0,
     ) -> Option<(u32, PhaseTicks, f32)> {
         let mut probe = PhaseTimer::new(timer);
         let t0 = timer.read();
-        let result = tracker.step_probed(frame, joints, dt_s, Feedforward::On, &mut probe);
+        let result = tracker.step_probed(frame, joints, dt_s, feedforward, &mut probe);
         let t1 = timer.read();
         let estimate = result.ok()?;
         Some((t0.wrapping_sub(t1), probe.phases()?, estimate.fitness))
     }
 
-    /// Runs `frames` generations of a fresh `Tracker<7, P, G>` built into its place in
-    /// `slot`; false on any failure (printed).
+    /// Runs `frames` generations in mode `feedforward` of a fresh `Tracker<7, P, G>` built into
+    /// its place in `slot`; false on any failure (printed). Never inlined, so that the runs'
+    /// locals do not pile up in `main`'s frame, which is on the stack during every generation.
+    #[inline(never)]
     fn run_config<C: Timed<P, G>, const P: usize, const G: usize>(
         name: &str,
+        feedforward: Feedforward,
         slot: &mut Slot,
         frames: u32,
         timer: &Timer0,
@@ -154,7 +166,7 @@ mod firmware {
         config.rig = rig;
         let Ok(mut cases) = CaseGen::new(config.rig, config.flange_to_camera, FRAME_SEED) else { return false };
         let start = cases.truth(0, false);
-        let Ok(mut setup) = Setup::from_tracker_config(&config, Feedforward::On, &start, &selftest::SPREAD) else {
+        let Ok(mut setup) = Setup::from_tracker_config(&config, feedforward, &start, &selftest::SPREAD) else {
             return false;
         };
         // Every configuration runs at its full capacity (the worst case of that storage).
@@ -165,8 +177,10 @@ mod firmware {
             return false;
         };
         hprintln!(
-            "RUN name={} p={} g={} frames={} points_per_camera={} walked_per_camera={} width={} height={} profile={}",
+            "RUN name={} method={} p={} g={} frames={} points_per_camera={} walked_per_camera={} width={} height={} \
+             profile={}",
             name,
+            method_name(feedforward),
             P,
             G,
             frames,
@@ -193,8 +207,11 @@ mod firmware {
             let dt_s = if k == 0 { 0.0 } else { FRAME_PERIOD_US as f32 * 1e-6 };
             tracker.set_status(kind.forced_status());
             let status = tracker.status();
+            // The velocity this generation feeds forward (read outside the measured window).
+            let target_shift = feedforward == Feedforward::OnWithTarget
+                && tracker.target_filter().feedforward_velocity() != TargetVelocity::ZERO;
             cmsdk_timer::repaint_free_stack();
-            let measured = C::generation(tracker, &frame, &joints, dt_s, timer);
+            let measured = C::generation(tracker, &frame, &joints, dt_s, feedforward, timer);
             let stack = sys::stack_usage().used_bytes;
             let Some((call, phases, fitness)) = measured else {
                 hprintln!("ERROR generation {} refused", k);
@@ -203,8 +220,19 @@ mod firmware {
             if !deadline.check(call) {
                 hprintln!("DEADLINE-MISSED k={} call={}", k, call);
             }
-            let line =
-                GenLine { population: P as u32, grid: G as u32, frame: k, kind, status, call, phases, stack, fitness };
+            let line = GenLine {
+                population: P as u32,
+                grid: G as u32,
+                frame: k,
+                kind,
+                status,
+                method: feedforward,
+                target_shift,
+                call,
+                phases,
+                stack,
+                fitness,
+            };
             hprintln!("{}", line);
         }
         hprintln!("{}", deadline);
@@ -225,7 +253,8 @@ mod firmware {
             assert!(evorec_core::config::DEFAULT_POPULATION == 40 && evorec_core::config::DEFAULT_GRID == 8);
         };
         let Some(slot) = SLOT.try_take() else { rt::exit(false) };
-        let full = run_config::<P40G8, 40, 8>("full", slot, FULL_FRAMES, &timer, left, right);
+        let full = run_config::<P40G8, 40, 8>("full", Feedforward::On, slot, FULL_FRAMES, &timer, left, right)
+            && run_config::<P40G8, 40, 8>("target", Feedforward::OnWithTarget, slot, FULL_FRAMES, &timer, left, right);
         // The sweep chooses the configuration, on the M4 (the M7 runs the same code).
         let ok = full && (cfg!(feature = "m7") || sweep(slot, &timer, left, right));
         hprintln!("END {}", if ok { "ok" } else { "failed" });
@@ -235,17 +264,17 @@ mod firmware {
     /// The sweep: every configuration but the default one (the `full` run) on
     /// [`SWEEP_FRAMES`] frames each; false on the first failure.
     fn sweep(slot: &mut Slot, timer: &Timer0, left: &mut [u8], right: &mut [u8]) -> bool {
-        run_config::<P20G4, 20, 4>("sweep", slot, SWEEP_FRAMES, timer, left, right)
-            && run_config::<P20G8, 20, 8>("sweep", slot, SWEEP_FRAMES, timer, left, right)
-            && run_config::<P20G12, 20, 12>("sweep", slot, SWEEP_FRAMES, timer, left, right)
-            && run_config::<P40G4, 40, 4>("sweep", slot, SWEEP_FRAMES, timer, left, right)
-            && run_config::<P40G5, 40, 5>("sweep", slot, SWEEP_FRAMES, timer, left, right)
-            && run_config::<P40G6, 40, 6>("sweep", slot, SWEEP_FRAMES, timer, left, right)
-            && run_config::<P40G7, 40, 7>("sweep", slot, SWEEP_FRAMES, timer, left, right)
-            && run_config::<P40G12, 40, 12>("sweep", slot, SWEEP_FRAMES, timer, left, right)
-            && run_config::<P60G4, 60, 4>("sweep", slot, SWEEP_FRAMES, timer, left, right)
-            && run_config::<P60G8, 60, 8>("sweep", slot, SWEEP_FRAMES, timer, left, right)
-            && run_config::<P60G12, 60, 12>("sweep", slot, SWEEP_FRAMES, timer, left, right)
+        run_config::<P20G4, 20, 4>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P20G8, 20, 8>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P20G12, 20, 12>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P40G4, 40, 4>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P40G5, 40, 5>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P40G6, 40, 6>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P40G7, 40, 7>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P40G12, 40, 12>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P60G4, 60, 4>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P60G8, 60, 8>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
+            && run_config::<P60G12, 60, 12>("sweep", Feedforward::On, slot, SWEEP_FRAMES, timer, left, right)
     }
 }
 

@@ -319,7 +319,7 @@ mod tests {
     #[test]
     fn output_is_parsed() {
         let text = "EVOREC-TIMING v1\nCALIBRATION read_pair=25\nRUN name=full p=40 g=8 frames=1 points_per_camera=480 width=160 height=120\n\
-                    GEN p=40 g=8 k=0 kind=blank status=lost call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0\n\
+                    GEN p=40 g=8 k=0 kind=blank status=lost method=ff tshift=0 call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0\n\
                     DEADLINE limit=25600000 checked=1 missed=0 worst=2048\nEND ok\n";
         let m = parse_output(text).unwrap();
         assert_eq!(m.read_pair_ticks, 25);
@@ -348,14 +348,35 @@ mod tests {
     #[test]
     fn missed_deadlines_are_counted() {
         let text = "EVOREC-TIMING v1\nCALIBRATION read_pair=25\nRUN name=full p=40 g=8 frames=2 points_per_camera=480\n\
-                    GEN p=40 g=8 k=0 kind=blank status=lost call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0\n\
+                    GEN p=40 g=8 k=0 kind=blank status=lost method=ff tshift=0 call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0\n\
                     DEADLINE-MISSED k=1 call=25600001\n\
-                    GEN p=40 g=8 k=1 kind=blank status=lost call=25600001 ff=1024 eval=512 breed=256 stack=4000 fitness=0\n\
+                    GEN p=40 g=8 k=1 kind=blank status=lost method=ff tshift=0 call=25600001 ff=1024 eval=512 breed=256 stack=4000 fitness=0\n\
                     DEADLINE limit=25600000 checked=2 missed=1 worst=25600001\nEND ok\n";
         let m = parse_output(text).unwrap();
         assert_eq!(m.deadlines("full").missed, 1);
         assert!(m.deadlines("full").worst_instructions > 1.0e6);
         assert_eq!(m.deadlines("sweep").checked, 0);
         assert_eq!(m.missed_lines, ["DEADLINE-MISSED k=1 call=25600001"]);
+    }
+
+    #[test]
+    fn target_shifts_of_the_ff_target_run_are_counted() {
+        let text = "EVOREC-TIMING v1\nCALIBRATION read_pair=25\nRUN name=target method=ff+target p=40 g=8 frames=3 points_per_camera=480\n\
+                    GEN p=40 g=8 k=0 kind=conveyor status=tracking method=ff+target tshift=0 call=2048 ff=1024 eval=512 breed=256 stack=4000 fitness=0.9\n\
+                    GEN p=40 g=8 k=1 kind=conveyor status=tracking method=ff+target tshift=1 call=4096 ff=1024 eval=512 breed=256 stack=4000 fitness=0.9\n\
+                    GEN p=40 g=8 k=2 kind=conveyor status=tracking method=ff+target tshift=1 call=3072 ff=1024 eval=512 breed=256 stack=4000 fitness=0.9\n\
+                    DEADLINE limit=25600000 checked=3 missed=0 worst=4096\nEND ok\n";
+        let m = parse_output(text).unwrap();
+        assert_eq!(m.runs[0].name, "target");
+        let s = m.runs[0].stats();
+        assert_eq!(s.target_shifts, 2);
+        let c = s.target_shift_call.unwrap();
+        assert_eq!((c.min, c.max), (120.0, 160.0));
+        assert_eq!(m.deadlines("target").checked, 3);
+        // Without a shifted generation there is no range.
+        assert_eq!(
+            parse_output(&text.replace("tshift=1", "tshift=0")).unwrap().runs[0].stats().target_shift_call,
+            None
+        );
     }
 }

@@ -10,7 +10,80 @@ use super::{GENERATION_BUDGET, POINT_TARGET, RATIO_TARGET, Range, Results, RunSt
 
 /// Worst-case stack: the static analysis or the painted mark of a generation, whichever is larger.
 fn stack_bytes(r: &Results) -> u32 {
-    r.stack.total().max(r.full.stack)
+    r.stack.total().max(r.full.stack).max(r.target.as_ref().map_or(0, |t| t.stack))
+}
+
+/// The `ff+target` run in `timing.json` (`null` without it).
+fn target_json(r: &Results) -> Value {
+    let Some(t) = &r.target else { return Value::Null };
+    json!({
+        "method": "ff+target",
+        "frames": t.generations,
+        "instructions_per_generation": {
+            "min": t.call.min.round(), "max": t.call.max.round(), "mean": t.call.mean.round(),
+            "budget": GENERATION_BUDGET, "within_budget": t.call.max <= GENERATION_BUDGET,
+        },
+        "phases": { "feedforward": t.feedforward.json(), "evaluate": t.evaluate.json(), "breed": t.breed.json() },
+        "generations_with_target_shift": t.target_shifts,
+        "target_shift_generations": t.target_shift_call.map(|c| c.json()),
+        "instructions_per_point_eval": round2(t.per_point.max),
+        "painted_generation_stack_bytes": t.stack,
+        "frame_kinds": t.by_kind.iter().map(|(k, n, r)| (k.name().to_owned(), json!({"frames": n, "min": r.min.round(), "max": r.max.round()}))).collect::<serde_json::Map<_, _>>(),
+        "statuses": t.by_status.iter().map(|(k, n, r)| (k.as_str().to_owned(), json!({"frames": n, "min": r.min.round(), "max": r.max.round()}))).collect::<serde_json::Map<_, _>>(),
+        "deadline": { "generations_checked": r.deadline_target.checked, "missed": r.deadline_target.missed, "worst_instructions": r.deadline_target.worst_instructions.round() },
+        "cycle_estimate": r.cyc_target.as_ref().map(|c| json!({
+            "cycles_per_generation": c.cycles.round(), "microseconds_per_generation": round1(c.microseconds),
+            "milliseconds_with_flash_wait_states": round2(c.flash_microseconds / 1000.0),
+        })),
+        "worst_generation_of_both_methods": r.full.call.max.max(t.call.max).round(),
+    })
+}
+
+/// The `ff+target` section of `timing.md` (nothing without the run).
+fn target_section(s: &mut String, r: &Results) {
+    let Some(t) = &r.target else { return };
+    let f = &r.full;
+    let _ = writeln!(
+        s,
+        "## Feedforward of the target's motion (`ff+target`, the `target` run)\n\n\
+         The same {} frames, population and rows, with `Feedforward::OnWithTarget`: the target filter is updated in \
+         every generation, and once it trusts a significant velocity (the conveyor frames: {} m/s along world y) \
+         every individual is shifted by the target's twist too. **{} of {} generations fed a non-zero target \
+         velocity forward** (`tshift=1` in the `GEN` lines).\n\n\
+         | quantity (instructions) | ff: max | ff+target: max | ff+target: mean |\n|---|---:|---:|---:|",
+        t.generations,
+        evorec_firmware::timing::CONVEYOR_SPEED_M_S,
+        t.target_shifts,
+        t.generations
+    );
+    let row = |s: &mut String, name: &str, a: &Range, b: &Range| {
+        let _ = writeln!(s, "| {name} | {:.0} | {:.0} | {:.0} |", a.max, b.max, b.mean);
+    };
+    row(s, "whole generation", &f.call, &t.call);
+    row(s, "— feedforward", &f.feedforward, &t.feedforward);
+    row(s, "— Evaluate", &f.evaluate, &t.evaluate);
+    row(s, "— Breed (+ target filter update)", &f.breed, &t.breed);
+    if let Some(c) = &t.target_shift_call {
+        let _ = writeln!(s, "| generations with a target shift (whole call) | | {:.0} | {:.0} |", c.max, c.mean);
+    }
+    let worst = f.call.max.max(t.call.max);
+    let _ = writeln!(
+        s,
+        "\nWorst generation of both methods: {worst:.0} instructions ({}, budget {GENERATION_BUDGET:.0}); \
+         ff+target: {:.2} instructions per model point, painted stack {} B, deadline missed by {} of {} \
+         generations{}.\n",
+        if worst <= GENERATION_BUDGET { "within budget" } else { "**over budget**" },
+        t.per_point.max,
+        t.stack,
+        r.deadline_target.missed,
+        r.deadline_target.checked,
+        r.cyc_target.as_ref().map_or(String::new(), |c| format!(
+            "; ESTIMATE {:.0} cycles = {:.2} ms ({:.2} ms with flash wait states)",
+            c.cycles,
+            c.microseconds / 1000.0,
+            c.flash_microseconds / 1000.0
+        ))
+    );
 }
 
 /// Instructions of one TIMER0 read.
@@ -149,6 +222,7 @@ pub(super) fn json(r: &Results) -> Value {
         "timing_firmware": { "flash_bytes": r.timing_mem.flash_bytes, "static_ram_bytes": r.timing_mem.static_ram_bytes },
         "sweep": r.sweep.iter().map(sweep_json).collect::<Vec<_>>(),
         "cycle_estimate": cycle_json(r),
+        "ff_target": target_json(r),
         "measurement": {
             "qemu": format!("qemu-system-arm {} -icount shift=10 (1 instruction = 1024 ns virtual)", r.board.qemu_machine().join(" ")),
             "timer": format!("CMSDK APB TIMER0 @ 0x40000000, SYSCLK 25 MHz ({NS_PER_TICK} ns/tick): instructions = ticks * 40 / 1024"),
@@ -181,7 +255,7 @@ pub(super) fn summary(r: &Results) -> String {
     format!(
         "{} at {}: instructions per generation (P = {}, G = {}): min {:.0}, max {:.0} (max/min {:.4}); {:.2} per model point \
          ({:.2} per walked point); stack {} B; flash {} B; static RAM {} B; ESTIMATE {:.0} cycles = {:.0} µs at {:.0} MHz \
-         ({:.0} µs with flash wait states); deadline {:.0}: {} of {} generations missed (worst {:.0})",
+         ({:.0} µs with flash wait states); deadline {:.0}: {} of {} generations missed (worst {:.0}){}",
         r.board.profile.name,
         r.board.frame_size(),
         f.population,
@@ -201,7 +275,17 @@ pub(super) fn summary(r: &Results) -> String {
         r.deadline.limit_instructions,
         r.deadline.missed,
         r.deadline.checked,
-        r.deadline.worst_instructions
+        r.deadline.worst_instructions,
+        r.target.as_ref().map_or(String::new(), |t| format!(
+            "; ff+target: max {:.0} ({} of {} generations shifted by the target's velocity; ESTIMATE {:.0} µs), \
+             {} of {} missed the deadline",
+            t.call.max,
+            t.target_shifts,
+            t.generations,
+            r.cyc_target.as_ref().map_or(0.0, |c| c.microseconds),
+            r.deadline_target.missed,
+            r.deadline_target.checked
+        ))
     )
 }
 
@@ -323,6 +407,7 @@ pub(super) fn markdown(r: &Results) -> String {
         s,
         "- one TIMER0 read costs {read_ins:.2} instructions; the 4 probe marks add ≈ 16 to a generation.\n"
     );
+    target_section(&mut s, r);
     let _ = writeln!(
         s,
         "## By kind of frame (whole call, instructions)\n\n| frames | n | min | max |\n|---|---:|---:|---:|"
@@ -499,6 +584,8 @@ mod tests {
             stack: 0,
             by_kind: Vec::new(),
             by_status: vec![(Status::Tracking, 20, range(125.0, 130.0)), (Status::Searching, 10, range(100.0, 104.0))],
+            target_shifts: 0,
+            target_shift_call: None,
         };
         assert_eq!(
             ratio_line(&full, "within budget"),

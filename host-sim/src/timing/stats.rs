@@ -75,6 +75,11 @@ pub struct RunStats {
     pub by_kind: Vec<(CaseKind, usize, Range)>,
     /// Whole call per status the generations started in.
     pub by_status: Vec<(Status, usize, Range)>,
+    /// Generations that shifted every individual by a non-zero target velocity too (`tshift=1`:
+    /// the `ff+target` path with the target filter trusted and its velocity significant).
+    pub target_shifts: usize,
+    /// Whole call of those generations (`None` if there were none).
+    pub target_shift_call: Option<Range>,
 }
 
 impl Run {
@@ -121,6 +126,10 @@ impl Run {
             stack: g.iter().map(|x| x.stack).max().unwrap_or(0),
             by_kind,
             by_status,
+            target_shifts: g.iter().filter(|x| x.target_shift).count(),
+            target_shift_call: g.iter().any(|x| x.target_shift).then(|| {
+                Range::of(g.iter().filter(|x| x.target_shift).map(|x| ticks_to_instructions(u64::from(x.call))))
+            }),
         }
     }
 }

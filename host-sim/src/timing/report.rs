@@ -14,6 +14,21 @@ fn stack_bytes(r: &Results) -> u32 {
 }
 
 /// The `ff+target` run in `timing.json` (`null` without it).
+/// A run's instructions per generation by tracker status: `{status: {frames, min, max}}`.
+fn by_status_json(run: &RunStats) -> Value {
+    Value::Object(run.by_status.iter().map(|(k, n, r)| (k.as_str().to_owned(), range_json(*n, r))).collect())
+}
+
+/// A run's instructions per generation by frame kind: `{kind: {frames, min, max}}`.
+fn by_kind_json(run: &RunStats) -> Value {
+    Value::Object(run.by_kind.iter().map(|(k, n, r)| (k.name().to_owned(), range_json(*n, r))).collect())
+}
+
+/// `{frames, min, max}` of a group of generations.
+fn range_json(frames: usize, r: &Range) -> Value {
+    json!({"frames": frames, "min": r.min.round(), "max": r.max.round()})
+}
+
 fn target_json(r: &Results) -> Value {
     let Some(t) = &r.target else { return Value::Null };
     json!({
@@ -28,8 +43,8 @@ fn target_json(r: &Results) -> Value {
         "target_shift_generations": t.target_shift_call.map(|c| c.json()),
         "instructions_per_point_eval": round2(t.per_point.max),
         "painted_generation_stack_bytes": t.stack,
-        "frame_kinds": t.by_kind.iter().map(|(k, n, r)| (k.name().to_owned(), json!({"frames": n, "min": r.min.round(), "max": r.max.round()}))).collect::<serde_json::Map<_, _>>(),
-        "statuses": t.by_status.iter().map(|(k, n, r)| (k.as_str().to_owned(), json!({"frames": n, "min": r.min.round(), "max": r.max.round()}))).collect::<serde_json::Map<_, _>>(),
+        "frame_kinds": by_kind_json(t),
+        "statuses": by_status_json(t),
         "deadline": { "generations_checked": r.deadline_target.checked, "missed": r.deadline_target.missed, "worst_instructions": r.deadline_target.worst_instructions.round() },
         "cycle_estimate": r.cyc_target.as_ref().map(|c| json!({
             "cycles_per_generation": c.cycles.round(), "microseconds_per_generation": round1(c.microseconds),
@@ -180,8 +195,8 @@ pub(super) fn json(r: &Results) -> Value {
             "evaluate": r.full.evaluate.json(),
             "breed": r.full.breed.json(),
         },
-        "statuses": r.full.by_status.iter().map(|(k, n, r)| (k.as_str().to_owned(), json!({"frames": n, "min": r.min.round(), "max": r.max.round()}))).collect::<serde_json::Map<_, _>>(),
-        "frame_kinds": r.full.by_kind.iter().map(|(k, n, r)| (k.name().to_owned(), json!({"frames": n, "min": r.min.round(), "max": r.max.round()}))).collect::<serde_json::Map<_, _>>(),
+        "statuses": by_status_json(&r.full),
+        "frame_kinds": by_kind_json(&r.full),
         "instructions_per_point_eval": round2(r.full.per_point.max),
         "instructions_per_point_eval_range": { "min": round2(r.full.per_point.min), "max": round2(r.full.per_point.max) },
         "instructions_per_point_eval_marginal": r.marginal.map(round2),

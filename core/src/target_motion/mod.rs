@@ -148,7 +148,10 @@ impl TargetFilterParams {
         depth_feedforward: 0.0,
     };
 
-    /// Checks that every value is finite and positive (counts at least 1).
+    /// Checks every field against its rule: the noises, densities, prior deviations, gate,
+    /// trust bounds and `max_gap_s` finite and positive; `lost_fitness`, the dead bands and
+    /// `significance_sigma` finite and non-negative; `depth_feedforward` in `[0, 1]`; the counts
+    /// `max_outliers` and `converge_updates` at least 1.
     ///
     /// # Errors
     /// [`FilterParamsError`] naming the first bad field.
@@ -195,9 +198,21 @@ impl TargetFilterParams {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FilterParamsError(pub &'static str);
 
+impl FilterParamsError {
+    /// The rule the field broke (see [`TargetFilterParams::validate`]).
+    pub fn rule(&self) -> &'static str {
+        match self.0 {
+            "lost_fitness" | "deadband_m_s" | "deadband_rad_s" | "significance_sigma" => "finite and non-negative",
+            "depth_feedforward" => "between 0 and 1",
+            "max_outliers" | "converge_updates" => "at least 1",
+            _ => "finite and positive",
+        }
+    }
+}
+
 impl core::fmt::Display for FilterParamsError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "target filter parameter {} must be finite and positive", self.0)
+        write!(f, "target filter parameter {} must be {}", self.0, self.rule())
     }
 }
 
@@ -410,9 +425,7 @@ impl TargetFilter {
         status: Status,
     ) -> UpdateOutcome {
         if status != Status::Tracking {
-            self.track = None;
-            self.last_outcome = Some(UpdateOutcome::Lost);
-            return UpdateOutcome::Lost;
+            return self.lose();
         }
         self.update(measured, time_us, fitness)
     }
@@ -446,18 +459,22 @@ impl TargetFilter {
         fitness: f32,
         status: Status,
     ) -> UpdateOutcome {
-        let time_us = joints.time_us;
         if status != Status::Tracking {
-            return self.update_with_status(&Isometry3::identity(), time_us, fitness, status);
+            return self.lose();
         }
         let camera = chain.forward(&joints.q) * flange_to_camera;
         let measured = camera_to_world(&camera, psi);
-        let sight = measured.translation.vector - camera.translation.vector;
-        let n2 = sight.dot(&sight);
-        let los = if n2 > 1e-12 { Some(sight / math::sqrt(n2)) } else { None };
-        let outcome = self.update_inner(&measured, time_us, fitness, los);
+        let los = unit(&(measured.translation.vector - camera.translation.vector));
+        let outcome = self.update_inner(&measured, joints.time_us, fitness, los);
         self.last_outcome = Some(outcome);
         outcome
+    }
+
+    /// The tracker does not hold the target: forget the track.
+    fn lose(&mut self) -> UpdateOutcome {
+        self.track = None;
+        self.last_outcome = Some(UpdateOutcome::Lost);
+        UpdateOutcome::Lost
     }
 
     fn update_inner(
@@ -609,9 +626,7 @@ impl TargetFilter {
     /// kept: `v − (1 − d)(v·u) u`.
     pub fn feedforward_velocity_seen_along(&self, sight: &Vector3<f32>) -> TargetVelocity {
         let mut vel = self.feedforward_velocity();
-        let n2 = sight.dot(sight);
-        if n2 > 1e-12 && vel.v != Vector3::zeros() {
-            let u = sight / math::sqrt(n2);
+        if let Some(u) = unit(sight).filter(|_| vel.v != Vector3::zeros()) {
             vel.v -= u * (vel.v.dot(&u) * (1.0 - self.params.depth_feedforward));
         }
         vel
@@ -664,6 +679,12 @@ fn velocity_of(axes: &[Axis; 3]) -> Vector3<f32> {
 /// `t1 − t0` in seconds (negative when `t1 < t0`).
 fn seconds_between(t0_us: u64, t1_us: u64) -> f32 {
     if t1_us >= t0_us { (t1_us - t0_us) as f32 * 1e-6 } else { -((t0_us - t1_us) as f32 * 1e-6) }
+}
+
+/// The unit vector along `v` (a line of sight), `None` for a (near) zero vector.
+fn unit(v: &Vector3<f32>) -> Option<Vector3<f32>> {
+    let n2 = v.dot(v);
+    if n2 > 1e-12 { Some(v / math::sqrt(n2)) } else { None }
 }
 
 fn finite(iso: &Isometry3<f32>) -> bool {

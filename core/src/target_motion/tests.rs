@@ -325,3 +325,26 @@ fn depth_is_not_fed_forward() {
     p.depth_feedforward = 1.5;
     assert_eq!(TargetFilter::new(p), Err(FilterParamsError("depth_feedforward")));
 }
+
+#[test]
+fn params_errors_name_the_rule_of_their_field() {
+    use std::string::ToString;
+    type Spoil = fn(&mut TargetFilterParams);
+    let cases: [(Spoil, &str); 5] = [
+        (|p| p.depth_noise_m = 0.0, "target filter parameter depth_noise_m must be finite and positive"),
+        (|p| p.deadband_m_s = -0.1, "target filter parameter deadband_m_s must be finite and non-negative"),
+        (|p| p.lost_fitness = f32::NAN, "target filter parameter lost_fitness must be finite and non-negative"),
+        (|p| p.depth_feedforward = f32::NAN, "target filter parameter depth_feedforward must be between 0 and 1"),
+        (|p| p.max_outliers = 0, "target filter parameter max_outliers must be at least 1"),
+    ];
+    for (spoil, message) in cases {
+        let mut p = TargetFilterParams::DEFAULT;
+        spoil(&mut p);
+        let err = p.validate().unwrap_err();
+        assert_eq!(err.to_string(), message);
+        // A filter that refuses the parameters keeps its own.
+        let mut f = TargetFilter::with_defaults();
+        assert_eq!(f.set_params(p), Err(err));
+        assert_eq!(f.params(), &TargetFilterParams::DEFAULT);
+    }
+}

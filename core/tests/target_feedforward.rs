@@ -78,8 +78,9 @@ fn target_feedforward_follows_a_sliding_block() {
     assert!(rms_target < 0.5 * rms_ff, "FF + target {rms_target} m vs FF {rms_ff} m");
     // The target term starts only once the ramping speed is significant against the filter's
     // own uncertainty (2σ, `TargetFilterParams::significance_sigma`): with the first, slow
-    // tuning that took long (10.7 mm here); the fast default (0.2 m²/s³, trusted at 0.1 m/s)
-    // follows the ramp sooner: measured 4.6 mm (FF alone 33.3 mm).
+    // tuning that took long (10.7 mm here); the fast constant-velocity filter (0.2 m²/s³,
+    // trusted at 0.1 m/s) followed the ramp sooner: 4.6 mm (FF alone 33.3 mm); the default
+    // with its acceleration state: measured 3.4 mm.
     assert!(rms_target < 0.008, "FF + target {rms_target} m");
 
     // The filter has the block's velocity (the camera is the world's flange frame at q = 0, so
@@ -89,7 +90,8 @@ fn target_feedforward_follows_a_sliding_block() {
     let v = filter.velocity().unwrap().v;
     let cam = evorec_core::kinematics::PA10.forward(&[0.0; 7]);
     let expected = cam.rotation * Vector3::new(SPEED, 0.0, 0.0);
-    assert!((v - expected).norm() < 0.02, "v {v} vs {expected}");
+    // (One frame's velocity of the filter with an acceleration state: 0.026 m/s off, measured.)
+    assert!((v - expected).norm() < 0.03, "v {v} vs {expected}");
 
     // Hand-over: the pose 50 ms after the last capture is ahead by about 5 mm.
     let last = (FRAMES - 1) * DT_US;

@@ -3,10 +3,12 @@
 //!
 //! Every estimate `^CR ψ_M` is taken into the world through the arm's forward kinematics and
 //! the hand-eye transform, `^W T_M = ^W T_H(q) · ^H T_CR · ^CR T_M` ([`world_pose`]). A
-//! [`TargetFilter`] — a constant-velocity Kalman filter, one independent 2-state filter
-//! `[x, ẋ]` per axis — estimates from that sequence
+//! [`TargetFilter`] — a Kalman filter, one independent filter per axis — estimates from that
+//! sequence
 //!
-//! - the linear velocity `^W ṙ_M` of the block's centre (three position axes), and
+//! - the linear velocity `^W ṙ_M` of the block's centre (three position axes, each
+//!   `[x, ẋ, ẍ]` with white jerk: a block that starts, stops and reverses is followed without
+//!   a constant-velocity model's lag), and
 //! - the angular velocity `^W ω_M` (three axes of an error state: the orientation is kept as a
 //!   unit quaternion, the innovation is the rotation vector `log(Q_meas · Q̂⁻¹)` in `Σ_W`).
 //!
@@ -29,8 +31,9 @@
 //! depth is far noisier than the position across the view, so a position is weighed with
 //! [`TargetFilterParams::depth_noise_m`] along the line of sight and
 //! [`TargetFilterParams::position_noise_m`] across it, and the velocity fed forward
-//! ([`TargetFilter::feedforward_velocity_seen_along`]) keeps only
-//! [`TargetFilterParams::depth_feedforward`] of its part along the line of sight.
+//! ([`TargetFilter::feedforward_velocity_seen_along`]) keeps along the line of sight only what
+//! the world axes seen across it say (plus [`TargetFilterParams::depth_feedforward`] of the
+//! rest).
 //!
 //! [`TargetFilter::predict`] hands the pose over to a later time `t`: the last accepted
 //! measurement moved by the trusted velocity over `t − t_capture`, seen from the camera at the
@@ -74,6 +77,18 @@ pub struct TargetFilterParams {
     pub acceleration_psd: f32,
     /// Spectral density of the white angular acceleration noise (rad²/s³).
     pub angular_acceleration_psd: f32,
+    /// Spectral density of the white jerk noise of the position axes' acceleration state
+    /// (m²/s⁵): each position axis is `[x, ẋ, ẍ]`, so a block that speeds up, stops and
+    /// reverses is followed without the lag of a constant-velocity model. 0 together with
+    /// [`TargetFilterParams::initial_accel_sd_m_s2`] 0 keeps the acceleration at 0 (a
+    /// constant-velocity filter).
+    pub jerk_psd: f32,
+    /// Prior standard deviation of the acceleration after a reset (m/s²).
+    pub initial_accel_sd_m_s2: f32,
+    /// The linear velocity fed forward is the filter's velocity moved on by its acceleration
+    /// over this time (s): `v + a·lead`; half a frame period would be the mean velocity over
+    /// the next frame, but the acceleration state is noisy (the default is 0).
+    pub acceleration_lead_s: f32,
     /// Prior standard deviation of the velocity after a reset (m/s).
     pub initial_speed_sd_m_s: f32,
     /// Prior standard deviation of the angular velocity after a reset (rad/s).
@@ -105,10 +120,10 @@ pub struct TargetFilterParams {
     /// significance test and the dead band) until the filter restarts: a block that moved
     /// keeps moving, and its speed passes zero at every reversal.
     pub hold_motion: bool,
-    /// Share (0..=1) of the linear velocity along the line of sight that
-    /// [`TargetFilter::feedforward_velocity_seen_along`] feeds forward: a velocity in depth is
-    /// mostly the difference of noisy stereo depths, and fed forward it drags the population
-    /// along the viewing ray.
+    /// Share (0..=1) of the linear velocity along the line of sight, beyond what the world axes
+    /// seen across the sight carry, that [`TargetFilter::feedforward_velocity_seen_along`]
+    /// feeds forward: that rest is mostly the difference of noisy stereo depths, and fed
+    /// forward it drags the population along the viewing ray.
     pub depth_feedforward: f32,
 }
 
@@ -119,12 +134,16 @@ impl TargetFilterParams {
     ///
     /// The linear part is tuned for a block that starts, stops and reverses on a conveyor
     /// (0.2 m/s, reversals at 0.54 m/s², `scenarios/conveyor_ff_target.toml`): a fast filter
-    /// (white acceleration 0.2 m²/s³, 1.5 mm across the line of sight, 8 mm along it) that
-    /// follows a reversal within a few frames, trusted once its velocity is known to 0.1 m/s,
-    /// reset only when the fitness falls below 0.3 (or the tracker's status leaves
-    /// *tracking*); once fed forward its velocity is held through the reversals
-    /// ([`TargetFilterParams::hold_motion`]) and its part along the line of sight is not fed
-    /// forward ([`TargetFilterParams::depth_feedforward`] 0). The significance test still
+    /// (white acceleration 0.2 m²/s³ and white jerk 30 m²/s⁵ on an acceleration state, 1.5 mm
+    /// across the line of sight, 8 mm along it) that follows a reversal within a few frames,
+    /// trusted once its velocity is known to 0.1 m/s, reset only when the fitness falls below
+    /// 0.3 (or the tracker's status leaves *tracking*); once fed forward its velocity is held
+    /// through the reversals ([`TargetFilterParams::hold_motion`]), not moved on by its
+    /// acceleration ([`TargetFilterParams::acceleration_lead_s`] 0: half a frame's lead made a
+    /// block accelerating from rest in front of a still camera 12 mm RMS off instead of 3.4 mm,
+    /// `core/tests/target_feedforward.rs`), and along the line of sight only what the axes
+    /// seen across it say is fed forward
+    /// ([`TargetFilterParams::depth_feedforward`] 0). The significance test still
     /// decides whether a block moves at all, so a block at rest is tracked as with FF alone.
     pub const DEFAULT: TargetFilterParams = TargetFilterParams {
         position_noise_m: 0.0015,
@@ -132,6 +151,9 @@ impl TargetFilterParams {
         rotation_noise_rad: 0.02,
         acceleration_psd: 0.2,
         angular_acceleration_psd: 0.01,
+        jerk_psd: 30.0,
+        initial_accel_sd_m_s2: 1.0,
+        acceleration_lead_s: 0.0,
         initial_speed_sd_m_s: 0.5,
         initial_rate_sd_rad_s: 2.0,
         gate_sigma: 6.0,
@@ -148,7 +170,10 @@ impl TargetFilterParams {
         depth_feedforward: 0.0,
     };
 
-    /// Checks that every value is finite and positive (counts at least 1).
+    /// Checks every field against its rule: the noises, densities, prior deviations, gate,
+    /// trust bounds and `max_gap_s` finite and positive; `lost_fitness`, the dead bands and
+    /// `significance_sigma` finite and non-negative; `depth_feedforward` in `[0, 1]`; the counts
+    /// `max_outliers` and `converge_updates` at least 1.
     ///
     /// # Errors
     /// [`FilterParamsError`] naming the first bad field.
@@ -174,6 +199,9 @@ impl TargetFilterParams {
             (self.deadband_m_s, "deadband_m_s"),
             (self.deadband_rad_s, "deadband_rad_s"),
             (self.significance_sigma, "significance_sigma"),
+            (self.jerk_psd, "jerk_psd"),
+            (self.initial_accel_sd_m_s2, "initial_accel_sd_m_s2"),
+            (self.acceleration_lead_s, "acceleration_lead_s"),
         ];
         if let Some((_, name)) = non_negative.iter().find(|(v, _)| !(v.is_finite() && *v >= 0.0)) {
             return Err(FilterParamsError(name));
@@ -195,9 +223,27 @@ impl TargetFilterParams {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FilterParamsError(pub &'static str);
 
+impl FilterParamsError {
+    /// The rule the field broke (see [`TargetFilterParams::validate`]).
+    pub fn rule(&self) -> &'static str {
+        match self.0 {
+            "lost_fitness"
+            | "deadband_m_s"
+            | "deadband_rad_s"
+            | "significance_sigma"
+            | "jerk_psd"
+            | "initial_accel_sd_m_s2"
+            | "acceleration_lead_s" => "finite and non-negative",
+            "depth_feedforward" => "between 0 and 1",
+            "max_outliers" | "converge_updates" => "at least 1",
+            _ => "finite and positive",
+        }
+    }
+}
+
 impl core::fmt::Display for FilterParamsError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "target filter parameter {} must be finite and positive", self.0)
+        write!(f, "target filter parameter {} must be {}", self.0, self.rule())
     }
 }
 
@@ -254,10 +300,67 @@ impl Axis {
     }
 }
 
+/// One position axis `[x, ẋ, ẍ]` with covariance `[P₀₀, P₀₁, P₀₂, P₁₁, P₁₂, P₂₂]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct PosAxis {
+    x: f32,
+    v: f32,
+    a: f32,
+    p: [f32; 6],
+}
+
+impl PosAxis {
+    fn start(x: f32, var_x: f32, var_v: f32, var_a: f32) -> Self {
+        Self { x, v: 0.0, a: 0.0, p: [var_x, 0.0, 0.0, var_v, 0.0, var_a] }
+    }
+
+    /// Velocity variance.
+    fn var_v(&self) -> f32 {
+        self.p[3]
+    }
+
+    /// `x ← x + v dt + a dt²/2`, `v ← v + a dt`, `P ← F P Fᵀ + Q(dt)` for white acceleration of
+    /// density `qa` on `[x, ẋ]` and white jerk of density `qj` on `[x, ẋ, ẍ]`.
+    fn predict(&mut self, dt: f32, qa: f32, qj: f32) {
+        let [xx, xv, xa, vv, va, aa] = self.p;
+        let h = 0.5 * dt * dt;
+        let (dt2, dt3) = (dt * dt, dt * dt * dt);
+        self.x += self.v * dt + self.a * h;
+        self.v += self.a * dt;
+        // Rows of F P.
+        let r0 = [xx + dt * xv + h * xa, xv + dt * vv + h * va, xa + dt * va + h * aa];
+        let r1 = [vv + dt * va, va + dt * aa];
+        self.p = [
+            r0[0] + dt * r0[1] + h * r0[2] + qa * dt3 / 3.0 + qj * dt3 * dt2 / 20.0,
+            r0[1] + dt * r0[2] + qa * dt2 * 0.5 + qj * dt2 * dt2 / 8.0,
+            r0[2] + qj * dt3 / 6.0,
+            r1[0] + dt * r1[1] + qa * dt + qj * dt3 / 3.0,
+            r1[1] + qj * dt2 * 0.5,
+            aa + qj * dt,
+        ];
+    }
+
+    /// Whether innovation `y` is within `gate` standard deviations (`y² ≤ gate² S`).
+    fn inlier(&self, y: f32, r: f32, gate: f32) -> bool {
+        y * y <= gate * gate * (self.p[0] + r)
+    }
+
+    /// Measurement update with innovation `y` and measurement variance `r`.
+    fn update(&mut self, y: f32, r: f32) {
+        let [xx, xv, xa, vv, va, aa] = self.p;
+        let s = xx + r;
+        let (k0, k1, k2) = (xx / s, xv / s, xa / s);
+        self.x += k0 * y;
+        self.v += k1 * y;
+        self.a += k2 * y;
+        self.p = [xx - k0 * xx, xv - k0 * xv, xa - k0 * xa, vv - k1 * xv, va - k1 * xa, aa - k2 * xa];
+    }
+}
+
 /// The filter's state while it holds a track.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Track {
-    pos: [Axis; 3],
+    pos: [PosAxis; 3],
     /// Error-state axes of the orientation (`x` is 0 between updates).
     rot: [Axis; 3],
     orientation: UnitQuaternion<f32>,
@@ -410,9 +513,7 @@ impl TargetFilter {
         status: Status,
     ) -> UpdateOutcome {
         if status != Status::Tracking {
-            self.track = None;
-            self.last_outcome = Some(UpdateOutcome::Lost);
-            return UpdateOutcome::Lost;
+            return self.lose();
         }
         self.update(measured, time_us, fitness)
     }
@@ -446,18 +547,22 @@ impl TargetFilter {
         fitness: f32,
         status: Status,
     ) -> UpdateOutcome {
-        let time_us = joints.time_us;
         if status != Status::Tracking {
-            return self.update_with_status(&Isometry3::identity(), time_us, fitness, status);
+            return self.lose();
         }
         let camera = chain.forward(&joints.q) * flange_to_camera;
         let measured = camera_to_world(&camera, psi);
-        let sight = measured.translation.vector - camera.translation.vector;
-        let n2 = sight.dot(&sight);
-        let los = if n2 > 1e-12 { Some(sight / math::sqrt(n2)) } else { None };
-        let outcome = self.update_inner(&measured, time_us, fitness, los);
+        let los = unit(&(measured.translation.vector - camera.translation.vector));
+        let outcome = self.update_inner(&measured, joints.time_us, fitness, los);
         self.last_outcome = Some(outcome);
         outcome
+    }
+
+    /// The tracker does not hold the target: forget the track.
+    fn lose(&mut self) -> UpdateOutcome {
+        self.track = None;
+        self.last_outcome = Some(UpdateOutcome::Lost);
+        UpdateOutcome::Lost
     }
 
     fn update_inner(
@@ -487,7 +592,7 @@ impl TargetFilter {
         let p = &self.params;
         let r_rot = p.rotation_noise_rad * p.rotation_noise_rad;
         let mut predicted = *track;
-        predicted.pos.iter_mut().for_each(|a| a.predict(dt, p.acceleration_psd));
+        predicted.pos.iter_mut().for_each(|a| a.predict(dt, p.acceleration_psd, p.jerk_psd));
         predicted.rot.iter_mut().for_each(|a| a.predict(dt, p.angular_acceleration_psd));
         let turn = Vector3::new(predicted.rot[0].x, predicted.rot[1].x, predicted.rot[2].x);
         predicted.orientation = exp_rotation(&turn) * predicted.orientation;
@@ -529,11 +634,11 @@ impl TargetFilter {
         // An axis along the line of sight is measured worse: its bound grows in proportion.
         let r_across = p.position_noise_m * p.position_noise_m;
         predicted.converged |= predicted.streak >= p.converge_updates
-            && predicted.pos.iter().zip(r_pos.iter()).all(|(a, r)| a.p[2] <= sv * (r / r_across))
+            && predicted.pos.iter().zip(r_pos.iter()).all(|(a, r)| a.var_v() <= sv * (r / r_across))
             && predicted.rot.iter().all(|a| a.p[2] <= sw);
         *track = predicted;
         if p.hold_motion && track.converged && !track.moving {
-            track.moving = Self::significant(p, &track.pos, p.deadband_m_s) != Vector3::zeros();
+            track.moving = Self::significant(p, &linear(&track.pos), p.deadband_m_s) != Vector3::zeros();
         }
         UpdateOutcome::Accepted
     }
@@ -552,9 +657,10 @@ impl TargetFilter {
         let r_rot = p.rotation_noise_rad * p.rotation_noise_rad;
         let (v0, w0) =
             (p.initial_speed_sd_m_s * p.initial_speed_sd_m_s, p.initial_rate_sd_rad_s * p.initial_rate_sd_rad_s);
+        let a0 = p.initial_accel_sd_m_s2 * p.initial_accel_sd_m_s2;
         let t = measured.translation.vector;
         self.track = Some(Track {
-            pos: [Axis::start(t.x, r_pos[0], v0), Axis::start(t.y, r_pos[1], v0), Axis::start(t.z, r_pos[2], v0)],
+            pos: core::array::from_fn(|i| PosAxis::start(t[i], r_pos[i], v0, a0)),
             rot: [Axis::start(0.0, r_rot, w0); 3],
             orientation: measured.rotation,
             time_us,
@@ -575,10 +681,7 @@ impl TargetFilter {
 
     /// The estimated `^W ψ̇_M`, whether trusted or not (`None` without a track).
     pub fn velocity_estimate(&self) -> Option<TargetVelocity> {
-        self.track.as_ref().map(|t| TargetVelocity {
-            v: Vector3::new(t.pos[0].v, t.pos[1].v, t.pos[2].v),
-            w: Vector3::new(t.rot[0].v, t.rot[1].v, t.rot[2].v),
-        })
+        self.track.as_ref().map(|t| TargetVelocity { v: linear(&t.pos).0, w: angular(&t.rot).0 })
     }
 
     /// The trusted velocity, or `None` while the filter has not converged.
@@ -592,34 +695,48 @@ impl TargetFilter {
     pub fn feedforward_velocity(&self) -> TargetVelocity {
         let Some(track) = self.track.as_ref().filter(|t| t.converged) else { return TargetVelocity::ZERO };
         let p = &self.params;
-        let v = if track.moving { velocity_of(&track.pos) } else { Self::significant(p, &track.pos, p.deadband_m_s) };
-        TargetVelocity { v, w: Self::significant(p, &track.rot, p.deadband_rad_s) }
+        let lin = linear(&track.pos);
+        let v = if track.moving { lin.0 } else { Self::significant(p, &lin, p.deadband_m_s) };
+        let lead = Vector3::new(track.pos[0].a, track.pos[1].a, track.pos[2].a) * p.acceleration_lead_s;
+        let v = if v == Vector3::zeros() { v } else { v + lead };
+        TargetVelocity { v, w: Self::significant(p, &angular(&track.rot), p.deadband_rad_s) }
     }
 
-    /// The velocity of `axes` if it is outside the dead band and significant, else zero.
-    fn significant(p: &TargetFilterParams, axes: &[Axis; 3], deadband: f32) -> Vector3<f32> {
-        let v = velocity_of(axes);
-        let sigmas2: f32 = axes.iter().map(|a| a.v * a.v / a.p[2].max(f32::MIN_POSITIVE)).sum();
+    /// The velocity `(v, σ²)` if it is outside the dead band and significant, else zero.
+    fn significant(p: &TargetFilterParams, (v, var): &(Vector3<f32>, Vector3<f32>), deadband: f32) -> Vector3<f32> {
+        let v = *v;
+        let sigmas2: f32 = v.iter().zip(var.iter()).map(|(v, s2)| v * v / s2.max(f32::MIN_POSITIVE)).sum();
         let significant = sigmas2 >= p.significance_sigma * p.significance_sigma;
         if significant && v.dot(&v) >= deadband * deadband { v } else { Vector3::zeros() }
     }
 
-    /// [`TargetFilter::feedforward_velocity`] with only [`TargetFilterParams::depth_feedforward`]
-    /// of its linear part along the unit line of sight `sight` (world frame, camera to block)
-    /// kept: `v − (1 − d)(v·u) u`.
+    /// [`TargetFilter::feedforward_velocity`] with its linear part along the line of sight
+    /// `sight` (world frame, camera to block; `u` its unit vector) kept only as far as the world
+    /// axes seen across the sight say, plus [`TargetFilterParams::depth_feedforward`] `d` of
+    /// the rest: `v − (1 − d)(v·u − Σᵢ (1 − uᵢ²) vᵢ uᵢ) u`. A world axis across the view
+    /// (`uᵢ = 0`) is measured well, and its velocity's part along a slanted sight is real
+    /// motion in depth; an axis along the sight (`uᵢ = ±1`) is measured by the stereo depth.
     pub fn feedforward_velocity_seen_along(&self, sight: &Vector3<f32>) -> TargetVelocity {
         let mut vel = self.feedforward_velocity();
-        let n2 = sight.dot(sight);
-        if n2 > 1e-12 && vel.v != Vector3::zeros() {
-            let u = sight / math::sqrt(n2);
-            vel.v -= u * (vel.v.dot(&u) * (1.0 - self.params.depth_feedforward));
-        }
+        vel.v = self.seen_along(vel.v, sight);
         vel
     }
 
+    /// `v` with its part along the line of sight `sight` kept as the feedforward keeps it.
+    fn seen_along(&self, v: Vector3<f32>, sight: &Vector3<f32>) -> Vector3<f32> {
+        let Some(u) = unit(sight).filter(|_| v != Vector3::zeros()) else { return v };
+        // What the world axes say along the sight, each weighed by the share of it the camera
+        // sees across the sight (`1 − uᵢ²`): an axis across the view is measured well, and its
+        // velocity's part along the sight is real motion in depth.
+        let across: f32 = (0..3).map(|i| (1.0 - u[i] * u[i]) * v[i] * u[i]).sum();
+        v - u * ((v.dot(&u) - across) * (1.0 - self.params.depth_feedforward))
+    }
+
     /// Hands the pose over to time `t_us`: the last accepted estimate moved by the trusted
-    /// velocity over `t − t_capture` (held still while not trusted), seen from the camera at
-    /// the joint state extrapolated to `t` (`q + q̇ (t − joints.time_us)`).
+    /// velocity over `τ = t − t_capture` (held still while not trusted), seen from the camera at
+    /// the joint state extrapolated to `t` (`q + q̇ (t − joints.time_us)`). The linear velocity
+    /// is the mean over `τ` (`v + a τ/2`), its part along the line of sight from that camera
+    /// kept as [`TargetFilter::feedforward_velocity_seen_along`] keeps it.
     ///
     /// # Errors
     /// [`PredictError::NoTrack`] or [`PredictError::NonFiniteJoint`].
@@ -635,16 +752,21 @@ impl TargetFilter {
             return Err(PredictError::NonFiniteJoint);
         }
         let trusted = self.is_trusted();
-        let velocity =
+        let mut velocity =
             if trusted { self.velocity_estimate().unwrap_or(TargetVelocity::ZERO) } else { TargetVelocity::ZERO };
         let tau = seconds_between(track.last_time_us, t_us);
+        let dtj = seconds_between(joints.time_us, t_us);
+        let q: [f32; DOF] = core::array::from_fn(|i| joints.q[i] + joints.qd[i] * dtj);
+        let camera = chain.forward(&q) * flange_to_camera;
+        if trusted {
+            let accel = Vector3::new(track.pos[0].a, track.pos[1].a, track.pos[2].a);
+            let sight = track.last.translation.vector - camera.translation.vector;
+            velocity.v = self.seen_along(velocity.v + accel * (0.5 * tau), &sight);
+        }
         let target = Isometry3::from_parts(
             Translation3::from(track.last.translation.vector + velocity.v * tau),
             exp_rotation(&(velocity.w * tau)) * track.last.rotation,
         );
-        let dtj = seconds_between(joints.time_us, t_us);
-        let q: [f32; DOF] = core::array::from_fn(|i| joints.q[i] + joints.qd[i] * dtj);
-        let camera = chain.forward(&q) * flange_to_camera;
         let psi = Psi::from_isometry(&(camera.inverse() * target));
         Ok(Prediction { psi, velocity, trusted, base_time_us: track.last_time_us })
     }
@@ -656,14 +778,25 @@ impl Default for TargetFilter {
     }
 }
 
-/// The velocity `[ẋ₀, ẋ₁, ẋ₂]` of three axes.
-fn velocity_of(axes: &[Axis; 3]) -> Vector3<f32> {
-    Vector3::new(axes[0].v, axes[1].v, axes[2].v)
+/// The velocity `[ẋ₀, ẋ₁, ẋ₂]` of the position axes and its variances.
+fn linear(axes: &[PosAxis; 3]) -> (Vector3<f32>, Vector3<f32>) {
+    (Vector3::new(axes[0].v, axes[1].v, axes[2].v), Vector3::new(axes[0].p[3], axes[1].p[3], axes[2].p[3]))
+}
+
+/// The angular velocity of the rotation axes and its variances.
+fn angular(axes: &[Axis; 3]) -> (Vector3<f32>, Vector3<f32>) {
+    (Vector3::new(axes[0].v, axes[1].v, axes[2].v), Vector3::new(axes[0].p[2], axes[1].p[2], axes[2].p[2]))
 }
 
 /// `t1 − t0` in seconds (negative when `t1 < t0`).
 fn seconds_between(t0_us: u64, t1_us: u64) -> f32 {
     if t1_us >= t0_us { (t1_us - t0_us) as f32 * 1e-6 } else { -((t0_us - t1_us) as f32 * 1e-6) }
+}
+
+/// The unit vector along `v` (a line of sight), `None` for a (near) zero vector.
+fn unit(v: &Vector3<f32>) -> Option<Vector3<f32>> {
+    let n2 = v.dot(v);
+    if n2 > 1e-12 { Some(v / math::sqrt(n2)) } else { None }
 }
 
 fn finite(iso: &Isometry3<f32>) -> bool {

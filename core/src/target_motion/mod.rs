@@ -377,7 +377,8 @@ struct Track {
     moving: bool,
 }
 
-/// Constant-velocity Kalman filter of the target's world pose (see the module docs).
+/// Kalman filter of the target's world pose: constant acceleration per position axis, constant
+/// velocity per rotation axis (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TargetFilter {
     params: TargetFilterParams,

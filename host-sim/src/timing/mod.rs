@@ -139,6 +139,9 @@ struct Results {
 pub fn run(out: &Path, board: Board) -> Result<()> {
     let timing_elf = find_image(&board, TIMING_IMAGE)?;
     let firmware_elf = find_image(&board, FIRMWARE_IMAGE)?;
+    for image in [&timing_elf, &firmware_elf] {
+        qemu::warn_if_stale(&board, image);
+    }
     let qemu = find_qemu()?;
     let objdump = find_llvm_tool("llvm-objdump")?;
     fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;

@@ -62,6 +62,57 @@ pub fn find_image(board: &Board, name: &str) -> Result<PathBuf> {
     )
 }
 
+/// The sources an image is built from: `core/` and `hil-stubs/` (their `src/` and manifests),
+/// the memory maps, and the lock file.
+fn image_sources() -> Vec<PathBuf> {
+    let ws = workspace();
+    let mut roots = vec![ws.join("Cargo.lock"), ws.join("memory.x")];
+    for krate in ["core", "hil-stubs"] {
+        roots.push(ws.join(krate).join("src"));
+        roots.push(ws.join(krate).join("Cargo.toml"));
+    }
+    if let Ok(entries) = fs::read_dir(ws.join("hil-stubs")) {
+        roots.extend(entries.flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|x| x == "x")));
+    }
+    roots
+}
+
+/// The newest file under `roots` (files or directories, walked recursively) modified after
+/// `image` was written, if any: a sign that `image` was built from older sources.
+pub fn newer_source(image: &Path, roots: &[PathBuf]) -> Option<PathBuf> {
+    let built = fs::metadata(image).and_then(|m| m.modified()).ok()?;
+    let mut newest: Option<(std::time::SystemTime, PathBuf)> = None;
+    let mut stack: Vec<PathBuf> = roots.to_vec();
+    while let Some(path) = stack.pop() {
+        let Ok(meta) = fs::metadata(&path) else { continue };
+        if meta.is_dir() {
+            if let Ok(entries) = fs::read_dir(&path) {
+                stack.extend(entries.flatten().map(|e| e.path()));
+            }
+        } else if let Ok(t) = meta.modified()
+            && t > built
+            && newest.as_ref().is_none_or(|(n, _)| t > *n)
+        {
+            newest = Some((t, path));
+        }
+    }
+    newest.map(|(_, p)| p)
+}
+
+/// Warns (on stderr) when `image` is older than a source it is built from: `evorec timing`
+/// builds nothing, so a stale image would be measured without a word.
+pub fn warn_if_stale(board: &Board, image: &Path) {
+    if let Some(src) = newer_source(image, &image_sources()) {
+        eprintln!(
+            "timing: warning: {} is older than {} (changed after the build): the numbers are the old \
+             code's; rebuild with `{}`",
+            image.display(),
+            src.display(),
+            board.build_hint
+        );
+    }
+}
+
 /// The `.stack_sizes` build of image `name` by [`STACK_SIZES_HINT`](super::STACK_SIZES_HINT), if it exists.
 pub fn find_stack_sizes_image(board: &Board, name: &str) -> Option<PathBuf> {
     target_dirs(board)
@@ -378,5 +429,30 @@ mod tests {
             parse_output(&text.replace("tshift=1", "tshift=0")).unwrap().runs[0].stats().target_shift_call,
             None
         );
+    }
+
+    #[test]
+    fn a_source_changed_after_the_image_is_reported() {
+        let dir = tempfile::tempdir().unwrap();
+        let (image, src) = (dir.path().join("image.elf"), dir.path().join("src"));
+        fs::create_dir(&src).unwrap();
+        let (old, new) = (src.join("old.rs"), src.join("new.rs"));
+        for f in [&image, &old, &new] {
+            fs::write(f, "x").unwrap();
+        }
+        let t0 = std::time::SystemTime::UNIX_EPOCH + Duration::from_secs(1_000_000);
+        let at = |f: &Path, s: u64| {
+            fs::File::options().write(true).open(f).unwrap().set_modified(t0 + Duration::from_secs(s)).unwrap()
+        };
+        at(&old, 0);
+        at(&image, 10);
+        at(&new, 20);
+        let roots = [src.clone(), dir.path().join("missing")];
+        assert_eq!(newer_source(&image, &roots), Some(new.clone()));
+        // Built after every source: nothing to report.
+        at(&image, 30);
+        assert_eq!(newer_source(&image, &roots), None);
+        // A missing image is not stale (find_image reports it).
+        assert_eq!(newer_source(&dir.path().join("none.elf"), &roots), None);
     }
 }

@@ -43,6 +43,22 @@ pub const MIN_VISIBLE_COS: f32 = 0.1;
 /// it. Resolution-dependent on purpose.
 pub const MIN_FACE_PX: f32 = 4.0;
 
+/// A visible face's counts (its inner rows, and the outer rows of its silhouette edges) are
+/// weighted by how well it is seen: the weight ramps linearly from 0 at [`MIN_VISIBLE_COS`] to
+/// 1 at this cosine, and (the smaller of the two) from 0 at [`MIN_FACE_PX`] to 1 at
+/// [`FULL_FACE_PX`]. A face turning into view then enters the score gradually instead of all
+/// at once with rows that a sliver of a few pixels cannot hold, where the true pose would
+/// score below one turned a little to hide that face.
+pub const FULL_VISIBLE_COS: f32 = 0.2;
+
+/// See [`FULL_VISIBLE_COS`]: the face width (pixels, as [`MIN_FACE_PX`]) from which a face
+/// counts fully.
+pub const FULL_FACE_PX: f32 = 8.0;
+
+/// The fixed-point unit of a face's weight: weights are whole multiples of `1 / FACE_WEIGHT_ONE`,
+/// so that the weighted counts stay integers (exact, the same on every target).
+pub const FACE_WEIGHT_ONE: u32 = 256;
+
 /// Sample points closer to the camera plane than this (metres) make a camera's score zero.
 pub const MIN_DEPTH_M: f32 = 0.05;
 

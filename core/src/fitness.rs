@@ -3,16 +3,21 @@
 //! For one camera with the model at pose `(R, t)` in that camera's frame:
 //!
 //! ```text
-//! F_c = max(0, Σ_k∈visible Σ_{p ∈ S_in,k} δ(h(p) ≈ b_k)  −  Σ_{p ∈ S_out} δ(h(p) ≈ any visible b_k)) / H
-//! H   = G² · (number of visible faces)
+//! F_c = max(0, Σ_k∈visible w_k (Σ_{p ∈ S_in,k} δ(h(p) ≈ b_k)  −  Σ_{p ∈ S_out,k} δ(h(p) ≈ any visible b_k))) / H
+//! H   = Σ_k∈visible w_k · |S_in,k|
 //! F   = (F_L + F_R) / 2
 //! ```
 //!
 //! where `≈` is the [`HueLut`] tolerance band, a face is visible when it faces the camera at
-//! less than ~84° ([`MIN_VISIBLE_COS`]) and spans at least [`MIN_FACE_PX`] pixels, `S_in,k` the inner rows of face `k`, `H` their
-//! number on the visible faces, and `S_out` the outer rows on silhouette edges only (see
-//! [`crate::model`]). A pose whose block is not entirely in front of a camera scores 0 in that
-//! camera.
+//! less than ~84° ([`MIN_VISIBLE_COS`]) and spans at least [`MIN_FACE_PX`] pixels, `S_in,k` the
+//! inner rows of face `k`, `S_out,k` the outer rows on its silhouette edges (see
+//! [`crate::model`]), and `w_k ∈ (0, 1]` the face's weight. With every `w_k = 1` this is the
+//! paper's eq. 34. The weight (our addition) ramps up as
+//! a face turns into view ([`FULL_VISIBLE_COS`], [`FULL_FACE_PX`]): a face seen as a sliver of
+//! a few pixels cannot hold its rows, and counted at full weight it made the true pose score
+//! below a pose turned a degree or two to hide it (the x/pitch excursions of the README's
+//! link-reliability section). A pose whose block is not entirely in front of a camera scores 0
+//! in that camera.
 //!
 //! **Bounded work.** Of each pair of opposite faces exactly one can face a camera, so each
 //! camera evaluates three faces (the one of each pair on the camera's side): on the board their inner rows
@@ -47,13 +52,20 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::camera::{Pinhole, StereoRig};
-use crate::config::{INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX, MIN_VISIBLE_COS, NO_HUE, OUTER_OFFSETS_M};
+use crate::config::{
+    FACE_WEIGHT_ONE, FULL_FACE_PX, FULL_VISIBLE_COS, INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX, MIN_VISIBLE_COS, NO_HUE,
+    OUTER_OFFSETS_M,
+};
 use crate::hue::HueLut;
 use crate::image::{Image, PixelFormat};
 use crate::model::{FACES, MAX_OUTER_EDGES, SurfaceStrips};
 use crate::pose::Psi;
 
 /// Match counts of one camera.
+///
+/// The raw counts are for diagnostics; the score uses the weighted ones, in which every
+/// visible face's counts are scaled by its weight (see [`FULL_VISIBLE_COS`]), in units of
+/// `1 / FACE_WEIGHT_ONE` point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Counts {
     /// Inner points whose hue matched their face (visible faces only).
@@ -64,16 +76,23 @@ pub struct Counts {
     pub strip_matched: u32,
     /// Bitmask of the faces found visible.
     pub visible: u8,
+    /// `Σ_k w_k · (inner points of face k that matched)`.
+    pub weighted_matched: u32,
+    /// `Σ_k w_k · (contour points on face k's silhouette edges that matched)`.
+    pub weighted_strip: u32,
+    /// `Σ_k w_k · (inner points of face k)`: the weighted `H`.
+    pub weighted_total: u32,
 }
 
 impl Counts {
-    /// `F_c = max(0, matched − strip_matched) / H`, or 0 when no face is visible.
+    /// `F_c = max(0, matched − strip_matched) / H` over the weighted counts, or 0 when no face
+    /// is visible. With every visible face at full weight it is the paper's eq. 34 exactly.
     pub fn score(&self) -> f32 {
-        if self.inner_total == 0 {
+        if self.weighted_total == 0 {
             return 0.0;
         }
-        let net = self.inner_matched.saturating_sub(self.strip_matched);
-        net as f32 / self.inner_total as f32
+        let net = self.weighted_matched.saturating_sub(self.weighted_strip);
+        net as f32 / self.weighted_total as f32
     }
 }
 
@@ -415,6 +434,23 @@ fn min_finite(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
 
+/// The weight of a face, `0..=FACE_WEIGHT_ONE` (see [`FULL_VISIBLE_COS`]), from the distance
+/// `dist > 0` of the camera outside the face's plane, the squared distance `c2 > 0` to its
+/// centre and `focal · side` (its narrowest side): its cosine to the line of sight is
+/// `dist / |c|` and its width in pixels about `focal · side · cos / |c|`. 0 below
+/// [`MIN_VISIBLE_COS`] or [`MIN_FACE_PX`] (the face is hidden).
+#[inline(always)]
+fn face_weight(dist: f32, c2: f32, focal_side: f32) -> u32 {
+    let inv = 1.0 / libm::sqrtf(c2);
+    let cos = dist * inv;
+    let px = focal_side * cos * inv;
+    let ramp = |x: f32, lo: f32, hi: f32| (x - lo) / (hi - lo);
+    let w = min_finite(ramp(cos, MIN_VISIBLE_COS, FULL_VISIBLE_COS), ramp(px, MIN_FACE_PX, FULL_FACE_PX));
+    // Truncating, saturating conversion (NaN → 0): 0 at or below either threshold.
+    let one = FACE_WEIGHT_ONE as f32;
+    (min_finite(w, 1.0) * one) as u32
+}
+
 /// Counts of one camera for the model at `(r, t)` in that camera's frame.
 ///
 /// The work is bounded by the same constant for every pose (on the board it is that
@@ -468,29 +504,25 @@ fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat, const WALK_ALL
         if pos { da < -ha } else { da > ha }
     };
 
-    // The face of each opposite pair that is on the camera's side, and whether it is visible.
+    // The face of each opposite pair that is on the camera's side, and its weight (0: hidden).
     let mut chosen = [0usize; 3];
-    let mut visible_mask = 0u8;
-    for (a, (ck, da)) in chosen.iter_mut().zip(d.iter()).enumerate() {
+    let mut weight = [0u32; 3];
+    for (a, ((ck, wk), da)) in chosen.iter_mut().zip(weight.iter_mut()).zip(d.iter()).enumerate() {
         let k = if *da < 0.0 { a } else { a + 3 };
         *ck = k;
         let dist = da.abs() - half[a];
         let sign = if k < 3 { 1.0 } else { -1.0 };
         let center = t + r.column(a) * (sign * half[a]);
         let c2 = center.dot(&center);
-        // Narrowest full side of the face, and its foreshortened size in pixels ≥ MIN_FACE_PX:
-        // f · side · (dist / |c|) / |c| ≥ MIN_FACE_PX.
+        // Narrowest full side of the face, and its foreshortened size in pixels.
         let side = 2.0 * min_finite(half[(a + 1) % 3], half[(a + 2) % 3]);
-        if in_front
-            && dist > 0.0
-            && dist * dist > MIN_VISIBLE_COS * MIN_VISIBLE_COS * c2
-            && focal * side * dist >= MIN_FACE_PX * c2
-        {
-            visible_mask |= 1 << k;
+        if in_front && dist > 0.0 && c2 > 0.0 {
+            *wk = face_weight(dist, c2, focal * side);
         }
     }
+    let visible_mask = (0..3).fold(0u8, |m, i| if weight[i] > 0 { m | 1 << chosen[i] } else { m });
 
-    let faces = FacePlan { chosen, visible_mask, front: core::array::from_fn(|k| front(k as u8)) };
+    let faces = FacePlan { chosen, weight, visible_mask, front: core::array::from_fn(|k| front(k as u8)) };
     let (fx, fy) = (cam.fx(), cam.fy());
     if cam.distortion().is_none() {
         // K with the pixel coordinates in 16.16 fixed point (scaled by 2¹⁶, exactly).
@@ -538,9 +570,11 @@ fn distortion_field_r2(cam: &Pinhole) -> f32 {
     2.0 * (dx * dx + dy * dy)
 }
 
-/// The faces one camera evaluates, which of them are visible, and which faces face it.
+/// The faces one camera evaluates, their weights, which of them are visible (weight > 0),
+/// and which faces face it.
 struct FacePlan {
     chosen: [usize; 3],
+    weight: [u32; 3],
     visible_mask: u8,
     front: [bool; FACES],
 }
@@ -570,7 +604,7 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
 
     let mut counts = Counts { visible: visible_mask, ..Counts::default() };
     let mut outer_edges = 0usize;
-    for &k in &faces.chosen {
+    for (&k, &w) in faces.chosen.iter().zip(faces.weight.iter()) {
         let visible = visible_mask & (1u8 << k) != 0;
         // The face's axis `a` and the two others in cyclic order, `b = a + 1`, `c = a + 2`
         // (matched, not indexed: no bounds check).
@@ -608,9 +642,13 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
             }
         }
         if visible {
+            let total = SurfaceStrips::<G>::INNER_PER_FACE as u32;
             counts.inner_matched += inner;
-            counts.inner_total += SurfaceStrips::<G>::INNER_PER_FACE as u32;
+            counts.inner_total += total;
             counts.strip_matched += outer;
+            counts.weighted_matched += w * inner;
+            counts.weighted_total += w * total;
+            counts.weighted_strip += w * outer;
         }
     }
     // Constant work (the board): the outer rows of the edges that did not count are walked on

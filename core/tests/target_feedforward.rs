@@ -44,8 +44,12 @@ fn render(rig: &StereoRig, psi: &Psi) -> (Vec<u8>, Vec<u8>) {
     (l, r)
 }
 
-/// Runs the sequence; returns the RMS position error (m) over frames 30.. and the tracker.
-fn run(mode: Feedforward) -> (f32, Tracker) {
+/// Frames at the end over which the filter's velocity is averaged (one frame's is noisy).
+const LAST: u64 = 20;
+
+/// Runs the sequence; returns the RMS position error (m) over frames 30.., the tracker, and
+/// the filter's mean world velocity over the last [`LAST`] frames (zero where it has none).
+fn run(mode: Feedforward) -> (f32, Tracker, Vector3<f32>) {
     let rig = rig();
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
     let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(3);
@@ -53,6 +57,7 @@ fn run(mode: Feedforward) -> (f32, Tracker) {
     tracker.reset_around(&truth(0), &[0.002, 0.002, 0.002, 0.004, 0.004, 0.004]).unwrap();
     let mut sq = 0.0;
     let mut n = 0;
+    let mut v_sum = Vector3::zeros();
     for k in 0..FRAMES {
         let (l, r) = render(&rig, &truth(k));
         let frame = StereoFrame {
@@ -67,14 +72,17 @@ fn run(mode: Feedforward) -> (f32, Tracker) {
             sq += (e.psi.translation() - truth(k).translation()).norm_squared();
             n += 1;
         }
+        if k >= FRAMES - LAST {
+            v_sum += tracker.target_filter().velocity().map_or(Vector3::zeros(), |v| v.v);
+        }
     }
-    ((sq / n as f32).sqrt(), tracker)
+    ((sq / n as f32).sqrt(), tracker, v_sum / LAST as f32)
 }
 
 #[test]
 fn target_feedforward_follows_a_sliding_block() {
-    let (rms_ff, _) = run(Feedforward::On);
-    let (rms_target, tracker) = run(Feedforward::OnWithTarget);
+    let (rms_ff, ..) = run(Feedforward::On);
+    let (rms_target, tracker, v_mean) = run(Feedforward::OnWithTarget);
     assert!(rms_target < 0.5 * rms_ff, "FF + target {rms_target} m vs FF {rms_ff} m");
     // The target term starts only once the ramping speed is significant against the filter's
     // own uncertainty (2σ, `TargetFilterParams::significance_sigma`): with the first, slow
@@ -87,11 +95,12 @@ fn target_feedforward_follows_a_sliding_block() {
     // the world velocity is the camera-frame one rotated by the flange's rotation).
     let filter = tracker.target_filter();
     assert!(filter.is_trusted());
-    let v = filter.velocity().unwrap().v;
     let cam = evorec_core::kinematics::PA10.forward(&[0.0; 7]);
     let expected = cam.rotation * Vector3::new(SPEED, 0.0, 0.0);
-    // (One frame's velocity of the filter with an acceleration state: 0.026 m/s off, measured.)
-    assert!((v - expected).norm() < 0.03, "v {v} vs {expected}");
+    // One frame's velocity is noisy (0.026 and 0.030 m/s off at the last frame, measured with
+    // the fitness before and after its face weights): the mean over the last frames is tested
+    // (0.002 m/s off, measured).
+    assert!((v_mean - expected).norm() < 0.01, "mean v {v_mean} vs {expected}");
 
     // Hand-over: the pose 50 ms after the last capture is ahead by about 5 mm.
     let last = (FRAMES - 1) * DT_US;
@@ -105,7 +114,7 @@ fn target_feedforward_follows_a_sliding_block() {
 
 #[test]
 fn a_reset_forgets_the_target_motion() {
-    let (_, mut tracker) = run(Feedforward::OnWithTarget);
+    let (_, mut tracker, _) = run(Feedforward::OnWithTarget);
     assert!(tracker.target_filter().is_trusted());
     tracker.reset_uniform();
     assert!(!tracker.target_filter().has_track());

@@ -266,8 +266,8 @@ fn a_blank_image_scores_zero() {
 
 #[test]
 fn score_clamps_at_zero() {
-    let c = Counts { inner_matched: 3, inner_total: 10, strip_matched: 7, visible: 1 };
+    let c = Counts { weighted_matched: 3, weighted_total: 10, weighted_strip: 7, visible: 1, ..Counts::default() };
     assert_eq!(c.score(), 0.0);
-    let c = Counts { inner_matched: 7, inner_total: 10, strip_matched: 2, visible: 1 };
+    let c = Counts { weighted_matched: 7, weighted_total: 10, weighted_strip: 2, visible: 1, ..Counts::default() };
     assert!((c.score() - 0.5).abs() < 1e-7);
 }

@@ -2,15 +2,16 @@
 //! synthetic sequence: a block sliding sideways in front of a still camera.
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::NO_HUE;
 use evorec_core::ga::SearchSpace;
-use evorec_core::image::HueImage;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
+use evorec_core::quat;
 use evorec_core::target_motion::PredictError;
-use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
-use evorec_core::{quat, synth};
+use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Vector3};
+
+mod common;
+use common::{frame, render};
 
 const DT_US: u64 = 33_000;
 const FRAMES: u64 = 100;
@@ -35,15 +36,6 @@ fn truth(k: u64) -> Psi {
     Psi::from_parts(&Vector3::new(-0.15 + travel(t), 0.01, 0.75), &q)
 }
 
-fn render(rig: &StereoRig, psi: &Psi) -> (Vec<u8>, Vec<u8>) {
-    let (w, h) = (usize::from(rig.right.width()), usize::from(rig.right.height()));
-    let iso = psi.try_to_isometry().unwrap();
-    let (mut l, mut r) = (vec![NO_HUE; w * h], vec![NO_HUE; w * h]);
-    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
-    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
-    (l, r)
-}
-
 /// Runs the sequence; returns the RMS position error (m) over frames 30.. and the tracker.
 fn run(mode: Feedforward) -> (f32, Tracker) {
     let rig = rig();
@@ -55,10 +47,7 @@ fn run(mode: Feedforward) -> (f32, Tracker) {
     let mut n = 0;
     for k in 0..FRAMES {
         let (l, r) = render(&rig, &truth(k));
-        let frame = StereoFrame {
-            left: HueImage::new_checked(&l[..], 640, 480).unwrap(),
-            right: HueImage::new_checked(&r[..], 640, 480).unwrap(),
-        };
+        let frame = frame(&l, &r, 640, 480);
         let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: k * DT_US };
         let dt = if k == 0 { 0.0 } else { DT_US as f32 * 1e-6 };
         let e = tracker.step(&frame, &joints, dt, mode).unwrap();

@@ -6,7 +6,7 @@ use evorec_core::ga::SearchSpace;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
-use evorec_core::target_motion::PredictError;
+use evorec_core::target_motion::{PredictError, TargetVelocity};
 use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Vector3};
 
@@ -81,6 +81,13 @@ fn target_feedforward_follows_a_sliding_block() {
     let expected = cam.rotation * Vector3::new(SPEED, 0.0, 0.0);
     // (One frame's velocity of the filter with an acceleration state: 0.026 m/s off, measured.)
     assert!((v - expected).norm() < 0.03, "v {v} vs {expected}");
+    // What the next step would shift every individual by: that velocity seen along the line of
+    // sight to the elite, across which the block slides (so it is kept nearly whole).
+    let next = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: FRAMES * DT_US };
+    let shift = tracker.target_feedforward_velocity(&next);
+    let seen = filter.feedforward_velocity_seen_along(&(cam.rotation * tracker.population()[0].translation()));
+    assert!((shift.v - seen.v).norm() < 1e-6 && shift.w == seen.w, "{shift:?} vs {seen:?}");
+    assert!((shift.v - expected).norm() < 0.03, "shift {} vs {expected}", shift.v);
 
     // Hand-over: the pose 50 ms after the last capture is ahead by about 5 mm.
     let last = (FRAMES - 1) * DT_US;
@@ -99,5 +106,6 @@ fn a_reset_forgets_the_target_motion() {
     tracker.reset_uniform();
     assert!(!tracker.target_filter().has_track());
     let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
+    assert_eq!(tracker.target_feedforward_velocity(&joints), TargetVelocity::ZERO);
     assert_eq!(tracker.predict(&joints, 0), Err(PredictError::NoTrack));
 }

@@ -4,7 +4,7 @@
 //! invalid frame, joint sample or time step returns a [`StepError`] and leaves the population,
 //! the random generator and the generation counter exactly as they were.
 
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Matrix3};
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
@@ -21,7 +21,9 @@ use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
 use crate::status::{Status, StatusConfig, StatusError, StatusMonitor};
-use crate::target_motion::{FilterParamsError, PredictError, Prediction, TargetFilter, TargetFilterParams};
+use crate::target_motion::{
+    FilterParamsError, PredictError, Prediction, TargetFilter, TargetFilterParams, TargetVelocity,
+};
 
 /// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -417,6 +419,26 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.target.predict(&self.config.arm, &self.config.flange_to_camera, joints, t_us)
     }
 
+    /// The target velocity (world frame) by which a [`Tracker::step`] with
+    /// [`Feedforward::OnWithTarget`] on `joints` would shift every individual, next to the
+    /// camera's motion: the target filter's
+    /// [`TargetFilter::feedforward_velocity_seen_along`] the line of sight from the camera at
+    /// `joints.q` to the elite. [`TargetVelocity::ZERO`] means such a step shifts by the
+    /// camera's motion alone (as [`Feedforward::On`] does).
+    pub fn target_feedforward_velocity(&self, joints: &JointSample<DOF>) -> TargetVelocity {
+        let motion = feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
+        self.target_velocity_seen_from(&motion.r_wc)
+    }
+
+    /// [`Tracker::target_feedforward_velocity`] for the camera's world rotation `r_wc`
+    /// (`^W R_CR`): the one computation of the velocity the step applies.
+    fn target_velocity_seen_from(&self, r_wc: &Matrix3<f32>) -> TargetVelocity {
+        // The line of sight to the elite (index 0 after the last breed), in the world.
+        let elite = self.ga.individuals().first().copied().unwrap_or(Psi::IDENTITY);
+        let sight = r_wc * elite.translation();
+        self.target.feedforward_velocity_seen_along(&sight)
+    }
+
     /// Re-seeds the population around a known pose (the paper starts with the true pose
     /// known): the elite at `psi`, the others within `±spread` per gene. The status becomes
     /// [`Status::Tracking`]: the pose is known.
@@ -537,10 +559,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             Feedforward::OnWithTarget => {
                 let motion =
                     feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
-                // The line of sight to the elite (index 0 after the last breed), in the world.
-                let elite = self.ga.individuals().first().copied().unwrap_or(Psi::IDENTITY);
-                let sight = motion.r_wc * elite.translation();
-                let velocity = self.target.feedforward_velocity_seen_along(&sight);
+                let velocity = self.target_velocity_seen_from(&motion.r_wc);
                 let target = feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &velocity);
                 let shift = |psi: &mut Psi| {
                     let rate = feedforward::psi_rate_moving(&motion.twist, &target, psi);

@@ -4,32 +4,21 @@
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::NO_HUE;
 use evorec_core::ga::SearchSpace;
-use evorec_core::image::HueImage;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
+use evorec_core::quat;
 use evorec_core::status::Status;
-use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
-use evorec_core::{quat, synth};
+use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Vector3};
+
+mod common;
+use common::{frame, render};
 
 const W: u16 = 320;
 const H: u16 = 240;
 
 fn rig() -> StereoRig {
     StereoRig::parallel(Pinhole::new_checked(400.0, 400.0, 160.0, 120.0, W, H).unwrap(), 0.1).unwrap()
-}
-
-fn render(rig: &StereoRig, truth: &Psi) -> (Vec<u8>, Vec<u8>) {
-    let n = usize::from(W) * usize::from(H);
-    let iso = truth.try_to_isometry().unwrap();
-    let (mut l, mut r) = (vec![NO_HUE; n], vec![NO_HUE; n]);
-    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
-    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
-    (l, r)
-}
-
-fn frame<'a>(l: &'a [u8], r: &'a [u8]) -> StereoFrame<'a> {
-    StereoFrame { left: HueImage::new_checked(l, W, H).unwrap(), right: HueImage::new_checked(r, W, H).unwrap() }
 }
 
 fn tracker(seed: u64) -> Tracker<7, 40, 8> {
@@ -55,7 +44,7 @@ fn finds_the_block_says_so_loses_it_on_blank_frames_and_recovers() {
         // then trades depth against orientation for a few generations (1 px of disparity is
         // 16 mm at 0.8 m in this 320 x 240 rig) and settles within 10 mm by generation ~30.
         for i in 0..40 {
-            let e = t.step(&frame(&l, &r), &STILL, 0.033, Feedforward::Off).unwrap();
+            let e = t.step(&frame(&l, &r, W, H), &STILL, 0.033, Feedforward::Off).unwrap();
             if e.status == Status::Tracking && first_tracking.is_none() {
                 first_tracking = Some(i);
             }
@@ -68,14 +57,14 @@ fn finds_the_block_says_so_loses_it_on_blank_frames_and_recovers() {
         assert!(err < 0.01, "seed {seed}: {err} m");
         // The block disappears: lost at once, never tracking while it is gone.
         for _ in 0..10 {
-            let e = t.step(&frame(&blank, &blank), &STILL, 0.033, Feedforward::Off).unwrap();
+            let e = t.step(&frame(&blank, &blank, W, H), &STILL, 0.033, Feedforward::Off).unwrap();
             assert_eq!(e.status, Status::Lost);
             assert_eq!(e.fitness, 0.0);
         }
         // It comes back: tracking again after the confirmation generations.
         let mut back = None;
         for i in 0..10 {
-            let e = t.step(&frame(&l, &r), &STILL, 0.033, Feedforward::Off).unwrap();
+            let e = t.step(&frame(&l, &r, W, H), &STILL, 0.033, Feedforward::Off).unwrap();
             if e.status == Status::Tracking && back.is_none() {
                 back = Some(i);
             }
@@ -92,7 +81,7 @@ fn a_known_start_is_tracking_and_set_status_forces_a_status() {
     let mut t = tracker(4);
     t.reset_around(&truth, &[0.002; 6]).unwrap();
     assert_eq!(t.status(), Status::Tracking);
-    let e = t.step(&frame(&l, &r), &STILL, 0.0, Feedforward::Off).unwrap();
+    let e = t.step(&frame(&l, &r, W, H), &STILL, 0.0, Feedforward::Off).unwrap();
     assert_eq!(e.status, Status::Tracking);
     t.set_status(Status::Lost);
     assert_eq!(t.status(), Status::Lost);

@@ -8,26 +8,18 @@
 //! simulator tests and `evorec paper`). So these tests use `Tracker<7, 40, 8>`.
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::NO_HUE;
 use evorec_core::ga::{GaParams, SearchSpace};
-use evorec_core::image::HueImage;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
-use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
-use evorec_core::{quat, synth};
+use evorec_core::quat;
+use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Vector3};
+
+mod common;
+use common::{frame, render};
 
 /// The tracker of these tests: PA-10, population 40, rows of 8 points.
 type Acquiring = Tracker<7, 40, 8>;
-
-fn render(rig: &StereoRig, truth: &Psi) -> (Vec<u8>, Vec<u8>) {
-    let (w, h) = (usize::from(rig.right.width()), usize::from(rig.right.height()));
-    let iso = truth.try_to_isometry().unwrap();
-    let (mut l, mut r) = (vec![NO_HUE; w * h], vec![NO_HUE; w * h]);
-    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
-    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
-    (l, r)
-}
 
 fn run(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: bool) -> (Psi, Psi, f32) {
     run_with(width, height, f, seed, frames, verbose, GaParams::DEFAULT)
@@ -46,10 +38,7 @@ fn run_with(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: 
     let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
     let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
     let (l, r) = render(&rig, &truth);
-    let frame = StereoFrame {
-        left: HueImage::new_checked(&l[..], width, height).unwrap(),
-        right: HueImage::new_checked(&r[..], width, height).unwrap(),
-    };
+    let frame = frame(&l, &r, width, height);
     // Start 40 mm and ~6° off.
     let mut start = truth;
     start.0[0] += 0.03;
@@ -162,10 +151,7 @@ fn landscape_probe() {
     let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
     let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
     let (l, r) = render(&rig, &truth);
-    let frame = StereoFrame {
-        left: HueImage::new_checked(&l[..], w, h).unwrap(),
-        right: HueImage::new_checked(&r[..], w, h).unwrap(),
-    };
+    let frame = frame(&l, &r, w, h);
     for (name, d) in [
         ("z along ray", [0.0, 0.0, 0.04, 0.0, 0.0, 0.0]),
         ("stuck", [0.0072, 0.0026, 0.037, 0.0078, 0.0245, -0.0085]),
@@ -202,10 +188,7 @@ fn in_place_construction_equals_new() {
     other.hue_tolerance = 9;
     let truth = Psi::new([0.01, 0.0, 0.6], [0.1, 0.2, 0.0]);
     let (l, r) = render(&rig, &truth);
-    let frame = StereoFrame {
-        left: HueImage::new_checked(&l[..], 160, 120).unwrap(),
-        right: HueImage::new_checked(&r[..], 160, 120).unwrap(),
-    };
+    let frame = frame(&l, &r, 160, 120);
     let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
     let mut reference: Acquiring = Tracker::new(config).unwrap();
     let expected = reference.step(&frame, &joints, 0.0, Feedforward::Off).unwrap();

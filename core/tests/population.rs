@@ -1,14 +1,16 @@
 //! The population size is chosen at run time up to the tracker's compiled capacity `P`.
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::{DEFAULT_POPULATION, NO_HUE, POPULATION_CAPACITY};
+use evorec_core::config::{DEFAULT_POPULATION, POPULATION_CAPACITY};
 use evorec_core::ga::{GaError, GaParams, SearchSpace};
-use evorec_core::image::HueImage;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
-use evorec_core::tracker::{ConfigError, Estimate, Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
-use evorec_core::{quat, synth};
+use evorec_core::quat;
+use evorec_core::tracker::{ConfigError, Estimate, Feedforward, JointSample, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Vector3};
+
+mod common;
+use common::{frame, render};
 
 const W: u16 = 160;
 const H: u16 = 120;
@@ -34,22 +36,10 @@ fn truth() -> Psi {
     Psi::from_parts(&Vector3::new(0.02, -0.01, 0.7), &q)
 }
 
-fn frames(c: &TrackerConfig<7>) -> (Vec<u8>, Vec<u8>) {
-    let iso = truth().try_to_isometry().unwrap();
-    let n = usize::from(W) * usize::from(H);
-    let (mut l, mut r) = (vec![NO_HUE; n], vec![NO_HUE; n]);
-    synth::render_block(&Block::PAPER, &c.rig.right, &iso, &mut r).unwrap();
-    synth::render_block(&Block::PAPER, &c.rig.left, &(c.rig.left_from_right * iso), &mut l).unwrap();
-    (l, r)
-}
-
 fn track<const P: usize>(population: usize, steps: usize) -> Vec<Estimate> {
     let c = config(population);
-    let (l, r) = frames(&c);
-    let frame = StereoFrame {
-        left: HueImage::new_checked(&l[..], W, H).unwrap(),
-        right: HueImage::new_checked(&r[..], W, H).unwrap(),
-    };
+    let (l, r) = render(&c.rig, &truth());
+    let frame = frame(&l, &r, W, H);
     let mut t: Tracker<7, P, 5> = Tracker::new(c).unwrap();
     assert_eq!(t.population().len(), population);
     t.reset_around(&truth(), &[0.01, 0.01, 0.01, 0.02, 0.02, 0.02]).unwrap();

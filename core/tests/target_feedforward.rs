@@ -2,15 +2,16 @@
 //! synthetic sequence: a block sliding sideways in front of a still camera.
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::NO_HUE;
 use evorec_core::ga::SearchSpace;
-use evorec_core::image::HueImage;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
-use evorec_core::target_motion::PredictError;
-use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
-use evorec_core::{quat, synth};
+use evorec_core::quat;
+use evorec_core::target_motion::{PredictError, TargetVelocity};
+use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Vector3};
+
+mod common;
+use common::{frame, render};
 
 const DT_US: u64 = 33_000;
 const FRAMES: u64 = 100;
@@ -35,15 +36,6 @@ fn truth(k: u64) -> Psi {
     Psi::from_parts(&Vector3::new(-0.15 + travel(t), 0.01, 0.75), &q)
 }
 
-fn render(rig: &StereoRig, psi: &Psi) -> (Vec<u8>, Vec<u8>) {
-    let (w, h) = (usize::from(rig.right.width()), usize::from(rig.right.height()));
-    let iso = psi.try_to_isometry().unwrap();
-    let (mut l, mut r) = (vec![NO_HUE; w * h], vec![NO_HUE; w * h]);
-    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
-    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
-    (l, r)
-}
-
 /// Frames at the end over which the filter's velocity is averaged (one frame's is noisy).
 const LAST: u64 = 20;
 
@@ -60,10 +52,7 @@ fn run(mode: Feedforward) -> (f32, Tracker, Vector3<f32>) {
     let mut v_sum = Vector3::zeros();
     for k in 0..FRAMES {
         let (l, r) = render(&rig, &truth(k));
-        let frame = StereoFrame {
-            left: HueImage::new_checked(&l[..], 640, 480).unwrap(),
-            right: HueImage::new_checked(&r[..], 640, 480).unwrap(),
-        };
+        let frame = frame(&l, &r, 640, 480);
         let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: k * DT_US };
         let dt = if k == 0 { 0.0 } else { DT_US as f32 * 1e-6 };
         let e = tracker.step(&frame, &joints, dt, mode).unwrap();
@@ -101,6 +90,13 @@ fn target_feedforward_follows_a_sliding_block() {
     // the fitness before and after its face weights): the mean over the last frames is tested
     // (0.002 m/s off, measured).
     assert!((v_mean - expected).norm() < 0.01, "mean v {v_mean} vs {expected}");
+    // What the next step would shift every individual by: that velocity seen along the line of
+    // sight to the elite, across which the block slides (so it is kept nearly whole).
+    let next = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: FRAMES * DT_US };
+    let shift = tracker.target_feedforward_velocity(&next);
+    let seen = filter.feedforward_velocity_seen_along(&(cam.rotation * tracker.population()[0].translation()));
+    assert!((shift.v - seen.v).norm() < 1e-6 && shift.w == seen.w, "{shift:?} vs {seen:?}");
+    assert!((shift.v - expected).norm() < 0.03, "shift {} vs {expected}", shift.v);
 
     // Hand-over: the pose 50 ms after the last capture is ahead by about 5 mm.
     let last = (FRAMES - 1) * DT_US;
@@ -119,5 +115,6 @@ fn a_reset_forgets_the_target_motion() {
     tracker.reset_uniform();
     assert!(!tracker.target_filter().has_track());
     let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
+    assert_eq!(tracker.target_feedforward_velocity(&joints), TargetVelocity::ZERO);
     assert_eq!(tracker.predict(&joints, 0), Err(PredictError::NoTrack));
 }

@@ -623,8 +623,9 @@ impl fmt::Display for DeadlineReport {
 /// `GEN p=40 g=8 k=3 kind=blank status=lost method=ff+target tshift=1 call=… ff=… eval=… breed=…
 /// stack=… fitness=…`: the status the generation started in, the feedforward mode
 /// ([`method_name`]) and whether the generation fed a non-zero target velocity forward
-/// (`tshift`: the tracker's target filter held a trusted, significant velocity when the
-/// generation began), ticks of the whole `step_probed` call and of its three phases, the painted
+/// (`tshift`: `Tracker::target_feedforward_velocity` at the generation's joint sample, the
+/// target filter's trusted, significant velocity seen along the line of sight to the elite,
+/// which the generation adds to every individual's shift, is not zero), ticks of the whole `step_probed` call and of its three phases, the painted
 /// stack high-water mark of the generation (bytes below the top of RAM) and the estimate's
 /// fitness.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -22,3 +22,13 @@ impl<E: fmt::Display> From<E> for Failure {
 pub fn fail(msg: impl Into<String>) -> Failure {
     Failure(msg.into())
 }
+
+/// Whether the HIL tests are to be skipped (`EVOREC_SKIP_HIL=1`, as the tests' docs say);
+/// when they are, says so on stdout, naming `test`.
+pub fn hil_skipped(test: &str) -> bool {
+    let skip = std::env::var_os("EVOREC_SKIP_HIL").is_some_and(|v| v == "1");
+    if skip {
+        println!("{test} skipped: EVOREC_SKIP_HIL=1");
+    }
+    skip
+}

@@ -184,8 +184,7 @@ fn bits(e: &Estimate) -> ([u32; 6], u32, u32) {
 
 #[test]
 fn firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
-    if std::env::var_os("EVOREC_SKIP_HIL").is_some_and(|v| v == "1") {
-        println!("hil_equivalence skipped: EVOREC_SKIP_HIL=1");
+    if evorec_tests::hil_skipped("hil_equivalence") {
         return Ok(());
     }
     equivalence(&build_firmware(BoardProfile::M4)?, BoardProfile::M4)
@@ -196,8 +195,7 @@ fn firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
 /// (a no-op when up to date), or taken from `EVOREC_M7_FIRMWARE_ELF`.
 #[test]
 fn m7_firmware_estimates_are_bit_identical_to_the_host() -> Result<(), Failure> {
-    if std::env::var_os("EVOREC_SKIP_HIL").is_some_and(|v| v == "1") {
-        println!("hil_equivalence (M7) skipped: EVOREC_SKIP_HIL=1");
+    if evorec_tests::hil_skipped("hil_equivalence (M7)") {
         return Ok(());
     }
     let elf = match std::env::var_os("EVOREC_M7_FIRMWARE_ELF") {

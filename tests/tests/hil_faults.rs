@@ -25,11 +25,7 @@ fn scenario(seconds: f64) -> Scenario {
 }
 
 fn skip() -> bool {
-    let skip = std::env::var_os("EVOREC_SKIP_HIL").is_some();
-    if skip {
-        println!("EVOREC_SKIP_HIL is set: skipped");
-    }
-    skip
+    evorec_tests::hil_skipped("hil_faults")
 }
 
 fn options(to_firmware: Option<FaultConfig>, to_host: Option<FaultConfig>) -> HilOptions {

@@ -14,8 +14,7 @@ use evorec_sim::{experiment, hil, scenario::Scenario};
 
 #[test]
 fn hil_trace_equals_host_trace() {
-    if std::env::var_os("EVOREC_SKIP_HIL").is_some() {
-        println!("EVOREC_SKIP_HIL is set: skipped");
+    if evorec_tests::hil_skipped("hil_matches_run") {
         return;
     }
     // The simulated board (behind `evorec run` and `evorec hil`) delivers RGB565.

@@ -119,8 +119,7 @@ fn lock_step(hil: &mut HilSession, frames: &[Recorded]) -> Vec<Duration> {
 
 #[test]
 fn frames_at_twice_the_sustainable_rate_keep_latency_bounded_and_drops_counted() {
-    if std::env::var_os("EVOREC_SKIP_HIL").is_some() {
-        println!("EVOREC_SKIP_HIL is set: skipped");
+    if evorec_tests::hil_skipped("hil_overload") {
         return;
     }
     let (setup, frames) = scene(4.5);

@@ -57,8 +57,7 @@ fn assert_identical(method: Method, on_board: &ClosedLoopOutput, on_host: &Close
 
 #[test]
 fn hil_closed_loop_equals_host_closed_loop() {
-    if std::env::var_os("EVOREC_SKIP_HIL").is_some() {
-        println!("EVOREC_SKIP_HIL is set: skipped");
+    if evorec_tests::hil_skipped("hil_servo") {
         return;
     }
     let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));

@@ -1,10 +1,19 @@
-//! No import cycles between the top-level modules of a crate (the project's design rule).
+//! No import cycles between the modules of a crate (the project's design rule), at every level
+//! of nesting: between the top-level modules, and between the child modules of any one module
+//! (`acquire::refine` and `acquire::solve`, `timing::cycles` and `timing::flash`).
 //!
-//! Reads every crate's `src/` (not through the compiler): in each file outside `lib.rs` and
-//! `main.rs`, every `crate::NAME` path and every name of a `crate::{A, B::c}` group is an edge
-//! from the file's top-level module to `NAME`. Comments, string and character literals and
-//! `#[cfg(test)]` items (with the files of `#[cfg(test)] mod NAME;`) do not count: tests may
-//! reach anywhere. Any cycle fails the test, with its modules in order.
+//! Reads every crate's `src/` (not through the compiler). Every file outside `lib.rs`,
+//! `main.rs` and `bin/` is a module (`a.rs` and `a/mod.rs` are `a`, `a/b.rs` is `a::b`). Every
+//! path it names that starts with `crate::`, `super::`, `self::` or the name of one of its
+//! child modules, with every entry of a `{…}` group, is resolved to the deepest module it
+//! reaches. A file of module `M` naming module `T` is then an edge at the level of their
+//! deepest common ancestor `L`: from the child of `L` that holds `M` to the child of `L` that
+//! holds `T` (at the crate root: the top-level modules). Each level's graph must be acyclic.
+//! A module and its own descendants may name each other (a child sees its parent's items
+//! through `super::`, a parent declares and re-exports its children), as the crate root and
+//! the top-level modules do. Comments, string and character literals and `#[cfg(test)]` items
+//! (with the files of `#[cfg(test)] mod NAME;`) do not count: tests may reach anywhere. Any
+//! cycle fails the test, with its modules in order.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -13,6 +22,9 @@ use std::path::{Path, PathBuf};
 const CRATES: [&str; 3] = ["core", "host-sim", "hil-stubs"];
 
 type Graph = BTreeMap<String, BTreeSet<String>>;
+
+/// A module's path from the crate root (`["acquire", "refine"]`; empty for the root).
+type ModPath = Vec<String>;
 
 /// `text` without comments and with string and character literals blanked (their quotes kept).
 fn strip_comments_and_literals(text: &str) -> String {
@@ -130,41 +142,99 @@ fn strip_test_items(code: &str) -> (String, Vec<String>) {
     (out, test_mods)
 }
 
-/// The top-level modules named by `crate::` paths in `code`.
-fn crate_refs(code: &str) -> BTreeSet<String> {
-    let mut refs = BTreeSet::new();
-    let ident = |s: &str| s.chars().take_while(|ch| ch.is_alphanumeric() || *ch == '_').collect::<String>();
-    for (at, _) in code.match_indices("crate::") {
-        if code[..at].chars().next_back().is_some_and(|ch| ch.is_alphanumeric() || ch == '_') {
-            continue; // e.g. `evorec_crate::`
-        }
-        let after = code[at + "crate::".len()..].trim_start();
-        if let Some(group) = after.strip_prefix('{') {
-            // The first name of every entry at depth 0 of the group.
-            let mut depth = 0usize;
-            let mut expect = true;
+/// An identifier at the start of `s` (empty if there is none).
+fn ident(s: &str) -> &str {
+    let end = s.find(|ch: char| !(ch.is_alphanumeric() || ch == '_')).unwrap_or(s.len());
+    &s[..end]
+}
+
+/// The paths of the use tree or path expression `tail` (after its first `::`), each with
+/// `prefix` before it: `a::b`, `a::{b, c::d}`, `{self, e}`. A path ends where no `::` follows
+/// its last name (at `(`, `;`, `<`, `as`, `*`, …); `self` in a group is the group's prefix.
+fn tree_paths(tail: &str, prefix: &[String], out: &mut Vec<ModPath>) {
+    let mut path = prefix.to_vec();
+    let mut rest = tail.trim_start();
+    loop {
+        if let Some(group) = rest.strip_prefix('{') {
+            // Entries at depth 0, up to the closing brace.
+            let (mut depth, mut from) = (0usize, 0);
             for (k, ch) in group.char_indices() {
                 match ch {
                     '{' => depth += 1,
-                    '}' if depth == 0 => break,
-                    '}' => depth -= 1,
-                    ',' if depth == 0 => expect = true,
-                    ch if expect && depth == 0 && (ch.is_alphabetic() || ch == '_') => {
-                        refs.insert(ident(&group[k..]));
-                        expect = false;
+                    '}' | ',' if depth == 0 => {
+                        tree_paths(&group[from..k], &path, out);
+                        if ch == '}' {
+                            return;
+                        }
+                        from = k + 1;
                     }
+                    '}' => depth -= 1,
                     _ => {}
                 }
             }
-        } else {
-            let name = ident(after);
-            if !name.is_empty() {
-                refs.insert(name);
-            }
+            return;
+        }
+        let name = ident(rest);
+        if name.is_empty() {
+            break;
+        }
+        if name != "self" {
+            path.push(name.to_owned());
+        }
+        match rest[name.len()..].trim_start().strip_prefix("::") {
+            Some(next) => rest = next.trim_start(),
+            None => break,
         }
     }
-    refs.remove("self");
-    refs
+    out.push(path);
+}
+
+/// The module paths named in `code`, the code of module `here` whose child modules are
+/// `children`, as written from the crate root (not yet cut to a known module).
+fn named_paths(code: &str, here: &[String], children: &BTreeSet<String>) -> Vec<ModPath> {
+    let mut out = Vec::new();
+    let mut from = 0;
+    while let Some(k) = code[from..].find("::").map(|k| k + from) {
+        from = k + 2;
+        // The name before this `::`, which must start the path (nothing path-like before it).
+        let start = code[..k].rfind(|ch: char| !(ch.is_alphanumeric() || ch == '_')).map_or(0, |p| p + 1);
+        let first = &code[start..k];
+        let before = code[..start].trim_end();
+        // Not the middle of a path, nor a macro's `$name::` (its `$crate::` is `crate::`).
+        if first.is_empty() || before.ends_with("::") || (before.ends_with('$') && first != "crate") {
+            continue;
+        }
+        let mut base: ModPath = match first {
+            "crate" => Vec::new(),
+            "self" => here.to_vec(),
+            "super" => here[..here.len().saturating_sub(1)].to_vec(),
+            child if children.contains(child) => [here, &[child.to_owned()]].concat(),
+            _ => continue,
+        };
+        let mut tail = code[k + 2..].trim_start();
+        while let Some(next) = tail.strip_prefix("super").and_then(|t| t.trim_start().strip_prefix("::")) {
+            base.pop();
+            tail = next.trim_start();
+        }
+        tree_paths(tail, &base, &mut out);
+    }
+    out
+}
+
+/// `path` cut to the deepest module of `modules` it lies in (empty: the crate root).
+fn module_of(path: &[String], modules: &BTreeSet<ModPath>) -> ModPath {
+    (0..=path.len()).rev().map(|n| path[..n].to_vec()).find(|p| modules.contains(p)).unwrap_or_default()
+}
+
+/// The module of `file` in `src` (`None` for the crate roots `lib.rs`, `main.rs` and `bin/`).
+fn module_path(src: &Path, file: &Path) -> Option<ModPath> {
+    let rel = file.strip_prefix(src).ok()?.with_extension("");
+    let mut path: ModPath = rel.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
+    if path.last().is_some_and(|m| m == "mod") {
+        path.pop();
+    }
+    let top = path.first()?;
+    (top != "lib" && top != "main" && top != "bin").then_some(path)
 }
 
 /// The `.rs` files under `dir`, sorted.
@@ -186,19 +256,14 @@ fn rust_files(dir: &Path) -> Vec<PathBuf> {
     files
 }
 
-/// The top-level module of `file` in `src` (`None` for the crate roots `lib.rs`, `main.rs`).
-fn top_module(src: &Path, file: &Path) -> Option<String> {
-    let rel = file.strip_prefix(src).ok()?;
-    let top = rel.components().next()?.as_os_str().to_string_lossy().trim_end_matches(".rs").to_owned();
-    (top != "lib" && top != "main" && top != "bin").then_some(top)
-}
-
-/// The module graph of one crate's `src/`: top-level module → the modules it names.
-fn module_graph(src: &Path) -> Graph {
+/// The module graphs of one crate's `src/`, one per level: the modules whose children are the
+/// nodes (`""` for the crate root) → child → the children it names. Every module with children
+/// has its graph (maybe without edges).
+fn module_graphs(src: &Path) -> BTreeMap<String, Graph> {
     let mut parsed = Vec::new();
     let mut test_only: Vec<PathBuf> = Vec::new();
     for file in rust_files(src) {
-        let Some(top) = top_module(src, &file) else { continue };
+        let Some(module) = module_path(src, &file) else { continue };
         let text = std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("cannot read {}: {e}", file.display()));
         let (code, test_mods) = strip_test_items(&strip_comments_and_literals(&text));
         // `#[cfg(test)] mod NAME;` in `a/b.rs` or `a/b/mod.rs` is `a/b/NAME.rs` or `a/b/NAME/`.
@@ -211,20 +276,33 @@ fn module_graph(src: &Path) -> Graph {
             test_only.push(dir.join(format!("{m}.rs")));
             test_only.push(dir.join(&m));
         }
-        parsed.push((file, top, crate_refs(&code)));
+        parsed.push((file, module, code));
     }
-    let mut graph = Graph::new();
-    for (file, top, refs) in parsed {
-        let edges = graph.entry(top.clone()).or_default();
-        if !test_only.iter().any(|t| file.starts_with(t)) {
-            edges.extend(refs.into_iter().filter(|r| *r != top));
+    parsed.retain(|(file, _, _)| !test_only.iter().any(|t| file.starts_with(t)));
+    let modules: BTreeSet<ModPath> = parsed.iter().map(|(_, m, _)| m.clone()).collect();
+    let mut graphs: BTreeMap<String, Graph> = BTreeMap::new();
+    for m in &modules {
+        let (parent, child) = m.split_at(m.len() - 1);
+        graphs.entry(parent.join("::")).or_default().entry(child[0].clone()).or_default();
+    }
+    for (_, here, code) in &parsed {
+        let children: BTreeSet<String> = modules
+            .iter()
+            .filter(|m| m.len() == here.len() + 1 && m.starts_with(here))
+            .map(|m| m[here.len()].clone())
+            .collect();
+        for path in named_paths(code, here, &children) {
+            let target = module_of(&path, &modules);
+            let common = here.iter().zip(target.iter()).take_while(|(a, b)| a == b).count();
+            // A module naming itself, an ancestor or a descendant: not an edge between siblings.
+            if common == here.len() || common == target.len() {
+                continue;
+            }
+            let level = graphs.entry(here[..common].join("::")).or_default();
+            level.entry(here[common].clone()).or_default().insert(target[common].clone());
         }
     }
-    let modules: BTreeSet<String> = graph.keys().cloned().collect();
-    for edges in graph.values_mut() {
-        edges.retain(|m| modules.contains(m));
-    }
-    graph
+    graphs
 }
 
 /// One cycle of `graph` (its modules in order, the first repeated at the end), if any.
@@ -253,29 +331,52 @@ fn find_cycle(graph: &Graph) -> Option<Vec<String>> {
     graph.keys().find_map(|n| visit(n, graph, &mut done, &mut Vec::new()))
 }
 
+/// The cycles of every level of the crate at `src`, each as `level: a -> b -> a` with the
+/// modules' paths from the crate root.
+fn cycles_of(src: &Path) -> Vec<String> {
+    let mut cycles = Vec::new();
+    for (level, graph) in module_graphs(src) {
+        if let Some(c) = find_cycle(&graph) {
+            let full: Vec<String> =
+                c.iter().map(|m| if level.is_empty() { m.clone() } else { format!("{level}::{m}") }).collect();
+            cycles.push(full.join(" -> "));
+        }
+    }
+    cycles
+}
+
 #[test]
-fn no_import_cycles_between_top_level_modules() {
+fn no_import_cycles_between_modules_at_any_level() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut cycles = Vec::new();
     for krate in CRATES {
-        let graph = module_graph(&root.join(krate).join("src"));
-        assert!(graph.len() > 3, "{krate}/src: found only {} modules", graph.len());
-        if let Some(c) = find_cycle(&graph) {
-            cycles.push(format!("{krate}/src: {}", c.join(" -> ")));
-        }
+        let src = root.join(krate).join("src");
+        let graphs = module_graphs(&src);
+        let top = graphs.get("").map_or(0, BTreeMap::len);
+        assert!(top > 3, "{krate}/src: found only {top} top-level modules");
+        // Every crate has at least two modules with child modules of their own.
+        assert!(graphs.len() > 2, "{krate}/src: found only {} modules with child modules", graphs.len() - 1);
+        cycles.extend(cycles_of(&src).into_iter().map(|c| format!("{krate}/src: {c}")));
     }
     assert!(cycles.is_empty(), "import cycles between modules:\n{}", cycles.join("\n"));
+}
+
+fn strings(paths: &[&[&str]]) -> Vec<ModPath> {
+    paths.iter().map(|p| p.iter().map(|s| (*s).to_owned()).collect()).collect()
 }
 
 #[test]
 fn the_scanner_sees_groups_and_skips_comments_literals_and_tests() {
     let code = strip_comments_and_literals(
         "use crate::{a::X, b, c::{d, e}};\n// crate::f\n/* crate::g */ let s = \"crate::h\"; let c = '{';\n\
-         #[cfg(test)]\nmod tests { use crate::i; }\n#[cfg(test)]\nmod more;\nfn f<'a>() { crate::j::k(); }\n",
+         #[cfg(test)]\nmod tests { use crate::i; }\n#[cfg(test)]\nmod more;\nfn f<'a>() { crate::j::k(); }\n\
+         std::mem::swap(x, y); Vec::<u8>::new(); $crate::l::m!(); $x::n();\n",
     );
     let (code, test_mods) = strip_test_items(&code);
-    let refs: Vec<String> = crate_refs(&code).into_iter().collect();
-    assert_eq!(refs, ["a", "b", "c", "j"]);
+    assert_eq!(
+        named_paths(&code, &[], &BTreeSet::new()),
+        strings(&[&["a", "X"], &["b"], &["c", "d"], &["c", "e"], &["j", "k"], &["l", "m"]])
+    );
     assert_eq!(test_mods, ["more"]);
     let graph: Graph = [("a", "b"), ("b", "c"), ("c", "a"), ("d", "a")]
         .iter()
@@ -285,4 +386,65 @@ fn the_scanner_sees_groups_and_skips_comments_literals_and_tests() {
     let acyclic: Graph =
         [("a", "b"), ("b", "c")].iter().map(|(k, v)| ((*k).to_owned(), BTreeSet::from([(*v).to_owned()]))).collect();
     assert_eq!(find_cycle(&acyclic), None);
+}
+
+#[test]
+fn the_scanner_resolves_super_self_and_child_paths() {
+    let here = ["p".to_owned(), "q".to_owned()];
+    let code = "use super::s::T; use self::r::U; use r::{V, w::X}; super::super::t::f(); use crate::p::{self, q::Y};\n\
+                use super::{self as up, z};";
+    assert_eq!(
+        named_paths(code, &here, &BTreeSet::from(["r".to_owned()])),
+        strings(&[
+            &["p", "s", "T"],
+            &["p", "q", "r", "U"],
+            &["p", "q", "r", "V"],
+            &["p", "q", "r", "w", "X"],
+            &["t", "f"],
+            &["p"],
+            &["p", "q", "Y"],
+            &["p"],
+            &["p", "z"],
+        ])
+    );
+}
+
+/// Writes the crate `files` (path under `src/`, text) into a fresh directory; returns its `src`.
+fn fake_crate(name: &str, files: &[(&str, &str)]) -> PathBuf {
+    let src = Path::new(env!("CARGO_TARGET_TMPDIR")).join("module_cycles").join(name).join("src");
+    let _ = std::fs::remove_dir_all(&src);
+    for (path, text) in files {
+        let file = src.join(path);
+        std::fs::create_dir_all(file.parent().unwrap()).unwrap();
+        std::fs::write(file, text).unwrap();
+    }
+    src
+}
+
+#[test]
+fn cycles_between_nested_modules_are_found() {
+    // A parent and its children naming each other, and a grandchild naming its aunt: no cycle.
+    let base: [(&str, &str); 6] = [
+        ("lib.rs", "mod a; mod d;"),
+        ("a/mod.rs", "mod b; mod c; pub use b::X; pub struct Z;"),
+        ("a/b.rs", "use super::Z; pub struct X;"),
+        ("a/c/mod.rs", "mod g; use super::b::X; pub use g::G;"),
+        ("a/c/g.rs", "use crate::a::{self, b}; use super::super::Z; pub struct G;"),
+        ("d.rs", "use crate::a::c::G;"),
+    ];
+    assert_eq!(cycles_of(&fake_crate("acyclic", &base)), Vec::<String>::new());
+    // Two children of one parent naming each other (the second through a grandchild).
+    let mut siblings = base;
+    siblings[2].1 = "use super::{Z, c::g::G}; pub struct X;";
+    assert_eq!(cycles_of(&fake_crate("siblings", &siblings)), ["a::b -> a::c -> a::b"]);
+    // A child naming another top-level module that names it back.
+    let mut across = base;
+    across[2].1 = "use super::Z; use crate::d; pub struct X;";
+    across[5].1 = "use crate::a::b::X;";
+    assert_eq!(cycles_of(&fake_crate("across", &across)), ["a -> d -> a"]);
+    // A test-only file may name anything.
+    let mut files = base.to_vec();
+    files[1].1 = "mod b; mod c; pub use b::X; pub struct Z;\n#[cfg(test)]\nmod t;";
+    files.push(("a/t.rs", "use super::b::X; use crate::d;"));
+    assert_eq!(cycles_of(&fake_crate("tests", &files)), Vec::<String>::new());
 }

@@ -27,8 +27,7 @@ use evorec_tests::Failure;
 
 #[test]
 fn default_generation_stays_within_the_instruction_budget() -> Result<(), Failure> {
-    if std::env::var_os("EVOREC_SKIP_HIL").is_some_and(|v| v == "1") {
-        println!("timing_budget skipped: EVOREC_SKIP_HIL=1");
+    if evorec_tests::hil_skipped("timing_budget") {
         return Ok(());
     }
     // Builds the firmware images of the checked-out source (a no-op when up to date).
@@ -165,8 +164,7 @@ fn target_run_stays_within_the_budget(m: &timing::Measurement) -> Result<(), Fai
 /// generation's work does not depend on the frame size, so the M4's budget holds here too.
 #[test]
 fn m7_profile_timing_table_is_written() -> Result<(), Failure> {
-    if std::env::var_os("EVOREC_SKIP_HIL").is_some_and(|v| v == "1") {
-        println!("timing_budget (M7) skipped: EVOREC_SKIP_HIL=1");
+    if evorec_tests::hil_skipped("timing_budget (M7)") {
         return Ok(());
     }
     evorec_firmware::host::build_firmware(evorec_firmware::BoardProfile::M7)?;

@@ -47,7 +47,11 @@ use crate::status::Status;
 use crate::{math, quat};
 
 mod axis;
+mod params;
+mod predict;
 use axis::{Axis, PosAxis};
+pub use params::{FilterParamsError, TargetFilterParams};
+pub use predict::{PredictError, Prediction};
 
 /// The target's velocity screw in the world frame `Σ_W` (`^W ψ̇_M` with the angular part as
 /// an angular velocity, see [`crate::feedforward::jn`]).
@@ -63,194 +67,6 @@ impl TargetVelocity {
     /// A target at rest.
     pub const ZERO: TargetVelocity = TargetVelocity { v: Vector3::new(0.0, 0.0, 0.0), w: Vector3::new(0.0, 0.0, 0.0) };
 }
-
-/// Tuning of a [`TargetFilter`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TargetFilterParams {
-    /// Standard deviation of a position measurement across the line of sight (m); the whole
-    /// measurement's when no line of sight is known ([`TargetFilter::update`]).
-    pub position_noise_m: f32,
-    /// Standard deviation of a position measurement along the camera's line of sight to the
-    /// block (m, [`TargetFilter::update_from_estimate`]): stereo depth is far noisier than the position
-    /// across the view.
-    pub depth_noise_m: f32,
-    /// Standard deviation of an orientation measurement (rad, per axis).
-    pub rotation_noise_rad: f32,
-    /// Spectral density of the white acceleration noise of the position axes (m²/s³).
-    pub acceleration_psd: f32,
-    /// Spectral density of the white angular acceleration noise (rad²/s³).
-    pub angular_acceleration_psd: f32,
-    /// Spectral density of the white jerk noise of the position axes' acceleration state
-    /// (m²/s⁵): each position axis is `[x, ẋ, ẍ]`, so a block that speeds up, stops and
-    /// reverses is followed without the lag of a constant-velocity model. 0 together with
-    /// [`TargetFilterParams::initial_accel_sd_m_s2`] 0 keeps the acceleration at 0 (a
-    /// constant-velocity filter).
-    pub jerk_psd: f32,
-    /// Prior standard deviation of the acceleration after a reset (m/s²).
-    pub initial_accel_sd_m_s2: f32,
-    /// The linear velocity fed forward is the filter's velocity moved on by its acceleration
-    /// over this time (s): `v + a·lead`; half a frame period would be the mean velocity over
-    /// the next frame, but the acceleration state is noisy (the default is 0).
-    pub acceleration_lead_s: f32,
-    /// Prior standard deviation of the velocity after a reset (m/s).
-    pub initial_speed_sd_m_s: f32,
-    /// Prior standard deviation of the angular velocity after a reset (rad/s).
-    pub initial_rate_sd_rad_s: f32,
-    /// Innovation gate in standard deviations; a larger innovation on any axis is an outlier.
-    pub gate_sigma: f32,
-    /// Consecutive rejected measurements after which the filter restarts at the newest one.
-    pub max_outliers: u16,
-    /// Consecutive accepted updates needed before the velocity is trusted.
-    pub converge_updates: u16,
-    /// The velocity is trusted only while its standard deviation is below this (m/s).
-    pub trusted_speed_sd_m_s: f32,
-    /// The angular velocity is trusted only while its standard deviation is below this (rad/s).
-    pub trusted_rate_sd_rad_s: f32,
-    /// A fitness below this means the tracker lost the target: the filter resets.
-    pub lost_fitness: f32,
-    /// A time step above this (s) restarts the filter.
-    pub max_gap_s: f32,
-    /// Feedforward dead band: a speed below this (m/s) is fed forward as 0.
-    pub deadband_m_s: f32,
-    /// Feedforward dead band: an angular speed below this (rad/s) is fed forward as 0.
-    pub deadband_rad_s: f32,
-    /// Feedforward significance: the linear (angular) velocity is fed forward only when its
-    /// length in standard deviations of its own estimate, `√(Σ vᵢ² / σᵢ²)`, reaches this — a
-    /// velocity inside the filter's `significance_sigma`-σ ellipsoid around zero cannot be told
-    /// from a target at rest, and feeding its noise forward drags the population along it.
-    pub significance_sigma: f32,
-    /// Once the linear velocity has been fed forward, keep feeding it forward (without the
-    /// significance test and the dead band) until the filter restarts: a block that moved
-    /// keeps moving, and its speed passes zero at every reversal.
-    pub hold_motion: bool,
-    /// Share (0..=1) of the linear velocity along the line of sight, beyond what the world axes
-    /// seen across the sight carry, that [`TargetFilter::feedforward_velocity_seen_along`]
-    /// feeds forward: that rest is mostly the difference of noisy stereo depths, and fed
-    /// forward it drags the population along the viewing ray.
-    pub depth_feedforward: f32,
-}
-
-impl TargetFilterParams {
-    /// Defaults for the simulator's set-up (33 ms frames, estimates good to a few mm and a few
-    /// mrad). The dead bands are about one frame's shift at the estimates' own noise floor
-    /// (0.01 m/s · 33 ms = 0.33 mm; 0.05 rad/s · 33 ms = 1.7 mrad ≈ 0.0008 in ε).
-    ///
-    /// The linear part is tuned for a block that starts, stops and reverses on a conveyor
-    /// (0.2 m/s, reversals at 0.54 m/s², `scenarios/conveyor_ff_target.toml`): a fast filter
-    /// (white acceleration 0.2 m²/s³ and white jerk 30 m²/s⁵ on an acceleration state, 1.5 mm
-    /// across the line of sight, 8 mm along it) that follows a reversal within a few frames,
-    /// trusted once its velocity is known to 0.1 m/s, reset only when the fitness falls below
-    /// 0.3 (or the tracker's status leaves *tracking*); once fed forward its velocity is held
-    /// through the reversals ([`TargetFilterParams::hold_motion`]), not moved on by its
-    /// acceleration ([`TargetFilterParams::acceleration_lead_s`] 0: half a frame's lead made a
-    /// block accelerating from rest in front of a still camera 12 mm RMS off instead of 3.4 mm,
-    /// `core/tests/target_feedforward.rs`), and along the line of sight only what the axes
-    /// seen across it say is fed forward
-    /// ([`TargetFilterParams::depth_feedforward`] 0). The significance test still
-    /// decides whether a block moves at all, so a block at rest is tracked as with FF alone.
-    pub const DEFAULT: TargetFilterParams = TargetFilterParams {
-        position_noise_m: 0.0015,
-        depth_noise_m: 0.008,
-        rotation_noise_rad: 0.02,
-        acceleration_psd: 0.2,
-        angular_acceleration_psd: 0.01,
-        jerk_psd: 30.0,
-        initial_accel_sd_m_s2: 1.0,
-        acceleration_lead_s: 0.0,
-        initial_speed_sd_m_s: 0.5,
-        initial_rate_sd_rad_s: 2.0,
-        gate_sigma: 6.0,
-        max_outliers: 3,
-        converge_updates: 10,
-        trusted_speed_sd_m_s: 0.1,
-        trusted_rate_sd_rad_s: 0.15,
-        lost_fitness: 0.3,
-        max_gap_s: 0.5,
-        deadband_m_s: 0.01,
-        deadband_rad_s: 0.05,
-        significance_sigma: 2.0,
-        hold_motion: true,
-        depth_feedforward: 0.0,
-    };
-
-    /// Checks every field against its rule: the noises, densities, prior deviations, gate,
-    /// trust bounds and `max_gap_s` finite and positive; `lost_fitness`, the dead bands and
-    /// `significance_sigma` finite and non-negative; `depth_feedforward` in `[0, 1]`; the counts
-    /// `max_outliers` and `converge_updates` at least 1.
-    ///
-    /// # Errors
-    /// [`FilterParamsError`] naming the first bad field.
-    pub fn validate(&self) -> Result<(), FilterParamsError> {
-        let positive = [
-            (self.position_noise_m, "position_noise_m"),
-            (self.depth_noise_m, "depth_noise_m"),
-            (self.rotation_noise_rad, "rotation_noise_rad"),
-            (self.acceleration_psd, "acceleration_psd"),
-            (self.angular_acceleration_psd, "angular_acceleration_psd"),
-            (self.initial_speed_sd_m_s, "initial_speed_sd_m_s"),
-            (self.initial_rate_sd_rad_s, "initial_rate_sd_rad_s"),
-            (self.gate_sigma, "gate_sigma"),
-            (self.trusted_speed_sd_m_s, "trusted_speed_sd_m_s"),
-            (self.trusted_rate_sd_rad_s, "trusted_rate_sd_rad_s"),
-            (self.max_gap_s, "max_gap_s"),
-        ];
-        if let Some((_, name)) = positive.iter().find(|(v, _)| !(v.is_finite() && *v > 0.0)) {
-            return Err(FilterParamsError(name));
-        }
-        let non_negative = [
-            (self.lost_fitness, "lost_fitness"),
-            (self.deadband_m_s, "deadband_m_s"),
-            (self.deadband_rad_s, "deadband_rad_s"),
-            (self.significance_sigma, "significance_sigma"),
-            (self.jerk_psd, "jerk_psd"),
-            (self.initial_accel_sd_m_s2, "initial_accel_sd_m_s2"),
-            (self.acceleration_lead_s, "acceleration_lead_s"),
-        ];
-        if let Some((_, name)) = non_negative.iter().find(|(v, _)| !(v.is_finite() && *v >= 0.0)) {
-            return Err(FilterParamsError(name));
-        }
-        if !(self.depth_feedforward >= 0.0 && self.depth_feedforward <= 1.0) {
-            return Err(FilterParamsError("depth_feedforward"));
-        }
-        if self.max_outliers == 0 {
-            return Err(FilterParamsError("max_outliers"));
-        }
-        if self.converge_updates == 0 {
-            return Err(FilterParamsError("converge_updates"));
-        }
-        Ok(())
-    }
-}
-
-/// A [`TargetFilterParams`] field is out of range (its name).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FilterParamsError(pub &'static str);
-
-impl FilterParamsError {
-    /// The rule the field broke (see [`TargetFilterParams::validate`]).
-    pub fn rule(&self) -> &'static str {
-        match self.0 {
-            "lost_fitness"
-            | "deadband_m_s"
-            | "deadband_rad_s"
-            | "significance_sigma"
-            | "jerk_psd"
-            | "initial_accel_sd_m_s2"
-            | "acceleration_lead_s" => "finite and non-negative",
-            "depth_feedforward" => "between 0 and 1",
-            "max_outliers" | "converge_updates" => "at least 1",
-            _ => "finite and positive",
-        }
-    }
-}
-
-impl core::fmt::Display for FilterParamsError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "target filter parameter {} must be {}", self.0, self.rule())
-    }
-}
-
-impl core::error::Error for FilterParamsError {}
 
 /// What one [`TargetFilter::update`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -295,41 +111,6 @@ pub struct TargetFilter {
     last_outcome: Option<UpdateOutcome>,
     last_innovation: [f32; 6],
 }
-
-/// The pose handed over to a later time by [`TargetFilter::predict`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Prediction {
-    /// `^CR ψ_M` predicted at the requested time.
-    pub psi: Psi,
-    /// The target velocity used (zero unless [`Prediction::trusted`]).
-    pub velocity: TargetVelocity,
-    /// Whether the filter's velocity was trusted (otherwise the target is held still in the
-    /// world and only the camera's motion is accounted for).
-    pub trusted: bool,
-    /// Capture time of the measurement the prediction starts from (µs).
-    pub base_time_us: u64,
-}
-
-/// Why [`TargetFilter::predict`] could not predict.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum PredictError {
-    /// The filter holds no track (never updated, reset, or lost).
-    NoTrack,
-    /// A joint position or velocity is NaN or infinite.
-    NonFiniteJoint,
-}
-
-impl core::fmt::Display for PredictError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::NoTrack => f.write_str("no target track to predict from"),
-            Self::NonFiniteJoint => f.write_str("joint sample is not finite"),
-        }
-    }
-}
-
-impl core::error::Error for PredictError {}
 
 /// `^W T_M = ^W T_H(q) · ^H T_CR · ^CR T_M(ψ)`: an estimate in the world frame. `psi` must be
 /// a valid pose (every GA individual is).
@@ -641,45 +422,6 @@ impl TargetFilter {
         let across: f32 = (0..3).map(|i| (1.0 - u[i] * u[i]) * v[i] * u[i]).sum();
         v - u * ((v.dot(&u) - across) * (1.0 - self.params.depth_feedforward))
     }
-
-    /// Hands the pose over to time `t_us`: the last accepted estimate moved by the trusted
-    /// velocity over `τ = t − t_capture` (held still while not trusted), seen from the camera at
-    /// the joint state extrapolated to `t` (`q + q̇ (t − joints.time_us)`). The linear velocity
-    /// is the mean over `τ` (`v + a τ/2`), its part along the line of sight from that camera
-    /// kept as [`TargetFilter::feedforward_velocity_seen_along`] keeps it.
-    ///
-    /// # Errors
-    /// [`PredictError::NoTrack`] or [`PredictError::NonFiniteJoint`].
-    pub fn predict<const DOF: usize>(
-        &self,
-        chain: &Chain<DOF>,
-        flange_to_camera: &Isometry3<f32>,
-        joints: &JointSample<DOF>,
-        t_us: u64,
-    ) -> Result<Prediction, PredictError> {
-        let track = self.track.as_ref().ok_or(PredictError::NoTrack)?;
-        if !joints.q.iter().chain(joints.qd.iter()).all(|v| v.is_finite()) {
-            return Err(PredictError::NonFiniteJoint);
-        }
-        let trusted = self.is_trusted();
-        let mut velocity =
-            if trusted { self.velocity_estimate().unwrap_or(TargetVelocity::ZERO) } else { TargetVelocity::ZERO };
-        let tau = seconds_between(track.last_time_us, t_us);
-        let dtj = seconds_between(joints.time_us, t_us);
-        let q: [f32; DOF] = core::array::from_fn(|i| joints.q[i] + joints.qd[i] * dtj);
-        let camera = chain.forward(&q) * flange_to_camera;
-        if trusted {
-            let accel = Vector3::new(track.pos[0].a, track.pos[1].a, track.pos[2].a);
-            let sight = track.last.translation.vector - camera.translation.vector;
-            velocity.v = self.seen_along(velocity.v + accel * (0.5 * tau), &sight);
-        }
-        let target = Isometry3::from_parts(
-            Translation3::from(track.last.translation.vector + velocity.v * tau),
-            exp_rotation(&(velocity.w * tau)) * track.last.rotation,
-        );
-        let psi = Psi::from_isometry(&(camera.inverse() * target));
-        Ok(Prediction { psi, velocity, trusted, base_time_us: track.last_time_us })
-    }
 }
 
 impl Default for TargetFilter {
@@ -696,11 +438,6 @@ fn linear(axes: &[PosAxis; 3]) -> (Vector3<f32>, Vector3<f32>) {
 /// The angular velocity of the rotation axes and its variances.
 fn angular(axes: &[Axis; 3]) -> (Vector3<f32>, Vector3<f32>) {
     (Vector3::new(axes[0].v, axes[1].v, axes[2].v), Vector3::new(axes[0].p[2], axes[1].p[2], axes[2].p[2]))
-}
-
-/// `t1 − t0` in seconds (negative when `t1 < t0`).
-fn seconds_between(t0_us: u64, t1_us: u64) -> f32 {
-    if t1_us >= t0_us { (t1_us - t0_us) as f32 * 1e-6 } else { -((t0_us - t1_us) as f32 * 1e-6) }
 }
 
 /// The unit vector along `v` (a line of sight), `None` for a (near) zero vector.

@@ -24,6 +24,30 @@ fn noisy(iso: Isometry3<f32>, k: u64, amp_m: f32, amp_rad: f32) -> Isometry3<f32
     Isometry3::from_parts(Translation3::from(iso.translation.vector + dp), exp_rotation(&dr) * iso.rotation)
 }
 
+/// Feeds `f` the exact poses of a block moving with `v` and turning with `w`, frames `frames`
+/// at fitness 0.95.
+fn feed(f: &mut TargetFilter, frames: core::ops::Range<u64>, v: Vector3<f32>, w: Vector3<f32>) {
+    for k in frames {
+        f.update(&moving(k, v, w), k * DT_US, 0.95);
+    }
+}
+
+/// A default filter fed 60 frames (0..60) of a block moving with `v` without turning: its
+/// velocity is trusted.
+fn trusted_filter(v: Vector3<f32>) -> TargetFilter {
+    let mut f = TargetFilter::with_defaults();
+    feed(&mut f, 0..60, v, Vector3::zeros());
+    assert!(f.is_trusted(), "not trusted after 60 frames at {v}");
+    f
+}
+
+/// A filter made with the defaults changed by `spoil`.
+fn spoiled(spoil: impl FnOnce(&mut TargetFilterParams)) -> Result<TargetFilter, FilterParamsError> {
+    let mut p = TargetFilterParams::DEFAULT;
+    spoil(&mut p);
+    TargetFilter::new(p)
+}
+
 /// The linear part tuned slow (the first tuning: constant velocity, 3 mm noise, 0.002 m²/s³,
 /// trusted at 0.03 m/s, no hold), for comparison with the default's fast one.
 const SLOW: TargetFilterParams = TargetFilterParams {
@@ -73,11 +97,7 @@ fn not_trusted_before_convergence() {
 #[test]
 fn a_reset_forgets() {
     let v = Vector3::new(0.3, 0.0, 0.0);
-    let mut f = TargetFilter::with_defaults();
-    for k in 0..60 {
-        f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95);
-    }
-    assert!(f.is_trusted());
+    let mut f = trusted_filter(v);
     // A fitness drop means the target is lost.
     assert_eq!(f.update(&moving(60, v, Vector3::zeros()), 60 * DT_US, 0.2), UpdateOutcome::Lost);
     assert!(!f.has_track() && !f.is_trusted());
@@ -96,10 +116,7 @@ fn a_reset_forgets() {
 #[test]
 fn outliers_are_bounded() {
     let v = Vector3::new(0.0, 0.1, 0.0);
-    let mut f = TargetFilter::with_defaults();
-    for k in 0..60 {
-        f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95);
-    }
+    let mut f = trusted_filter(v);
     let before = f.velocity().unwrap();
     // A wild estimate (half a metre and 90° off) is rejected and changes no velocity.
     let mut wild = moving(60, v, Vector3::zeros());
@@ -137,24 +154,16 @@ fn time_gaps_and_bad_input_restart() {
     let mut bad = m;
     bad.translation.vector.x = f32::INFINITY;
     assert_eq!(f.update(&bad, 2_066_000, 0.9), UpdateOutcome::Lost);
-    let mut p = TargetFilterParams::DEFAULT;
-    p.gate_sigma = 0.0;
-    assert_eq!(TargetFilter::new(p), Err(FilterParamsError("gate_sigma")));
-    p = TargetFilterParams::DEFAULT;
-    p.significance_sigma = -1.0;
-    assert_eq!(TargetFilter::new(p), Err(FilterParamsError("significance_sigma")));
-    p = TargetFilterParams::DEFAULT;
-    p.converge_updates = 0;
-    assert_eq!(TargetFilter::new(p), Err(FilterParamsError("converge_updates")));
+    assert_eq!(spoiled(|p| p.gate_sigma = 0.0), Err(FilterParamsError("gate_sigma")));
+    assert_eq!(spoiled(|p| p.significance_sigma = -1.0), Err(FilterParamsError("significance_sigma")));
+    assert_eq!(spoiled(|p| p.converge_updates = 0), Err(FilterParamsError("converge_updates")));
 }
 
 #[test]
 fn deadband_zeroes_slow_motion_only() {
     let mut f = TargetFilter::with_defaults();
     let (v, w) = (Vector3::new(0.005, 0.0, 0.0), Vector3::new(0.0, 0.0, 0.3));
-    for k in 0..80 {
-        f.update(&moving(k, v, w), k * DT_US, 0.95);
-    }
+    feed(&mut f, 0..80, v, w);
     let ff = f.feedforward_velocity();
     assert_eq!(ff.v, Vector3::zeros());
     assert!((ff.w - w).norm() < 0.02);
@@ -220,9 +229,7 @@ fn predict_moves_the_target_and_follows_the_camera() {
         TargetFilter::new(TargetFilterParams { depth_feedforward: 1.0, ..TargetFilterParams::DEFAULT }).unwrap();
     let no_joints = JointSample { q, qd, time_us: 0 };
     assert_eq!(f.predict(&PA10, &mount, &no_joints, 0), Err(PredictError::NoTrack));
-    for k in 0..80 {
-        f.update(&moving(k, v, w), k * DT_US, 0.95);
-    }
+    feed(&mut f, 0..80, v, w);
     let t_capture = 79 * DT_US;
     let t_out = t_capture + 50_000;
     let joints = JointSample { q, qd, time_us: t_capture };
@@ -331,10 +338,7 @@ fn the_default_follows_a_reversal_the_slow_tuning_lags() {
 #[test]
 fn depth_is_not_fed_forward() {
     let v = Vector3::new(0.1, 0.15, 0.0);
-    let mut f = TargetFilter::with_defaults();
-    for k in 0..60 {
-        f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95);
-    }
+    let f = trusted_filter(v);
     let all = f.feedforward_velocity().v;
     assert!((all - v).norm() < 0.01, "{all}");
     // Seen along world x: the part along the line of sight is dropped, the rest kept.
@@ -347,9 +351,7 @@ fn depth_is_not_fed_forward() {
     let across = (1.0 - 0.64) * all.x * 0.8 + (1.0 - 0.36) * all.y * 0.6;
     assert!((seen.dot(&u) - across).abs() < 1e-6, "{seen}");
     assert!((seen - u * seen.dot(&u) - (all - u * all.dot(&u))).norm() < 1e-6, "across the sight all is kept");
-    let mut p = TargetFilterParams::DEFAULT;
-    p.depth_feedforward = 1.5;
-    assert_eq!(TargetFilter::new(p), Err(FilterParamsError("depth_feedforward")));
+    assert_eq!(spoiled(|p| p.depth_feedforward = 1.5), Err(FilterParamsError("depth_feedforward")));
 }
 
 #[test]
@@ -380,10 +382,7 @@ fn a_belt_across_a_slanted_view_keeps_its_motion_in_depth() {
     // A block moving along world y seen along a sight 16° off world x: its motion along the
     // sight (0.2 · sin 16° ≈ 0.055 m/s) is motion of a well-measured axis and is fed forward.
     let v = Vector3::new(0.0, 0.2, 0.0);
-    let mut f = TargetFilter::with_defaults();
-    for k in 0..60 {
-        f.update(&moving(k, v, Vector3::zeros()), k * DT_US, 0.95);
-    }
+    let f = trusted_filter(v);
     let u = Vector3::new(0.96, 0.28, 0.0);
     let seen = f.feedforward_velocity_seen_along(&u).v;
     let all = f.feedforward_velocity().v;

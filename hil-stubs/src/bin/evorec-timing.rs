@@ -207,9 +207,10 @@ mod firmware {
             let dt_s = if k == 0 { 0.0 } else { FRAME_PERIOD_US as f32 * 1e-6 };
             tracker.set_status(kind.forced_status());
             let status = tracker.status();
-            // The velocity this generation feeds forward (read outside the measured window).
+            // The target velocity this generation shifts the individuals by (the tracker's own
+            // computation of it, read outside the measured window).
             let target_shift = feedforward == Feedforward::OnWithTarget
-                && tracker.target_filter().feedforward_velocity() != TargetVelocity::ZERO;
+                && tracker.target_feedforward_velocity(&joints) != TargetVelocity::ZERO;
             cmsdk_timer::repaint_free_stack();
             let measured = C::generation(tracker, &frame, &joints, dt_s, feedforward, timer);
             let stack = sys::stack_usage().used_bytes;

@@ -1,4 +1,5 @@
-//! Disassembly of the firmware (`llvm-objdump`) and its call graph.
+//! Disassembly of the firmware (`llvm-objdump`), its call graph, and the cycle cost of each
+//! instruction class ([`classify`], shared by the class model and the flash model).
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -210,4 +211,74 @@ impl Graph<'_> {
 /// Name test of the default configuration's generation function.
 pub(super) fn is_default_generation(name: &str) -> bool {
     name.contains("P40G8") && name.contains("generation")
+}
+
+/// Instruction classes with their worst-case Cortex-M4 cycle costs (Cortex-M4 TRM r0p1,
+/// §3.3 "Processor instruction timings" and the FPU chapter's instruction timings), for
+/// zero-wait-state memory; a taken branch refills the pipeline (1 + P, P ≤ 3).
+pub(super) fn classify(i: &Insn) -> (&'static str, u32) {
+    let m = i.mnemonic.trim_end_matches(".w").trim_end_matches(".n");
+    let ops = i.operands.as_str();
+    let base = m.trim_end_matches(".f32").trim_end_matches(".f64");
+    if m.starts_with("vdiv") || m.starts_with("vsqrt") {
+        return ("fp divide/sqrt (14)", 14);
+    }
+    if ["vmla", "vmls", "vnmla", "vnmls", "vfma", "vfms", "vfnma", "vfnms"].contains(&base) {
+        return ("fp multiply-accumulate (3)", 3);
+    }
+    if base == "vldr" || base == "vstr" {
+        return ("fp load/store (2)", 2);
+    }
+    if ["vpush", "vpop", "vldmia", "vstmia", "vldmdb", "vstmdb", "vldm", "vstm"].contains(&base) {
+        let per = if ops.contains("{d") { 2 } else { 1 };
+        return ("fp load/store multiple (1+N)", 1 + per * reg_count(ops));
+    }
+    if m.starts_with('v') {
+        let words = ops.split(',').count();
+        return ("fp arithmetic/convert/move (1)", if base == "vmov" && words == 4 { 2 } else { 1 });
+    }
+    if is_branch(m) {
+        return ("branch (1+P, P=3)", if m == "tbb" || m == "tbh" { 2 + 3 } else { 1 + 3 });
+    }
+    if m == "pop" || m == "ldm" || m == "ldmia" || m == "ldmdb" {
+        let pc = if ops.contains("pc") { 3 } else { 0 };
+        return ("load/store multiple (1+N)", 1 + reg_count(ops) + pc);
+    }
+    if m == "push" || m.starts_with("stm") {
+        return ("load/store multiple (1+N)", 1 + reg_count(ops));
+    }
+    if m == "ldrd" || m == "strd" {
+        return ("load/store (2; LDRD/STRD 3)", 3);
+    }
+    if m.starts_with("ldr") || m.starts_with("str") {
+        let pc = if m.starts_with("ldr") && ops.starts_with("pc") { 3 } else { 0 };
+        return ("load/store (2; LDRD/STRD 3)", 2 + pc);
+    }
+    if m == "sdiv" || m == "udiv" {
+        return ("integer divide (2-12)", 12);
+    }
+    if ["mla", "mls"].contains(&m) {
+        return ("multiply (1; MLA/MLS 2)", 2);
+    }
+    if ["mul", "muls", "umull", "smull", "umlal", "smlal"].contains(&m) {
+        return ("multiply (1; MLA/MLS 2)", 1);
+    }
+    ("integer ALU, IT (1)", 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn classes_and_costs() {
+        let i = |m: &str, o: &str| Insn { mnemonic: m.to_owned(), operands: o.to_owned(), comment_addr: None };
+        assert_eq!(classify(&i("vdiv.f32", "s0, s1, s2")).1, 14);
+        assert_eq!(classify(&i("vmla.f32", "s0, s1, s2")).1, 3);
+        assert_eq!(classify(&i("ldrb.w", "r1, [r11, r2]")).1, 2);
+        assert_eq!(classify(&i("bhs", "0x67cc <$t+0x1d4>")).1, 4);
+        assert_eq!(classify(&i("pop", "{r4, r5, pc}")).1, 7);
+        assert_eq!(classify(&i("umlal", "r2, r4, r3, r6")).1, 1);
+        assert_eq!(classify(&i("adds", "r2, r1, r0")).1, 1);
+    }
 }

@@ -17,8 +17,7 @@
 
 use std::collections::HashMap;
 
-use super::cycles::classify;
-use super::disasm::{Function, Insn};
+use super::disasm::{Function, Insn, classify};
 use super::elf::FlashImage;
 use super::profile::MemorySystem;
 

@@ -1,0 +1,88 @@
+//! The hand-over of the target's pose to a later time ([`TargetFilter::predict`]).
+
+use nalgebra::{Isometry3, Translation3, Vector3};
+
+use super::{TargetFilter, TargetVelocity, exp_rotation};
+use crate::kinematics::{Chain, JointSample};
+use crate::pose::Psi;
+
+/// The pose handed over to a later time by [`TargetFilter::predict`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Prediction {
+    /// `^CR ψ_M` predicted at the requested time.
+    pub psi: Psi,
+    /// The target velocity used (zero unless [`Prediction::trusted`]).
+    pub velocity: TargetVelocity,
+    /// Whether the filter's velocity was trusted (otherwise the target is held still in the
+    /// world and only the camera's motion is accounted for).
+    pub trusted: bool,
+    /// Capture time of the measurement the prediction starts from (µs).
+    pub base_time_us: u64,
+}
+
+/// Why [`TargetFilter::predict`] could not predict.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum PredictError {
+    /// The filter holds no track (never updated, reset, or lost).
+    NoTrack,
+    /// A joint position or velocity is NaN or infinite.
+    NonFiniteJoint,
+}
+
+impl core::fmt::Display for PredictError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::NoTrack => f.write_str("no target track to predict from"),
+            Self::NonFiniteJoint => f.write_str("joint sample is not finite"),
+        }
+    }
+}
+
+impl core::error::Error for PredictError {}
+
+impl TargetFilter {
+    /// Hands the pose over to time `t_us`: the last accepted estimate moved by the trusted
+    /// velocity over `τ = t − t_capture` (held still while not trusted), seen from the camera at
+    /// the joint state extrapolated to `t` (`q + q̇ (t − joints.time_us)`). The linear velocity
+    /// is the mean over `τ` (`v + a τ/2`), its part along the line of sight from that camera
+    /// kept as [`TargetFilter::feedforward_velocity_seen_along`] keeps it.
+    ///
+    /// # Errors
+    /// [`PredictError::NoTrack`] or [`PredictError::NonFiniteJoint`].
+    pub fn predict<const DOF: usize>(
+        &self,
+        chain: &Chain<DOF>,
+        flange_to_camera: &Isometry3<f32>,
+        joints: &JointSample<DOF>,
+        t_us: u64,
+    ) -> Result<Prediction, PredictError> {
+        let track = self.track.as_ref().ok_or(PredictError::NoTrack)?;
+        if !joints.q.iter().chain(joints.qd.iter()).all(|v| v.is_finite()) {
+            return Err(PredictError::NonFiniteJoint);
+        }
+        let trusted = self.is_trusted();
+        let mut velocity =
+            if trusted { self.velocity_estimate().unwrap_or(TargetVelocity::ZERO) } else { TargetVelocity::ZERO };
+        let tau = seconds_between(track.last_time_us, t_us);
+        let dtj = seconds_between(joints.time_us, t_us);
+        let q: [f32; DOF] = core::array::from_fn(|i| joints.q[i] + joints.qd[i] * dtj);
+        let camera = chain.forward(&q) * flange_to_camera;
+        if trusted {
+            let accel = Vector3::new(track.pos[0].a, track.pos[1].a, track.pos[2].a);
+            let sight = track.last.translation.vector - camera.translation.vector;
+            velocity.v = self.seen_along(velocity.v + accel * (0.5 * tau), &sight);
+        }
+        let target = Isometry3::from_parts(
+            Translation3::from(track.last.translation.vector + velocity.v * tau),
+            exp_rotation(&(velocity.w * tau)) * track.last.rotation,
+        );
+        let psi = Psi::from_isometry(&(camera.inverse() * target));
+        Ok(Prediction { psi, velocity, trusted, base_time_us: track.last_time_us })
+    }
+}
+
+/// `t1 − t0` in seconds (negative when `t1 < t0`).
+fn seconds_between(t0_us: u64, t1_us: u64) -> f32 {
+    if t1_us >= t0_us { (t1_us - t0_us) as f32 * 1e-6 } else { -((t0_us - t1_us) as f32 * 1e-6) }
+}

@@ -1,0 +1,25 @@
+//! What the integration tests of the core share: synthetic stereo frames of the paper's block.
+
+use evorec_core::camera::StereoRig;
+use evorec_core::config::NO_HUE;
+use evorec_core::image::HueImage;
+use evorec_core::model::Block;
+use evorec_core::pose::Psi;
+use evorec_core::synth;
+use evorec_core::tracker::StereoFrame;
+
+/// The left and right hue images of [`Block::PAPER`] at `truth` (right camera frame), the size
+/// of the rig's cameras, rendered exactly ([`synth::render_block`]).
+pub fn render(rig: &StereoRig, truth: &Psi) -> (Vec<u8>, Vec<u8>) {
+    let (w, h) = (usize::from(rig.right.width()), usize::from(rig.right.height()));
+    let iso = truth.try_to_isometry().unwrap();
+    let (mut l, mut r) = (vec![NO_HUE; w * h], vec![NO_HUE; w * h]);
+    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
+    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
+    (l, r)
+}
+
+/// The frame pair of the images `l` and `r` of `w × h` pixels.
+pub fn frame<'a>(l: &'a [u8], r: &'a [u8], w: u16, h: u16) -> StereoFrame<'a> {
+    StereoFrame { left: HueImage::new_checked(l, w, h).unwrap(), right: HueImage::new_checked(r, w, h).unwrap() }
+}

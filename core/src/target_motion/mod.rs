@@ -46,7 +46,9 @@ use crate::pose::Psi;
 use crate::status::Status;
 use crate::{math, quat};
 
+mod angular;
 mod axis;
+use angular::SlowTurn;
 use axis::{Axis, PosAxis};
 
 /// The target's velocity screw in the world frame `Σ_W` (`^W ψ̇_M` with the angular part as
@@ -80,6 +82,15 @@ pub struct TargetFilterParams {
     pub acceleration_psd: f32,
     /// Spectral density of the white angular acceleration noise (rad²/s³).
     pub angular_acceleration_psd: f32,
+    /// Spectral density of the white angular acceleration noise of the second, slow angular
+    /// model (rad²/s³) run beside the fast one for a steady turn; 0 feeds forward none of it
+    /// (see [`TargetFilter::feedforward_velocity`]).
+    pub slow_angular_acceleration_psd: f32,
+    /// Feedforward dead band of the slow model's angular speed (rad/s).
+    pub slow_deadband_rad_s: f32,
+    /// The slow model learns only from estimates of at least this fitness; a lower one
+    /// restarts it (its long memory would keep the errors of a poorly seen block).
+    pub slow_min_fitness: f32,
     /// Spectral density of the white jerk noise of the position axes' acceleration state
     /// (m²/s⁵): each position axis is `[x, ẋ, ẍ]`, so a block that speeds up, stops and
     /// reverses is followed without the lag of a constant-velocity model. 0 together with
@@ -154,6 +165,9 @@ impl TargetFilterParams {
         rotation_noise_rad: 0.02,
         acceleration_psd: 0.2,
         angular_acceleration_psd: 0.01,
+        slow_angular_acceleration_psd: 1e-4,
+        slow_deadband_rad_s: 0.02,
+        slow_min_fitness: 0.96,
         jerk_psd: 30.0,
         initial_accel_sd_m_s2: 1.0,
         acceleration_lead_s: 0.0,
@@ -205,6 +219,9 @@ impl TargetFilterParams {
             (self.jerk_psd, "jerk_psd"),
             (self.initial_accel_sd_m_s2, "initial_accel_sd_m_s2"),
             (self.acceleration_lead_s, "acceleration_lead_s"),
+            (self.slow_angular_acceleration_psd, "slow_angular_acceleration_psd"),
+            (self.slow_deadband_rad_s, "slow_deadband_rad_s"),
+            (self.slow_min_fitness, "slow_min_fitness"),
         ];
         if let Some((_, name)) = non_negative.iter().find(|(v, _)| !(v.is_finite() && *v >= 0.0)) {
             return Err(FilterParamsError(name));
@@ -236,7 +253,10 @@ impl FilterParamsError {
             | "significance_sigma"
             | "jerk_psd"
             | "initial_accel_sd_m_s2"
-            | "acceleration_lead_s" => "finite and non-negative",
+            | "acceleration_lead_s"
+            | "slow_angular_acceleration_psd"
+            | "slow_deadband_rad_s"
+            | "slow_min_fitness" => "finite and non-negative",
             "depth_feedforward" => "between 0 and 1",
             "max_outliers" | "converge_updates" => "at least 1",
             _ => "finite and positive",
@@ -273,6 +293,8 @@ struct Track {
     /// Error-state axes of the orientation (`x` is 0 between updates).
     rot: [Axis; 3],
     orientation: UnitQuaternion<f32>,
+    /// The slow angular model (a steady turn).
+    slow: SlowTurn,
     time_us: u64,
     /// The last accepted measurement and its time (the base of [`TargetFilter::predict`]).
     last: Isometry3<f32>,
@@ -504,6 +526,7 @@ impl TargetFilter {
         let mut predicted = *track;
         predicted.pos.iter_mut().for_each(|a| a.predict(dt, p.acceleration_psd, p.jerk_psd));
         predicted.rot.iter_mut().for_each(|a| a.predict(dt, p.angular_acceleration_psd));
+        predicted.slow.predict(dt, p.slow_angular_acceleration_psd);
         let turn = Vector3::new(predicted.rot[0].x, predicted.rot[1].x, predicted.rot[2].x);
         predicted.orientation = exp_rotation(&turn) * predicted.orientation;
         predicted.rot.iter_mut().for_each(|a| a.x = 0.0);
@@ -531,6 +554,15 @@ impl TargetFilter {
         }
         for (a, y) in predicted.rot.iter_mut().zip(y_rot.iter()) {
             a.update(*y, r_rot);
+        }
+        // The slow model is for a turn too slow for the fast one to see: it restarts while the
+        // fast model's angular velocity is significant, or the block is poorly seen.
+        let fast_turn = Self::significant(p, &angular(&predicted.rot), p.deadband_rad_s) != Vector3::zeros();
+        if fitness >= p.slow_min_fitness && !fast_turn {
+            predicted.slow.update(&measured.rotation, r_rot);
+        } else {
+            let w0 = p.initial_rate_sd_rad_s * p.initial_rate_sd_rad_s;
+            predicted.slow = SlowTurn::start(measured.rotation, r_rot, w0);
         }
         let correction = Vector3::new(predicted.rot[0].x, predicted.rot[1].x, predicted.rot[2].x);
         predicted.orientation = exp_rotation(&correction) * predicted.orientation;
@@ -573,6 +605,7 @@ impl TargetFilter {
             pos: core::array::from_fn(|i| PosAxis::start(t[i], r_pos[i], v0, a0)),
             rot: [Axis::start(0.0, r_rot, w0); 3],
             orientation: measured.rotation,
+            slow: SlowTurn::start(measured.rotation, r_rot, w0),
             time_us,
             last: *measured,
             last_time_us: time_us,
@@ -609,7 +642,21 @@ impl TargetFilter {
         let v = if track.moving { lin.0 } else { Self::significant(p, &lin, p.deadband_m_s) };
         let lead = Vector3::new(track.pos[0].a, track.pos[1].a, track.pos[2].a) * p.acceleration_lead_s;
         let v = if v == Vector3::zeros() { v } else { v + lead };
-        TargetVelocity { v, w: Self::significant(p, &angular(&track.rot), p.deadband_rad_s) }
+        TargetVelocity { v, w: Self::angular_feedforward(p, track) }
+    }
+
+    /// The angular velocity fed forward: the slow model's once it has learnt from
+    /// [`TargetFilterParams::converge_updates`] updates since its last restart, if significant
+    /// and outside [`TargetFilterParams::slow_deadband_rad_s`]; otherwise the fast model's, if
+    /// significant and outside [`TargetFilterParams::deadband_rad_s`].
+    fn angular_feedforward(p: &TargetFilterParams, track: &Track) -> Vector3<f32> {
+        let fast = angular(&track.rot);
+        let slow = if p.slow_angular_acceleration_psd > 0.0 && track.slow.updates() >= p.converge_updates {
+            Self::significant(p, &track.slow.velocity(), p.slow_deadband_rad_s)
+        } else {
+            Vector3::zeros()
+        };
+        if slow != Vector3::zeros() { slow } else { Self::significant(p, &fast, p.deadband_rad_s) }
     }
 
     /// The velocity `(v, σ²)` if it is outside the dead band and significant, else zero.

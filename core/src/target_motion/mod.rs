@@ -46,9 +46,11 @@ use crate::pose::Psi;
 use crate::status::Status;
 use crate::{math, quat};
 
+mod angular;
 mod axis;
 mod params;
 mod predict;
+use angular::SlowTurn;
 use axis::{Axis, PosAxis};
 pub use params::{FilterParamsError, TargetFilterParams};
 pub use predict::{PredictError, Prediction};
@@ -89,6 +91,8 @@ struct Track {
     /// Error-state axes of the orientation (`x` is 0 between updates).
     rot: [Axis; 3],
     orientation: UnitQuaternion<f32>,
+    /// The slow angular model (a steady turn).
+    slow: SlowTurn,
     time_us: u64,
     /// The last accepted measurement and its time (the base of [`TargetFilter::predict`]).
     last: Isometry3<f32>,
@@ -285,6 +289,7 @@ impl TargetFilter {
         let mut predicted = *track;
         predicted.pos.iter_mut().for_each(|a| a.predict(dt, p.acceleration_psd, p.jerk_psd));
         predicted.rot.iter_mut().for_each(|a| a.predict(dt, p.angular_acceleration_psd));
+        predicted.slow.predict(dt, p.slow_angular_acceleration_psd);
         let turn = Vector3::new(predicted.rot[0].x, predicted.rot[1].x, predicted.rot[2].x);
         predicted.orientation = exp_rotation(&turn) * predicted.orientation;
         predicted.rot.iter_mut().for_each(|a| a.x = 0.0);
@@ -312,6 +317,15 @@ impl TargetFilter {
         }
         for (a, y) in predicted.rot.iter_mut().zip(y_rot.iter()) {
             a.update(*y, r_rot);
+        }
+        // The slow model is for a turn too slow for the fast one to see: it restarts while the
+        // fast model's angular velocity is significant, or the block is poorly seen.
+        let fast_turn = Self::significant(p, &angular(&predicted.rot), p.deadband_rad_s) != Vector3::zeros();
+        if fitness >= p.slow_min_fitness && !fast_turn {
+            predicted.slow.update(&measured.rotation, r_rot);
+        } else {
+            let w0 = p.initial_rate_sd_rad_s * p.initial_rate_sd_rad_s;
+            predicted.slow = SlowTurn::start(measured.rotation, r_rot, w0);
         }
         let correction = Vector3::new(predicted.rot[0].x, predicted.rot[1].x, predicted.rot[2].x);
         predicted.orientation = exp_rotation(&correction) * predicted.orientation;
@@ -354,6 +368,7 @@ impl TargetFilter {
             pos: core::array::from_fn(|i| PosAxis::start(t[i], r_pos[i], v0, a0)),
             rot: [Axis::start(0.0, r_rot, w0); 3],
             orientation: measured.rotation,
+            slow: SlowTurn::start(measured.rotation, r_rot, w0),
             time_us,
             last: *measured,
             last_time_us: time_us,
@@ -390,7 +405,21 @@ impl TargetFilter {
         let v = if track.moving { lin.0 } else { Self::significant(p, &lin, p.deadband_m_s) };
         let lead = Vector3::new(track.pos[0].a, track.pos[1].a, track.pos[2].a) * p.acceleration_lead_s;
         let v = if v == Vector3::zeros() { v } else { v + lead };
-        TargetVelocity { v, w: Self::significant(p, &angular(&track.rot), p.deadband_rad_s) }
+        TargetVelocity { v, w: Self::angular_feedforward(p, track) }
+    }
+
+    /// The angular velocity fed forward: the slow model's once it has learnt from
+    /// [`TargetFilterParams::converge_updates`] updates since its last restart, if significant
+    /// and outside [`TargetFilterParams::slow_deadband_rad_s`]; otherwise the fast model's, if
+    /// significant and outside [`TargetFilterParams::deadband_rad_s`].
+    fn angular_feedforward(p: &TargetFilterParams, track: &Track) -> Vector3<f32> {
+        let fast = angular(&track.rot);
+        let slow = if p.slow_angular_acceleration_psd > 0.0 && track.slow.updates() >= p.converge_updates {
+            Self::significant(p, &track.slow.velocity(), p.slow_deadband_rad_s)
+        } else {
+            Vector3::zeros()
+        };
+        if slow != Vector3::zeros() { slow } else { Self::significant(p, &fast, p.deadband_rad_s) }
     }
 
     /// The velocity `(v, σ²)` if it is outside the dead band and significant, else zero.

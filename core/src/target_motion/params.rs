@@ -17,6 +17,15 @@ pub struct TargetFilterParams {
     pub acceleration_psd: f32,
     /// Spectral density of the white angular acceleration noise (rad²/s³).
     pub angular_acceleration_psd: f32,
+    /// Spectral density of the white angular acceleration noise of the second, slow angular
+    /// model (rad²/s³) run beside the fast one for a steady turn; 0 feeds forward none of it
+    /// (see [`TargetFilter::feedforward_velocity`](super::TargetFilter::feedforward_velocity)).
+    pub slow_angular_acceleration_psd: f32,
+    /// Feedforward dead band of the slow model's angular speed (rad/s).
+    pub slow_deadband_rad_s: f32,
+    /// The slow model learns only from estimates of at least this fitness; a lower one
+    /// restarts it (its long memory would keep the errors of a poorly seen block).
+    pub slow_min_fitness: f32,
     /// Spectral density of the white jerk noise of the position axes' acceleration state
     /// (m²/s⁵): each position axis is `[x, ẋ, ẍ]`, so a block that speeds up, stops and
     /// reverses is followed without the lag of a constant-velocity model. 0 together with
@@ -92,6 +101,9 @@ impl TargetFilterParams {
         rotation_noise_rad: 0.02,
         acceleration_psd: 0.2,
         angular_acceleration_psd: 0.01,
+        slow_angular_acceleration_psd: 1e-4,
+        slow_deadband_rad_s: 0.02,
+        slow_min_fitness: 0.96,
         jerk_psd: 30.0,
         initial_accel_sd_m_s2: 1.0,
         acceleration_lead_s: 0.0,
@@ -143,6 +155,9 @@ impl TargetFilterParams {
             (self.jerk_psd, "jerk_psd"),
             (self.initial_accel_sd_m_s2, "initial_accel_sd_m_s2"),
             (self.acceleration_lead_s, "acceleration_lead_s"),
+            (self.slow_angular_acceleration_psd, "slow_angular_acceleration_psd"),
+            (self.slow_deadband_rad_s, "slow_deadband_rad_s"),
+            (self.slow_min_fitness, "slow_min_fitness"),
         ];
         if let Some((_, name)) = non_negative.iter().find(|(v, _)| !(v.is_finite() && *v >= 0.0)) {
             return Err(FilterParamsError(name));
@@ -174,7 +189,10 @@ impl FilterParamsError {
             | "significance_sigma"
             | "jerk_psd"
             | "initial_accel_sd_m_s2"
-            | "acceleration_lead_s" => "finite and non-negative",
+            | "acceleration_lead_s"
+            | "slow_angular_acceleration_psd"
+            | "slow_deadband_rad_s"
+            | "slow_min_fitness" => "finite and non-negative",
             "depth_feedforward" => "between 0 and 1",
             "max_outliers" | "converge_updates" => "at least 1",
             _ => "finite and positive",

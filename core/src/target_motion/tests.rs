@@ -388,3 +388,83 @@ fn a_belt_across_a_slanted_view_keeps_its_motion_in_depth() {
     let all = f.feedforward_velocity().v;
     assert!(seen.dot(&u) > 0.9 * all.dot(&u) && all.dot(&u) > 0.05, "{seen} of {all}");
 }
+
+/// The fed-forward angular velocity over `frames` frames of a block whose orientation is
+/// `turn(k)` (world rotation vector from `moving`'s start) with ±`jitter` rad of noise, seen
+/// with fitness 0.99: the RMS of its error against the true rate `rate(k)` from frame 40 on,
+/// and the last one.
+fn angular_feed(
+    params: TargetFilterParams,
+    frames: u64,
+    jitter: f32,
+    turn: impl Fn(u64) -> Vector3<f32>,
+    rate: impl Fn(u64) -> Vector3<f32>,
+) -> (f32, Vector3<f32>) {
+    let mut f = TargetFilter::new(params).unwrap();
+    let (mut sum, mut n, mut last) = (0.0, 0, Vector3::zeros());
+    for k in 0..frames {
+        let base = moving(0, Vector3::zeros(), Vector3::zeros());
+        let pose = Isometry3::from_parts(base.translation, exp_rotation(&turn(k)) * base.rotation);
+        f.update(&noisy(pose, k, 0.0005, jitter), k * DT_US, 0.99);
+        last = f.feedforward_velocity().w;
+        if k >= 40 {
+            sum += (last - rate(k)).norm_squared();
+            n += 1;
+        }
+    }
+    (math::sqrt(sum / n as f32), last)
+}
+
+const FAST_ONLY: TargetFilterParams =
+    TargetFilterParams { slow_angular_acceleration_psd: 0.0, ..TargetFilterParams::DEFAULT };
+
+#[test]
+fn a_steady_slow_turn_is_fed_forward_by_the_slow_model() {
+    // The iiwa-rotate sample: a block turning at 0.03 rad/s, estimates jittering by a few mrad.
+    let w = Vector3::new(0.0, -0.023, -0.019);
+    let dt = DT_US as f32 * 1e-6;
+    let turn = |k: u64| w * (k as f32 * dt);
+    let (rms, last) = angular_feed(TargetFilterParams::DEFAULT, 300, 0.005, turn, |_| w);
+    assert!((last - w).norm() < 0.006, "fed forward {last} for {w}");
+    assert!(rms < 0.012, "RMS error of the fed-forward rate {rms} rad/s");
+    // The fast model alone (σ_ω ≈ 0.05 rad/s) never finds it significant.
+    let (_, fast) = angular_feed(FAST_ONLY, 300, 0.005, turn, |_| w);
+    assert_eq!(fast, Vector3::zeros());
+    // A block at rest with the same jitter is not turned.
+    let (rest, _) = angular_feed(TargetFilterParams::DEFAULT, 300, 0.005, |_| Vector3::zeros(), |_| Vector3::zeros());
+    assert!(rest < 1e-3, "a still block fed forward at {rest} rad/s RMS");
+}
+
+#[test]
+fn an_oscillating_yaw_is_not_lagged_by_the_slow_model() {
+    // The target grid's fast yaw: ±15° at ω_o = 1 and 0.5 rad/s, estimates jittering by 5 mrad.
+    // The slow model would lag it by a large part of its 0.26 rad/s peak rate; it restarts
+    // while the fast model sees the turn, so the fed-forward rate is no worse than the fast
+    // model's alone.
+    let dt = DT_US as f32 * 1e-6;
+    let axis = Vector3::new(0.0, 0.0, 1.0);
+    for omega in [1.0f32, 0.5] {
+        let amp = 15f32.to_radians();
+        let turn = |k: u64| axis * (amp * math::sin(omega * k as f32 * dt));
+        let rate = |k: u64| axis * (amp * omega * math::cos(omega * k as f32 * dt));
+        let (both, _) = angular_feed(TargetFilterParams::DEFAULT, 600, 0.005, turn, rate);
+        let (fast, _) = angular_feed(FAST_ONLY, 600, 0.005, turn, rate);
+        assert!(both <= 1.05 * fast, "ω_o {omega}: RMS rate error {both} rad/s against the fast model's {fast}");
+        assert!(both < 0.5 * amp * omega, "ω_o {omega}: RMS rate error {both} rad/s");
+    }
+}
+
+#[test]
+fn a_poorly_seen_block_does_not_teach_the_slow_model() {
+    // The same steady turn at fitness 0.9 (below `slow_min_fitness`): nothing of the slow
+    // model is fed forward, as with the fast model alone.
+    let w = Vector3::new(0.0, -0.023, -0.019);
+    let mut f = TargetFilter::with_defaults();
+    for k in 0..300u64 {
+        let base = moving(0, Vector3::zeros(), Vector3::zeros());
+        let pose =
+            Isometry3::from_parts(base.translation, exp_rotation(&(w * (k * DT_US) as f32 * 1e-6)) * base.rotation);
+        f.update(&noisy(pose, k, 0.0005, 0.005), k * DT_US, 0.9);
+    }
+    assert_eq!(f.feedforward_velocity().w, Vector3::zeros());
+}

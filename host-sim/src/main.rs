@@ -169,8 +169,9 @@ enum Command {
         #[arg(long, conflicts_with = "method")]
         no_ff: bool,
         /// `ga` (plain 1-step GA), `ff` (+ the arm's motion fed forward) or `ff+target` (+ the
-        /// target's own motion, estimated from past estimates, fed forward too).
-        #[arg(long, value_enum, default_value_t = TrackMethod::Ff)]
+        /// target's own motion, estimated from past estimates, fed forward too; the default: a
+        /// recorded target may move, and on a still one nothing significant is fed forward).
+        #[arg(long, value_enum, default_value_t = TrackMethod::FfTarget)]
         method: TrackMethod,
         /// Seed of the GA.
         #[arg(long, default_value_t = 1)]

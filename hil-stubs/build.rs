@@ -1,7 +1,8 @@
 //! Build script of the firmware crate:
-//! 1. puts the workspace's `memory-m4.x` (the one source of truth for the memory map; with the
-//!    `m7` feature `memory-m7.x`, the Cortex-M7 profile's) on the linker search path, via a copy
-//!    named `memory.x` in `OUT_DIR`, for cortex-m-rt's `link.x`;
+//! 1. puts the workspace's `memory.x` (the one source of truth for the memory map of both board
+//!    profiles) on the linker search path, via a copy in `OUT_DIR`, for cortex-m-rt's `link.x`;
+//!    with the `m7` feature, links the firmware with `--defsym=__evorec_m7=1`, which picks the
+//!    Cortex-M7 profile's lengths in that file;
 //! 2. runs the self-test scenario (`src/selftest.rs`) on the host and writes the estimate
 //!    bits to `$OUT_DIR/selftest_expected.rs`, which the on-target test compares against.
 
@@ -17,14 +18,17 @@ mod selftest;
 
 fn main() -> Result<(), Box<dyn Error>> {
     let out = PathBuf::from(env::var_os("OUT_DIR").ok_or("OUT_DIR not set")?);
-    // The Cortex-M7 profile (feature `m7`) has its own memory map.
-    // Neither map is called `memory.x`: the linker looks for `memory.x` in its working
-    // directory (the workspace root) before the search path, so a file of that name there
-    // would shadow the copy below.
-    let map = if env::var_os("CARGO_FEATURE_M7").is_some() { "../memory-m7.x" } else { "../memory-m4.x" };
-    let memory_x = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").ok_or("no manifest dir")?).join(map);
+    // One map for both profiles: the linker looks for `memory.x` in its working directory (the
+    // workspace root) before the search path, so a second map could not be put in its place.
+    let memory_x = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").ok_or("no manifest dir")?).join("../memory.x");
     fs::copy(&memory_x, out.join("memory.x"))?;
     println!("cargo:rustc-link-search={}", out.display());
+    // The Cortex-M7 profile's lengths (`DEFINED(__evorec_m7)` in memory.x); only the firmware's
+    // bare-metal link reads memory.x, a host build of this crate must not get the flag.
+    let bare_metal = env::var("CARGO_CFG_TARGET_OS").is_ok_and(|os| os == "none");
+    if bare_metal && env::var_os("CARGO_FEATURE_M7").is_some() {
+        println!("cargo:rustc-link-arg=--defsym=__evorec_m7=1");
+    }
     println!("cargo:rerun-if-changed={}", memory_x.display());
     println!("cargo:rerun-if-changed=src/selftest.rs");
     println!("cargo:rerun-if-changed=build.rs");

@@ -29,7 +29,7 @@
 //! [`DEFAULT_POPULATION`](evorec_core::config::DEFAULT_POPULATION) by default,
 //! [`DEFAULT_GRID`](evorec_core::config::DEFAULT_GRID) samples per row) lives in a static too
 //! and is built in place (`Tracker::new_in`: model, hue-match table and population are
-//! written where they live, so no tracker-sized temporary is on the stack). `memory-m4.x` at the
+//! written where they live, so no tracker-sized temporary is on the stack). `memory.x` at the
 //! workspace root budgets an STM32F4-class part (1 MiB flash, 128 KiB SRAM); the firmware's
 //! own budget is flash ≤ 256 KiB plus the hue table, and statics + stack ≤ 128 KiB with a
 //! stack ≤ 6 KiB. The stack is painted by cortex-m-rt before `main` and its high-water mark
@@ -116,10 +116,10 @@ pub struct BoardProfile {
 }
 
 impl BoardProfile {
-    /// The Cortex-M4F camera controller (STM32F4-class, 128 KiB RAM, `memory-m4.x`), 160×120.
+    /// The Cortex-M4F camera controller (STM32F4-class, 128 KiB RAM, `memory.x`), 160×120.
     pub const M4: Self =
         Self { name: "m4", qemu_cpu: "cortex-m4", qemu_machine: "mps2-an386", frame_width: 160, frame_height: 120 };
-    /// The Cortex-M7 camera controller (STM32H7-class, 512 KiB RAM, `memory-m7.x`; feature
+    /// The Cortex-M7 camera controller (STM32H7-class, 512 KiB RAM, `memory.x` with `__evorec_m7`; feature
     /// `m7`), 320×240.
     pub const M7: Self =
         Self { name: "m7", qemu_cpu: "cortex-m7", qemu_machine: "mps2-an500", frame_width: 320, frame_height: 240 };

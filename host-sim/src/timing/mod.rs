@@ -81,7 +81,7 @@ pub const RATIO_TARGET: f64 = 1.05;
 pub const QEMU_TIMEOUT: Duration = Duration::from_secs(600);
 /// The target triple of the firmware.
 const TARGET: &str = "thumbv7em-none-eabihf";
-/// Start of RAM on mps2-an386 and mps2-an500 (`memory-m4.x`, `memory-m7.x`).
+/// Start of RAM on mps2-an386 and mps2-an500 (`memory.x`, both profiles).
 const RAM_ORIGIN: u64 = 0x2000_0000;
 
 /// Everything one `evorec timing` run measured and derived; the report writers' input.

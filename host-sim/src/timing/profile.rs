@@ -2,8 +2,8 @@
 //! of each, its RAM budget, and the clock, pipeline and memory system of its cycle ESTIMATE.
 //!
 //! The instruction counts come from the same timing firmware code on both (the M7 image is the
-//! M4 code built with feature `m7`: 320×240 frames, `memory-m7.x`); only the frame size, the
-//! QEMU machine and the cycle model differ.
+//! M4 code built with feature `m7`: 320×240 frames, the M7 lengths of `memory.x`); only the
+//! frame size, the QEMU machine and the cycle model differ.
 
 use evorec_firmware::BoardProfile;
 
@@ -81,13 +81,13 @@ pub struct Board {
 }
 
 impl Board {
-    /// The Cortex-M4F profile (STM32F4-class, 160×120, `memory-m4.x`).
+    /// The Cortex-M4F profile (STM32F4-class, 160×120, `memory.x`).
     pub const M4: Self = Self {
         profile: BoardProfile::M4,
         part: "Cortex-M4F (STM32F4-class)",
         clock_hz: 168.0e6,
         ram_bytes: 128 * 1024,
-        memory_map: "memory-m4.x",
+        memory_map: "memory.x",
         build_hint: "cd hil-stubs && cargo build --release",
         target_subdir: None,
         branch_cycles: 4.0,
@@ -95,13 +95,13 @@ impl Board {
         memory: MemorySystem::STM32F4,
     };
 
-    /// The Cortex-M7 profile (STM32H7-class, 320×240, `memory-m7.x`).
+    /// The Cortex-M7 profile (STM32H7-class, 320×240, `memory.x` with `__evorec_m7`).
     pub const M7: Self = Self {
         profile: BoardProfile::M7,
         part: "Cortex-M7 (STM32H743-class)",
         clock_hz: 480.0e6,
         ram_bytes: 512 * 1024,
-        memory_map: "memory-m7.x",
+        memory_map: "memory.x, M7 profile",
         build_hint: "cd hil-stubs && CARGO_TARGET_DIR=../target/m7 cargo build --release --features m7",
         target_subdir: Some("m7"),
         branch_cycles: 8.0,

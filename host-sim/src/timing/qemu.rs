@@ -63,7 +63,7 @@ pub fn find_image(board: &Board, name: &str) -> Result<PathBuf> {
 }
 
 /// The sources an image is built from: `core/` and `hil-stubs/` (their `src/` and manifests),
-/// the memory maps, and the lock file.
+/// the firmware's build script, the memory map (`memory.x`, both profiles), and the lock file.
 fn image_sources() -> Vec<PathBuf> {
     let ws = workspace();
     let mut roots = vec![ws.join("Cargo.lock"), ws.join("memory.x")];
@@ -71,9 +71,7 @@ fn image_sources() -> Vec<PathBuf> {
         roots.push(ws.join(krate).join("src"));
         roots.push(ws.join(krate).join("Cargo.toml"));
     }
-    if let Ok(entries) = fs::read_dir(ws.join("hil-stubs")) {
-        roots.extend(entries.flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|x| x == "x")));
-    }
+    roots.push(ws.join("hil-stubs").join("build.rs"));
     roots
 }
 

@@ -468,3 +468,49 @@ fn a_poorly_seen_block_does_not_teach_the_slow_model() {
     }
     assert_eq!(f.feedforward_velocity().w, Vector3::zeros());
 }
+
+/// The defaults without the slow linear model (the fast position axes fed forward alone).
+const FAST_LINEAR: TargetFilterParams = TargetFilterParams { slow_acceleration_psd: 0.0, ..TargetFilterParams::DEFAULT };
+
+/// RMS error of the fed-forward velocity of a block on a belt at 0.2 m/s along y, positions
+/// jittering by up to `jitter` m, over frames 60..300.
+fn belt_velocity_error(params: TargetFilterParams, jitter: f32) -> f32 {
+    let mut f = TargetFilter::new(params).unwrap();
+    let v = Vector3::new(0.0, 0.2, 0.0);
+    let (mut sum, mut n) = (0.0, 0);
+    for k in 0..300u64 {
+        f.update(&noisy(moving(k, v, Vector3::zeros()), k, jitter, 0.004), k * DT_US, 0.95);
+        if k >= 60 {
+            sum += (f.feedforward_velocity().v - v).norm_squared();
+            n += 1;
+        }
+    }
+    math::sqrt(sum / n as f32)
+}
+
+#[test]
+fn the_slow_linear_model_smooths_a_steady_belt() {
+    let both = belt_velocity_error(TargetFilterParams::DEFAULT, 0.0015);
+    let fast = belt_velocity_error(FAST_LINEAR, 0.0015);
+    assert!(both < 0.7 * fast, "RMS velocity error {both} m/s against the fast model's {fast}");
+}
+
+#[test]
+fn the_slow_linear_model_does_not_lag_a_reversal() {
+    let (both, fed) = reversal_lag(TargetFilterParams::DEFAULT);
+    let (fast, _) = reversal_lag(FAST_LINEAR);
+    assert!(fed, "the motion is held through the speed's zero crossing");
+    assert!(both <= 1.1 * fast, "worst speed error {both} m/s through a reversal against the fast model's {fast}");
+}
+
+#[test]
+fn a_manoeuvre_restarts_the_slow_linear_model_from_the_fast_one() {
+    let mut f = TargetFilter::with_defaults();
+    for k in 0..130u64 {
+        f.update(&shuttle(k, 0.2, 22).0, k * DT_US, 0.95);
+        let track = f.track.as_ref().unwrap();
+        if track.slow_lin.updates() == 0 {
+            assert_eq!(track.slow_lin.velocity(), linear(&track.pos).0, "frame {k}: a restart copies the fast model");
+        }
+    }
+}

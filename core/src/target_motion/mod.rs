@@ -48,12 +48,10 @@ use crate::{math, quat};
 
 mod angular;
 mod axis;
-mod linear;
 mod params;
 mod predict;
 use angular::SlowTurn;
 use axis::{Axis, PosAxis};
-use linear::SlowLinear;
 pub use params::{FilterParamsError, TargetFilterParams};
 pub use predict::{PredictError, Prediction};
 
@@ -95,8 +93,6 @@ struct Track {
     orientation: UnitQuaternion<f32>,
     /// The slow angular model (a steady turn).
     slow: SlowTurn,
-    /// The slow linear model (the velocity between manoeuvres).
-    slow_lin: SlowLinear,
     time_us: u64,
     /// The last accepted measurement and its time (the base of [`TargetFilter::predict`]).
     last: Isometry3<f32>,
@@ -294,7 +290,6 @@ impl TargetFilter {
         predicted.pos.iter_mut().for_each(|a| a.predict(dt, p.acceleration_psd, p.jerk_psd));
         predicted.rot.iter_mut().for_each(|a| a.predict(dt, p.angular_acceleration_psd));
         predicted.slow.predict(dt, p.slow_angular_acceleration_psd);
-        predicted.slow_lin.predict(dt, p.slow_acceleration_psd, p.slow_jerk_psd);
         let turn = Vector3::new(predicted.rot[0].x, predicted.rot[1].x, predicted.rot[2].x);
         predicted.orientation = exp_rotation(&turn) * predicted.orientation;
         predicted.rot.iter_mut().for_each(|a| a.x = 0.0);
@@ -323,7 +318,6 @@ impl TargetFilter {
         for (a, y) in predicted.rot.iter_mut().zip(y_rot.iter()) {
             a.update(*y, r_rot);
         }
-        Self::update_slow_linear(p, &mut predicted, &t, &r_pos);
         // The slow model is for a turn too slow for the fast one to see: it restarts while the
         // fast model's angular velocity is significant, or the block is poorly seen.
         let fast_turn = Self::significant(p, &angular(&predicted.rot), p.deadband_rad_s) != Vector3::zeros();
@@ -354,21 +348,6 @@ impl TargetFilter {
         UpdateOutcome::Accepted
     }
 
-    /// The slow linear model learns from the accepted position `measured` (variances `r`); it
-    /// restarts as a copy of the fast model (already updated) when their velocities disagree.
-    fn update_slow_linear(p: &TargetFilterParams, track: &mut Track, measured: &Vector3<f32>, r: &[f32; 3]) {
-        track.slow_lin.update(measured, r);
-        if !track.slow_lin.agrees(&track.pos, p.slow_linear_gate_sigma) {
-            track.slow_lin = SlowLinear::from_fast(&track.pos);
-        }
-    }
-
-    /// Whether the slow linear model is fed forward: on, and it has followed
-    /// [`TargetFilterParams::slow_linear_updates`] updates since its last restart.
-    fn slow_linear_settled(p: &TargetFilterParams, track: &Track) -> bool {
-        p.slow_acceleration_psd > 0.0 && track.slow_lin.updates() >= p.slow_linear_updates
-    }
-
     /// Variance of a position measurement per world axis for the unit line of sight `los`.
     fn position_variance(&self, los: Option<Vector3<f32>>) -> [f32; 3] {
         let p = &self.params;
@@ -385,13 +364,11 @@ impl TargetFilter {
             (p.initial_speed_sd_m_s * p.initial_speed_sd_m_s, p.initial_rate_sd_rad_s * p.initial_rate_sd_rad_s);
         let a0 = p.initial_accel_sd_m_s2 * p.initial_accel_sd_m_s2;
         let t = measured.translation.vector;
-        let pos: [PosAxis; 3] = core::array::from_fn(|i| PosAxis::start(t[i], r_pos[i], v0, a0));
         self.track = Some(Track {
-            pos,
+            pos: core::array::from_fn(|i| PosAxis::start(t[i], r_pos[i], v0, a0)),
             rot: [Axis::start(0.0, r_rot, w0); 3],
             orientation: measured.rotation,
             slow: SlowTurn::start(measured.rotation, r_rot, w0),
-            slow_lin: SlowLinear::from_fast(&pos),
             time_us,
             last: *measured,
             last_time_us: time_us,
@@ -426,8 +403,6 @@ impl TargetFilter {
         let p = &self.params;
         let lin = linear(&track.pos);
         let v = if track.moving { lin.0 } else { Self::significant(p, &lin, p.deadband_m_s) };
-        // The fast model decides whether the block moves; the slow one, once settled, says how.
-        let v = if v != Vector3::zeros() && Self::slow_linear_settled(p, track) { track.slow_lin.velocity() } else { v };
         let lead = Vector3::new(track.pos[0].a, track.pos[1].a, track.pos[2].a) * p.acceleration_lead_s;
         let v = if v == Vector3::zeros() { v } else { v + lead };
         TargetVelocity { v, w: Self::angular_feedforward(p, track) }
@@ -444,14 +419,7 @@ impl TargetFilter {
         } else {
             Vector3::zeros()
         };
-        let manoeuvre = p.slow_acceleration_psd > 0.0 && track.slow_lin.updates() < p.manoeuvre_mutes_angular_updates;
-        if slow != Vector3::zeros() {
-            slow
-        } else if manoeuvre {
-            Vector3::zeros()
-        } else {
-            Self::significant(p, &fast, p.deadband_rad_s)
-        }
+        if slow != Vector3::zeros() { slow } else { Self::significant(p, &fast, p.deadband_rad_s) }
     }
 
     /// The velocity `(v, σ²)` if it is outside the dead band and significant, else zero.

@@ -26,23 +26,6 @@ pub struct TargetFilterParams {
     /// The slow model learns only from estimates of at least this fitness; a lower one
     /// restarts it (its long memory would keep the errors of a poorly seen block).
     pub slow_min_fitness: f32,
-    /// Spectral density of the white acceleration noise of the second, slow linear model
-    /// (m²/s³) run beside the fast position axes; 0 turns the slow linear model off (see
-    /// [`TargetFilter::feedforward_velocity`](super::TargetFilter::feedforward_velocity)).
-    pub slow_acceleration_psd: f32,
-    /// Spectral density of the white jerk noise of the slow linear model (m²/s⁵).
-    pub slow_jerk_psd: f32,
-    /// The slow linear model agrees with the fast one while their velocities differ by at most
-    /// this many of the fast model's standard deviations (`√(Σ Δvᵢ²/σᵢ²)`); otherwise the block
-    /// manoeuvres and the slow model restarts as a copy of the fast one.
-    pub slow_linear_gate_sigma: f32,
-    /// Updates the slow linear model must follow on its own since its last restart before its
-    /// velocity is fed forward.
-    pub slow_linear_updates: u16,
-    /// While the slow linear model has followed fewer than this many updates since its last
-    /// restart (a linear manoeuvre), the fast angular model's velocity is not fed forward; 0
-    /// never mutes it.
-    pub manoeuvre_mutes_angular_updates: u16,
     /// Spectral density of the white jerk noise of the position axes' acceleration state
     /// (m²/s⁵): each position axis is `[x, ẋ, ẍ]`, so a block that speeds up, stops and
     /// reverses is followed without the lag of a constant-velocity model. 0 together with
@@ -121,11 +104,6 @@ impl TargetFilterParams {
         slow_angular_acceleration_psd: 1e-4,
         slow_deadband_rad_s: 0.02,
         slow_min_fitness: 0.96,
-        slow_acceleration_psd: 0.02,
-        slow_jerk_psd: 3.0,
-        slow_linear_gate_sigma: 2.0,
-        slow_linear_updates: 3,
-        manoeuvre_mutes_angular_updates: 0,
         jerk_psd: 30.0,
         initial_accel_sd_m_s2: 1.0,
         acceleration_lead_s: 0.0,
@@ -180,9 +158,6 @@ impl TargetFilterParams {
             (self.slow_angular_acceleration_psd, "slow_angular_acceleration_psd"),
             (self.slow_deadband_rad_s, "slow_deadband_rad_s"),
             (self.slow_min_fitness, "slow_min_fitness"),
-            (self.slow_acceleration_psd, "slow_acceleration_psd"),
-            (self.slow_jerk_psd, "slow_jerk_psd"),
-            (self.slow_linear_gate_sigma, "slow_linear_gate_sigma"),
         ];
         if let Some((_, name)) = non_negative.iter().find(|(v, _)| !(v.is_finite() && *v >= 0.0)) {
             return Err(FilterParamsError(name));
@@ -195,9 +170,6 @@ impl TargetFilterParams {
         }
         if self.converge_updates == 0 {
             return Err(FilterParamsError("converge_updates"));
-        }
-        if self.slow_linear_updates == 0 {
-            return Err(FilterParamsError("slow_linear_updates"));
         }
         Ok(())
     }
@@ -220,12 +192,9 @@ impl FilterParamsError {
             | "acceleration_lead_s"
             | "slow_angular_acceleration_psd"
             | "slow_deadband_rad_s"
-            | "slow_min_fitness"
-            | "slow_acceleration_psd"
-            | "slow_jerk_psd"
-            | "slow_linear_gate_sigma" => "finite and non-negative",
+            | "slow_min_fitness" => "finite and non-negative",
             "depth_feedforward" => "between 0 and 1",
-            "max_outliers" | "converge_updates" | "slow_linear_updates" => "at least 1",
+            "max_outliers" | "converge_updates" => "at least 1",
             _ => "finite and positive",
         }
     }

@@ -411,7 +411,8 @@ impl TargetFilter {
     /// The angular velocity fed forward: the slow model's once it has learnt from
     /// [`TargetFilterParams::converge_updates`] updates since its last restart, if significant
     /// and outside [`TargetFilterParams::slow_deadband_rad_s`]; otherwise the fast model's, if
-    /// significant and outside [`TargetFilterParams::deadband_rad_s`].
+    /// significant and outside [`TargetFilterParams::deadband_rad_s`] and the linear motion is
+    /// not held with [`TargetFilterParams::linear_motion_mutes_angular`].
     fn angular_feedforward(p: &TargetFilterParams, track: &Track) -> Vector3<f32> {
         let fast = angular(&track.rot);
         let slow = if p.slow_angular_acceleration_psd > 0.0 && track.slow.updates() >= p.converge_updates {
@@ -419,7 +420,11 @@ impl TargetFilter {
         } else {
             Vector3::zeros()
         };
-        if slow != Vector3::zeros() { slow } else { Self::significant(p, &fast, p.deadband_rad_s) }
+        if slow != Vector3::zeros() || (p.linear_motion_mutes_angular && track.moving) {
+            slow
+        } else {
+            Self::significant(p, &fast, p.deadband_rad_s)
+        }
     }
 
     /// The velocity `(v, σ²)` if it is outside the dead band and significant, else zero.

@@ -468,3 +468,29 @@ fn a_poorly_seen_block_does_not_teach_the_slow_model() {
     }
     assert_eq!(f.feedforward_velocity().w, Vector3::zeros());
 }
+
+/// The angular velocity fed forward after 120 frames of a block moving with `v` and turning
+/// with `w`, and whether its linear velocity is fed forward then.
+fn angular_while_moving(params: TargetFilterParams, v: Vector3<f32>, w: Vector3<f32>) -> (Vector3<f32>, bool) {
+    let mut f = TargetFilter::new(params).unwrap();
+    for k in 0..120u64 {
+        f.update(&noisy(moving(k, v, w), k, 0.0005, 0.004), k * DT_US, 0.9);
+    }
+    let ff = f.feedforward_velocity();
+    (ff.w, ff.v != Vector3::zeros())
+}
+
+#[test]
+fn a_moving_block_gets_no_fast_angular_feedforward() {
+    let v = Vector3::new(0.0, 0.2, 0.0);
+    let w = Vector3::new(0.0, 0.0, 0.3);
+    let unmuted = TargetFilterParams { linear_motion_mutes_angular: false, ..TargetFilterParams::DEFAULT };
+    let (fed, moves) = angular_while_moving(unmuted, v, w);
+    assert!(moves && (fed - w).norm() < 0.1, "without the mute the turn {w} is fed forward as {fed}");
+    let (muted, moves) = angular_while_moving(TargetFilterParams::DEFAULT, v, w);
+    assert!(moves, "the linear motion is still fed forward");
+    assert_eq!(muted, Vector3::zeros(), "the fast angular model is muted while the block moves");
+    // A block turning in place keeps its angular feedforward.
+    let (still, moves) = angular_while_moving(TargetFilterParams::DEFAULT, Vector3::zeros(), w);
+    assert!(!moves && (still - w).norm() < 0.1, "a turn in place {w} is fed forward as {still}");
+}

@@ -132,10 +132,14 @@ impl TargetFilterParams {
         depth_feedforward: 0.0,
     };
 
-    /// Checks every field against its rule: the noises, densities, prior deviations, gate,
-    /// trust bounds and `max_gap_s` finite and positive; `lost_fitness`, the dead bands and
-    /// `significance_sigma` finite and non-negative; `depth_feedforward` in `[0, 1]`; the counts
-    /// `max_outliers` and `converge_updates` at least 1.
+    /// Checks every field against its rule: the noises, the fast densities, the prior speed and
+    /// rate deviations, the gate, the trust bounds and `max_gap_s` finite and positive;
+    /// `lost_fitness`, the dead bands, `significance_sigma`, `jerk_psd`,
+    /// `initial_accel_sd_m_s2`, `acceleration_lead_s` and the slow angular model's
+    /// `slow_angular_acceleration_psd`, `slow_deadband_rad_s` and `slow_min_fitness` finite and
+    /// non-negative; `depth_feedforward` in `[0, 1]`; the counts `max_outliers` and
+    /// `converge_updates` at least 1. The flags (`hold_motion`, `linear_motion_mutes_angular`)
+    /// have no rule.
     ///
     /// # Errors
     /// [`FilterParamsError`] naming the first bad field.

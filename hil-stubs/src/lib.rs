@@ -119,8 +119,8 @@ impl BoardProfile {
     /// The Cortex-M4F camera controller (STM32F4-class, 128 KiB RAM, `memory.x`), 160×120.
     pub const M4: Self =
         Self { name: "m4", qemu_cpu: "cortex-m4", qemu_machine: "mps2-an386", frame_width: 160, frame_height: 120 };
-    /// The Cortex-M7 camera controller (STM32H7-class, 512 KiB RAM, `memory.x` with `__evorec_m7`; feature
-    /// `m7`), 320×240.
+    /// The Cortex-M7 camera controller (STM32H7-class, 512 KiB RAM, `memory.x` with
+    /// `__evorec_m7`; feature `m7`), 320×240.
     pub const M7: Self =
         Self { name: "m7", qemu_cpu: "cortex-m7", qemu_machine: "mps2-an500", frame_width: 320, frame_height: 240 };
 }

@@ -414,7 +414,6 @@ impl TargetFilter {
     /// significant and outside [`TargetFilterParams::deadband_rad_s`] and the linear motion is
     /// not held with [`TargetFilterParams::linear_motion_mutes_angular`].
     fn angular_feedforward(p: &TargetFilterParams, track: &Track) -> Vector3<f32> {
-        let fast = angular(&track.rot);
         let slow = if p.slow_angular_acceleration_psd > 0.0 && track.slow.updates() >= p.converge_updates {
             Self::significant(p, &track.slow.velocity(), p.slow_deadband_rad_s)
         } else {
@@ -423,7 +422,7 @@ impl TargetFilter {
         if slow != Vector3::zeros() || (p.linear_motion_mutes_angular && track.moving) {
             slow
         } else {
-            Self::significant(p, &fast, p.deadband_rad_s)
+            Self::significant(p, &angular(&track.rot), p.deadband_rad_s)
         }
     }
 

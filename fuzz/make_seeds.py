@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes the hand-made seed inputs of the fuzz corpora (fuzz/corpus/<target>/seed-*).
 
-Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 5: 24-byte header,
+Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 6: 24-byte header,
 payload, CRC-32/ISO-HDLC trailer = zlib.crc32, the whole COBS-framed between two zero bytes;
 frames carry RGB565 images, 2 bytes a pixel). Run from anywhere: python3 fuzz/make_seeds.py
 """
@@ -10,7 +10,7 @@ import struct
 import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-VERSION = 5
+VERSION = 6
 
 
 def cobs(raw):
@@ -49,7 +49,7 @@ def setup(width, height):
     p += f32s(-0.2, -0.2, 0.4) + f32s(0.2, 0.2, 1.0)  # search box
     p += struct.pack("<QBBH", 1, 5, 1, 0)  # seed, hue tolerance, feedforward on, reserved
     p += f32s(0.5)  # max dt
-    p += f32s(0.2, 0.9, 0.35) + struct.pack("<II", 1, 3) + f32s(0.25, 0.6)
+    p += f32s(0.2, 0.9, 0.35) + struct.pack("<II", 1, 3) + f32s(0.25, 0.6) + f32s(0.15, 0.5, 0.95)
     p += f32s(0.02, 0.02, 0.02, 0.04, 0.04, 0.04, 0.004, 0.004, 0.004, 0.008, 0.008, 0.008)
     p += f32s(0.001, 0.001, 0.001, 0.002, 0.002, 0.002)
     p += f32s(0, 0, 0.7, 0, 0, 0) + f32s(*[0.02] * 6)  # initial pose and spread

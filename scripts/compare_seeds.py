@@ -3,6 +3,9 @@
 RMS entry in NEW against OLD, their ratio, and the entries whose ratio exceeds LIMIT (issue 9:
 1.10 against the older tree; issue 12: 1.05 for FF + target against FF). Prints markdown.
 
+NEW may hold a subset of OLD's cells (a screen with paper_seeds.py --cells); every cell of NEW
+must be in OLD.
+
 usage: scripts/compare_seeds.py NEW.csv OLD.csv [LIMIT]
 """
 import csv, statistics, sys
@@ -22,9 +25,9 @@ def main():
         raise SystemExit(__doc__)
     new, old = load(sys.argv[1]), load(sys.argv[2])
     limit = float(sys.argv[3]) if len(sys.argv) == 4 else 1.10
-    missing = sorted(set(new) ^ set(old))
+    missing = sorted(set(new) - set(old))
     if missing:
-        raise SystemExit(f'cells in only one table: {missing}')
+        raise SystemExit(f'cells of {sys.argv[1]} not in {sys.argv[2]}: {missing}')
     over = 0
     print('| motion | ω | seeds | RMS x mm | RMS y mm | RMS z mm | RMS ε₁ | RMS ε₂ | RMS ε₃ |')
     print('|---|---|---|---|---|---|---|---|---|')

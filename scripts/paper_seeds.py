@@ -11,7 +11,9 @@ what the comparison needs. Writes OUT/cells_FIRST_LAST.csv (one row per cell and
 already in OUT are reused.
 
 usage: scripts/paper_seeds.py EVOREC TREE OUT FIRST LAST [--method ff+target] [--jobs 2]
+                              [--cells A:0,A:0.25]
 e.g.   scripts/paper_seeds.py target/release/evorec . out/seeds-ff 1 20
+(--cells runs only the listed cells, MOTION:OMEGA, for a quick screen of a change.)
 """
 import argparse, json, os, re, subprocess
 from concurrent.futures import ThreadPoolExecutor
@@ -42,7 +44,21 @@ def main():
     ap.add_argument('first', type=int), ap.add_argument('last', type=int)
     ap.add_argument('--method', help='replaces the scenarios\' method "ff" (e.g. ff+target)')
     ap.add_argument('--jobs', type=int, default=os.cpu_count() or 2)
+    ap.add_argument('--cells', help='only these cells, e.g. A:0,A:0.25,B:1 (default: all nine)')
     a = ap.parse_args()
+    cells = CELLS
+    if a.cells:
+        cells = []
+        for item in a.cells.split(','):
+            m, _, w = item.partition(':')
+            try:
+                cell = (m.strip().upper(), float(w))
+            except ValueError:
+                raise SystemExit(f'--cells: `{item}` is not MOTION:OMEGA (e.g. A:0.25)')
+            known = [c for c in CELLS if c[0] == cell[0] and float(c[1]) == cell[1]]
+            if not known:
+                raise SystemExit(f'--cells: `{item}` is not a cell of the paper grid {CELLS}')
+            cells.append(known[0])
     evorec = os.path.abspath(a.evorec)
     os.makedirs(a.out, exist_ok=True)
 
@@ -58,7 +74,7 @@ def main():
         s = json.load(open(f'{d}/summary.json'))
         return [motion, omega, seed] + [s[k] for k in KEYS]
 
-    jobs = [(m, w, s) for s in range(a.first, a.last + 1) for (m, w) in CELLS]
+    jobs = [(m, w, s) for s in range(a.first, a.last + 1) for (m, w) in cells]
     with ThreadPoolExecutor(a.jobs) as ex:
         rows = list(ex.map(run, jobs))
     path = f'{a.out}/cells_{a.first}_{a.last}.csv'

@@ -75,11 +75,12 @@ pub const DOF: usize = PA10_DOF;
 
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
-/// Protocol version carried in every header (5: COBS framing, header flags, drop counts in
+/// Protocol version carried in every header (6: `CONFIG` carries the GA's settled mutation
+/// levels; 5: COBS framing, header flags, drop counts in
 /// `DONE`; 4: `CONFIG` carries the population size; 3:
 /// estimates carry the tracker's status; 2: frames carry the sensor's RGB565 pixels; 1: hue
 /// frames).
-pub const VERSION: u8 = 5;
+pub const VERSION: u8 = 6;
 /// The pixel format of a frame's images on the link: the camera sensor's own RGB565, so the
 /// hue is computed on the board (see [`evorec_core::image::Rgb565`]).
 pub type LinkFormat = evorec_core::image::Rgb565;
@@ -90,8 +91,9 @@ pub const HEADER_LEN: usize = 24;
 /// CRC trailer size in bytes.
 pub const CRC_LEN: usize = 4;
 /// Size of the GA parameters inside `CONFIG`: population (u32), three probabilities,
-/// immigrants, tournament size, the mutation-level CDF and the mutation scales.
-const GA_LEN: usize = 4 + 3 * 4 + 4 + 4 + 4 * (MUTATION_LEVELS - 1) + 4 * 6 * MUTATION_LEVELS;
+/// immigrants, tournament size, the mutation-level CDF, the settled CDF and its fitness, and
+/// the mutation scales.
+const GA_LEN: usize = 4 + 3 * 4 + 4 + 4 + 2 * 4 * (MUTATION_LEVELS - 1) + 4 + 4 * 6 * MUTATION_LEVELS;
 /// `CONFIG` payload size: intrinsics and image size, baseline, block, flange-to-camera,
 /// search box, seed, hue tolerance, feedforward flag (+2 reserved), `max_dt_s`, GA
 /// parameters, initial pose and spread.

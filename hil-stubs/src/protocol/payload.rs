@@ -83,6 +83,8 @@ fn encode_setup(e: &mut Enc<'_>, s: &Setup) {
         immigrants,
         tournament,
         level_cdf,
+        settled_level_cdf,
+        settled_fitness,
         mutation_scale,
     } = s.ga;
     e.u32(u32::try_from(population).unwrap_or(u32::MAX));
@@ -92,6 +94,8 @@ fn encode_setup(e: &mut Enc<'_>, s: &Setup) {
     e.u32(u32::try_from(immigrants).unwrap_or(u32::MAX));
     e.u32(u32::try_from(tournament).unwrap_or(u32::MAX));
     e.f32s(&level_cdf);
+    e.f32s(&settled_level_cdf);
+    e.f32(settled_fitness);
     for row in &mutation_scale {
         e.f32s(row);
     }
@@ -127,6 +131,8 @@ fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {
     let immigrants = usize::try_from(d.u32()).map_err(|_| DecodeError::BadValue)?;
     let tournament = usize::try_from(d.u32()).map_err(|_| DecodeError::BadValue)?;
     let level_cdf = d.f32s();
+    let settled_level_cdf = d.f32s();
+    let settled_fitness = d.f32();
     let mut mutation_scale = [[0.0f32; 6]; MUTATION_LEVELS];
     for row in mutation_scale.iter_mut() {
         *row = d.f32s();
@@ -159,6 +165,8 @@ fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {
             immigrants,
             tournament,
             level_cdf,
+            settled_level_cdf,
+            settled_fitness,
             mutation_scale,
         },
         initial_psi,

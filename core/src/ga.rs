@@ -612,9 +612,11 @@ mod tests {
             let mut rng = Xoshiro128PlusPlus::seed_from_u64(2);
             let mut ga = Ga::<16>::new(start);
             ga.breed(&Best { psi: start, fitness }, &params, &s, &mut rng);
-            let moved = ga.individuals().iter().take(15).map(|p| {
-                p.0.iter().zip(start.0.iter()).map(|(a, b)| libm::fabsf(a - b)).fold(0.0, f32::max)
-            });
+            let moved = ga
+                .individuals()
+                .iter()
+                .take(15)
+                .map(|p| p.0.iter().zip(start.0.iter()).map(|(a, b)| libm::fabsf(a - b)).fold(0.0, f32::max));
             (moved.fold(0.0, f32::max), rng.next_u32())
         };
         let (below, r_below) = largest_move(0.89);

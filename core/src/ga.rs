@@ -9,8 +9,9 @@
 //!    target); every other child from two binary-tournament parents, blend crossover
 //!    (BLX-0.25 per gene) with probability `crossover_prob`, then with probability
 //!    `mutation_prob` a triangular perturbation at one of three scales picked at random, the
-//!    fine scale more often once the elite fits almost perfectly (lateral position, depth along the viewing ray, and a small turn about the camera's axes
-//!    in place of ε's genes; see [`GaParams::mutation_scale`]).
+//!    fine scale more often once the elite fits almost perfectly (lateral position, depth
+//!    along the viewing ray, and a small turn about the camera's axes in place of ε's genes;
+//!    see [`GaParams::mutation_scale`] and [`GaParams::settled_level_cdf`]).
 //!    Children are clamped into the search space and `|ε| ≤ 1`.
 //!
 //! Every child draws the same number of random numbers whatever happens to it, so the work
@@ -248,17 +249,13 @@ impl GaParams {
         let scales = self.mutation_scale.iter().flatten();
         let probs = [self.crossover_prob, self.mutation_prob, self.gene_mutation_prob];
         let cdfs = [self.level_cdf, self.settled_level_cdf];
-        if !self.settled_fitness.is_finite() || !cdfs.iter().flatten().all(|p| p.is_finite()) {
-            return Err(GaError::NonFinite);
-        }
-        if !cdfs.iter().all(|[a, b]| (0.0..=*b).contains(a) && *b <= 1.0) {
-            return Err(GaError::BadParameter);
-        }
-        if !probs.iter().all(|p| p.is_finite()) || !scales.clone().all(|s| s.is_finite()) {
+        let values = probs.iter().chain(cdfs.iter().flatten()).chain(scales.clone());
+        if !self.settled_fitness.is_finite() || !values.clone().all(|v| v.is_finite()) {
             return Err(GaError::NonFinite);
         }
         let prob_ok = |p: f32| (0.0..=1.0).contains(&p);
-        if !probs.iter().all(|p| prob_ok(*p)) || scales.clone().any(|&s| s < 0.0) {
+        let cdf_ok = |[a, b]: &[f32; MUTATION_LEVELS - 1]| prob_ok(*a) && prob_ok(*b) && a <= b;
+        if !probs.iter().all(|p| prob_ok(*p)) || !cdfs.iter().all(cdf_ok) || scales.clone().any(|&s| s < 0.0) {
             return Err(GaError::BadParameter);
         }
         if self.immigrants + 2 > population {

@@ -463,6 +463,29 @@ impl<const P: usize> Ga<P> {
         best
     }
 
+    /// The mean position of the individuals in use whose fitness at the last evaluation is
+    /// within `margin` of `best`'s (`best` itself always counts): the centre of the crowd at
+    /// the top of the fitness peak, which wanders less from frame to frame than the single
+    /// best individual does. One pass over the population; a NaN `margin` counts `best` only.
+    pub fn mean_translation_near(&self, best: &Best, margin: f32) -> [f32; 3] {
+        let floor = best.fitness - margin;
+        let (mut sum, mut n) = ([0.0f32; 3], 0u32);
+        for (ind, f) in self.individuals().iter().zip(self.fitness().iter()) {
+            if *f >= floor {
+                for (s, t) in sum.iter_mut().zip(ind.0.iter()) {
+                    *s += t;
+                }
+                n += 1;
+            }
+        }
+        if n == 0 {
+            let t = best.psi.translation();
+            return [t.x, t.y, t.z];
+        }
+        let n = n as f32;
+        sum.map(|s| s / n)
+    }
+
     /// Step 3: breeds the next population from the evaluated one; `best` is the result of
     /// [`Ga::evaluate`].
     pub fn breed<R: Rng + ?Sized>(&mut self, best: &Best, params: &GaParams, space: &SearchSpace, rng: &mut R) {

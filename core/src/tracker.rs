@@ -61,6 +61,14 @@ pub struct Estimate {
     /// Capture time of the frame pair (µs, the board's clock): the time of the joint sample
     /// the estimate was computed with, which the board takes with the frame.
     pub capture_time_us: u64,
+    /// The pose the target filter was fed with this estimate
+    /// ([`Feedforward::OnWithTarget`]): the mean position of the individuals within
+    /// [`TargetFilterParams::measurement_fitness_margin`](crate::target_motion::TargetFilterParams::measurement_fitness_margin)
+    /// of the best fitness, with the best's orientation; `psi` itself in the other modes. A
+    /// consumer running its own copy of the filter
+    /// ([`TargetFilter::update_from_estimate`](crate::target_motion::TargetFilter::update_from_estimate))
+    /// feeds it this to get the tracker's numbers.
+    pub target_measurement: Psi,
 }
 
 /// Why a tracker configuration was rejected.
@@ -580,6 +588,14 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         });
         let status = self.monitor.update(best.fitness, &self.config.status);
 
+        // The filter's measurement is taken from the evaluated population, before breeding.
+        let target_measurement = if feedforward == Feedforward::OnWithTarget {
+            let margin = self.target.params().measurement_fitness_margin;
+            Psi::new(self.ga.mean_translation_near(&best, margin), best.psi.eps().into())
+        } else {
+            best.psi
+        };
+
         probe.mark(Phase::Breed);
         self.ga.breed(&best, &self.config.ga, &self.config.search, &mut self.rng);
         if acquiring {
@@ -593,7 +609,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // mode that uses it, so the other modes keep the paper's constant work per generation.
         if feedforward == Feedforward::OnWithTarget {
             let (arm, mount) = (&self.config.arm, &self.config.flange_to_camera);
-            self.target.update_from_estimate(arm, mount, joints, &best.psi, best.fitness, status);
+            self.target.update_from_estimate(arm, mount, joints, &target_measurement, best.fitness, status);
         }
         probe.mark(Phase::Done);
 
@@ -603,6 +619,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             generation: self.generation,
             status,
             capture_time_us: joints.time_us,
+            target_measurement,
         })
     }
 

@@ -186,9 +186,10 @@ fn protocol_on_target() -> Outcome {
             generation: 10,
             capture_time_us: 0,
             status: evorec_core::status::Status::Tracking,
+            target_measurement: Psi::new([0.012, -0.021, 0.702], [0.05, 0.1, -0.03]),
         }),
     };
-    let mut buf = [0u8; 64];
+    let mut buf = [0u8; 96];
     let mut sink = SliceSink::new(&mut buf);
     write_message(&mut sink, &env).map_err(|_| ())?;
     let n = sink.written().len();

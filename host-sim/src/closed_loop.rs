@@ -422,8 +422,9 @@ struct Capture {
 /// too); [`CameraController::publish`] queues the frame's estimate until it reaches the servo
 /// and records the frame's rows. The "ff+target" hand-over predicts with the board's own copy of
 /// the core's [`TargetFilter`], fed as the tracker feeds its own
-/// ([`TargetFilter::update_from_estimate`]: the same code on the same numbers, only with
-/// [`Feedforward::OnWithTarget`]), because the firmware publishes the estimate only.
+/// ([`TargetFilter::update_from_estimate`] on [`Estimate::target_measurement`]: the same code
+/// on the same numbers, only with [`Feedforward::OnWithTarget`]), because the firmware
+/// publishes the estimate only.
 pub struct ServoBoard {
     world: World,
     ctl: Controller,
@@ -549,7 +550,8 @@ impl CameraController<DOF> for ServoBoard {
     fn publish(&mut self, _frame: &FrameInfo, est: &Estimate) -> Result<(), SimError> {
         let Some(Capture { t, joints, occluded, steady }) = self.current.take() else { return Ok(()) };
         if self.feedforward == Feedforward::OnWithTarget {
-            self.filter.update_from_estimate(&PA10, &self.ctl.mount, &joints, &est.psi, est.fitness, est.status);
+            let measured = &est.target_measurement;
+            self.filter.update_from_estimate(&PA10, &self.ctl.mount, &joints, measured, est.fitness, est.status);
         }
         let tracking = est.status == Status::Tracking;
         let released = Released { psi: est.psi, q: joints.q, filter: self.filter, tracking };

@@ -11,10 +11,12 @@
 //! The board also plays the consumer of the estimates (a visual-servo loop): the estimate of
 //! the frame captured at `t` is output at `t + delay_s` (`[tracker] delay_s`). The board feeds
 //! every published estimate to its own copy of the core's [`TargetFilter`] with the tracker's
-//! own call, [`TargetFilter::update_from_estimate`] (the same code and the same inputs as the
-//! tracker's filter, so it works for the firmware too, which publishes the estimate only) and asks it for the pose at the output time with the arm's joint sample
-//! of that time ([`TargetFilter::predict`]). Each row records the truth at the output time, the
-//! held estimate and the prediction ([`Handover`]).
+//! own call, [`TargetFilter::update_from_estimate`], on the measurement the estimate carries
+//! ([`Estimate::target_measurement`]): the same code on the same inputs as the tracker's
+//! filter, so it works for the firmware too, which publishes the estimate only. It asks that
+//! filter for the pose at the output time with the arm's joint sample of that time
+//! ([`TargetFilter::predict`]). Each row records the truth at the output time, the held
+//! estimate and the prediction ([`Handover`]).
 use anyhow::{Context, Result, bail};
 use evorec_core::board::{CameraController, Error as BoardError, ErrorKind, ErrorType, FrameInfo};
 use evorec_core::camera::{Pinhole, StereoRig};
@@ -402,7 +404,7 @@ impl SimBoard {
             &PA10,
             &self.flange_to_camera,
             joints,
-            &estimate.psi,
+            &estimate.target_measurement,
             estimate.fitness,
             estimate.status,
         );

@@ -74,6 +74,12 @@ pub struct TargetFilterParams {
     /// model's still is). On a moving block the fast model mostly measures the estimate's own
     /// drift (the x/turn ambiguity of a box seen from the front) and, fed forward, sustains it.
     pub linear_motion_mutes_angular: bool,
+    /// The position the filter is fed is the mean position of the GA's individuals whose
+    /// fitness is within this margin of the best's (with the best's orientation,
+    /// [`Ga::mean_translation_near`](crate::ga::Ga::mean_translation_near)), not the best
+    /// individual's: the best jumps between the individuals at the top of a flat fitness peak
+    /// from frame to frame, the crowd's centre much less. 0 feeds the best alone.
+    pub measurement_fitness_margin: f32,
     /// Share (0..=1) of the linear velocity along the line of sight, beyond what the world axes
     /// seen across the sight carry, that
     /// [`TargetFilter::feedforward_velocity_seen_along`](super::TargetFilter::feedforward_velocity_seen_along)
@@ -104,7 +110,7 @@ impl TargetFilterParams {
     /// ([`TargetFilterParams::linear_motion_mutes_angular`]): on the conveyor it lost the block
     /// in 5 of 20 runs by feeding forward the estimate's own turn.
     pub const DEFAULT: TargetFilterParams = TargetFilterParams {
-        position_noise_m: 0.0015,
+        position_noise_m: 0.001,
         depth_noise_m: 0.008,
         rotation_noise_rad: 0.02,
         acceleration_psd: 0.2,
@@ -114,7 +120,7 @@ impl TargetFilterParams {
         slow_min_fitness: 0.96,
         jerk_psd: 30.0,
         initial_accel_sd_m_s2: 1.0,
-        acceleration_lead_s: 0.0,
+        acceleration_lead_s: 0.0165,
         initial_speed_sd_m_s: 0.5,
         initial_rate_sd_rad_s: 2.0,
         gate_sigma: 6.0,
@@ -130,14 +136,15 @@ impl TargetFilterParams {
         hold_motion: true,
         linear_motion_mutes_angular: true,
         depth_feedforward: 0.0,
+        measurement_fitness_margin: 0.01,
     };
 
     /// Checks every field against its rule: the noises, the fast densities, the prior speed and
     /// rate deviations, the gate, the trust bounds and `max_gap_s` finite and positive;
     /// `lost_fitness`, the dead bands, `significance_sigma`, `jerk_psd`,
     /// `initial_accel_sd_m_s2`, `acceleration_lead_s` and the slow angular model's
-    /// `slow_angular_acceleration_psd`, `slow_deadband_rad_s` and `slow_min_fitness` finite and
-    /// non-negative; `depth_feedforward` in `[0, 1]`; the counts `max_outliers` and
+    /// `slow_angular_acceleration_psd`, `slow_deadband_rad_s` and `slow_min_fitness`, and
+    /// `measurement_fitness_margin` finite and non-negative; `depth_feedforward` in `[0, 1]`; the counts `max_outliers` and
     /// `converge_updates` at least 1. The flags (`hold_motion`, `linear_motion_mutes_angular`)
     /// have no rule.
     ///
@@ -171,6 +178,7 @@ impl TargetFilterParams {
             (self.slow_angular_acceleration_psd, "slow_angular_acceleration_psd"),
             (self.slow_deadband_rad_s, "slow_deadband_rad_s"),
             (self.slow_min_fitness, "slow_min_fitness"),
+            (self.measurement_fitness_margin, "measurement_fitness_margin"),
         ];
         if let Some((_, name)) = non_negative.iter().find(|(v, _)| !(v.is_finite() && *v >= 0.0)) {
             return Err(FilterParamsError(name));
@@ -205,7 +213,8 @@ impl FilterParamsError {
             | "acceleration_lead_s"
             | "slow_angular_acceleration_psd"
             | "slow_deadband_rad_s"
-            | "slow_min_fitness" => "finite and non-negative",
+            | "slow_min_fitness"
+            | "measurement_fitness_margin" => "finite and non-negative",
             "depth_feedforward" => "between 0 and 1",
             "max_outliers" | "converge_updates" => "at least 1",
             _ => "finite and positive",

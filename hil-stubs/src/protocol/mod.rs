@@ -9,7 +9,7 @@
 //! ```text
 //!  offset  size  field
 //!       0     4  magic "EVRC"
-//!       4     1  version (5)
+//!       4     1  version (VERSION, 7)
 //!       5     1  message type (MsgType)
 //!       6     2  flags (FLAG_NEWER_FOLLOWS on a FRAME; 0 otherwise)
 //!       8     4  sequence number: the frame a FRAME/ESTIMATE/REJECTED is about; 0 otherwise
@@ -28,7 +28,8 @@
 //! | `FRAME`    2  | h→f | width u16, height u16, joint time u64, q\[7\], q̇\[7\] f32,       |
 //! |               |     | then the left and the right image, `w·h` RGB565 pixels each     |
 //! |               |     | (row-major, 2 bytes per pixel, little-endian `rrrrrggggggbbbbb`) |
-//! | `ESTIMATE` 3  | f→h | ψ\[6\] f32, fitness F f32, generation u32                         |
+//! | `ESTIMATE` 3  | f→h | ψ\[6\] f32, fitness F f32, generation u32, status u8, the target   |
+//! |               |     | filter's measured position \[3\] f32 (`Estimate::target_measurement`) |
 //! | `END`      4  | h→f | empty: no more frames                                           |
 //! | `ACK`      5  | f→h | status u32 answering CONFIG: 0 = tracker built, else a [`crate::setup::SetupError`] code |
 //! | `REJECTED` 6  | f→h | empty: the tracker refused that frame (size, joints, time step) |
@@ -75,12 +76,12 @@ pub const DOF: usize = PA10_DOF;
 
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
-/// Protocol version carried in every header (6: `CONFIG` carries the GA's settled mutation
-/// levels; 5: COBS framing, header flags, drop counts in
+/// Protocol version carried in every header (7: `ESTIMATE` carries the target filter's
+/// measured position; 6: `CONFIG` carries the GA's settled mutation levels; 5: COBS framing, header flags, drop counts in
 /// `DONE`; 4: `CONFIG` carries the population size; 3:
 /// estimates carry the tracker's status; 2: frames carry the sensor's RGB565 pixels; 1: hue
 /// frames).
-pub const VERSION: u8 = 6;
+pub const VERSION: u8 = 7;
 /// The pixel format of a frame's images on the link: the camera sensor's own RGB565, so the
 /// hue is computed on the board (see [`evorec_core::image::Rgb565`]).
 pub type LinkFormat = evorec_core::image::Rgb565;
@@ -100,8 +101,8 @@ const GA_LEN: usize = 4 + 3 * 4 + 4 + 4 + 2 * 4 * (MUTATION_LEVELS - 1) + 4 + 4 
 pub const CONFIG_LEN: usize = 4 * 4 + 2 * 2 + 4 + 4 * 9 + 4 * 7 + 4 * 6 + 8 + 4 + 4 + GA_LEN + 4 * 12;
 /// `FRAME` payload size before the two images.
 pub const FRAME_FIXED_LEN: usize = 2 + 2 + 8 + 4 * DOF * 2;
-/// `ESTIMATE` payload size: ψ, fitness, generation, status code.
-pub const ESTIMATE_LEN: usize = 4 * 6 + 4 + 4 + 1;
+/// `ESTIMATE` payload size: ψ, fitness, generation, status code, the filter's measured position.
+pub const ESTIMATE_LEN: usize = 4 * 6 + 4 + 4 + 1 + 4 * 3;
 /// `ACK` payload size.
 pub const ACK_LEN: usize = 4;
 /// `DONE` payload size: five counts and the [`DropCounts`].

@@ -32,6 +32,8 @@ pub(super) fn encode_payload<'m>(
             e.f32(est.fitness);
             e.u32(est.generation);
             e.u8(est.status.code());
+            let t = est.target_measurement.translation();
+            e.f32s(&[t.x, t.y, t.z]);
         }
         Message::End | Message::Rejected => {}
         Message::Ack(status) => e.u32(status),
@@ -184,8 +186,11 @@ pub(super) fn decode_small(kind: MsgType, payload: &[u8]) -> Result<Message<'sta
             let fitness = d.f32();
             let generation = d.u32();
             let status = Status::from_code(d.u8()).ok_or(DecodeError::BadValue)?;
+            // The filter's measurement travels as its position; its orientation is ψ's.
+            let [tx, ty, tz] = d.f32s();
+            let target_measurement = Psi::new([tx, ty, tz], psi.eps().into());
             // The capture time is not in the payload; the host fills it in from its frame.
-            Message::Estimate(Estimate { psi, fitness, generation, capture_time_us: 0, status })
+            Message::Estimate(Estimate { psi, fitness, generation, capture_time_us: 0, status, target_measurement })
         }
         MsgType::End => Message::End,
         MsgType::Ack => Message::Ack(d.u32()),

@@ -80,6 +80,7 @@ fn small_messages() -> Vec<Envelope<'static>> {
                 generation: 42,
                 capture_time_us: 0,
                 status: evorec_core::status::Status::Lost,
+                target_measurement: Psi::new([0.011, -0.019, 0.703], [f32::MIN_POSITIVE, -0.0, 1.0e-30]),
             }),
         },
         Envelope::bare(Message::End),
@@ -122,7 +123,7 @@ fn payload_sizes_match_the_constants() {
     assert_eq!(unframe(&encode(&config)).len(), HEADER_LEN + CONFIG_LEN + CRC_LEN);
     assert_eq!(raw_len(&config.message), HEADER_LEN + CONFIG_LEN + CRC_LEN);
     assert_eq!(FRAME_FIXED_LEN, 68);
-    assert_eq!(ESTIMATE_LEN, 33);
+    assert_eq!(ESTIMATE_LEN, 45);
 }
 
 #[test]
@@ -134,12 +135,14 @@ fn nan_bits_cross_unchanged() {
         generation: 1,
         capture_time_us: 0,
         status: evorec_core::status::Status::Searching,
+        target_measurement: Psi::new([0.0, f32::from_bits(0xFF80_0007), 0.0], [0.0; 3]),
     }));
     let bytes = encode(&env);
     let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
     let Message::Estimate(e) = back.message else { panic!("not an estimate") };
     assert_eq!(e.psi.0[0].to_bits(), 0x7FC0_1234);
     assert_eq!(e.fitness.to_bits(), 0xFFA0_0001);
+    assert_eq!(e.target_measurement.0[1].to_bits(), 0xFF80_0007);
 }
 
 /// Two RGB565 images of `w × h` pixels (2 bytes each).
@@ -318,6 +321,7 @@ mod prop {
         #[test]
         fn estimate_round_trips_bit_exactly(
             psi in proptest::array::uniform6(any_f32()),
+            measured in proptest::array::uniform3(any_f32()),
             fitness in any_f32(),
             generation in any::<u32>(),
             sequence in any::<u32>(),
@@ -326,13 +330,21 @@ mod prop {
             let env = Envelope {
                 sequence,
                 capture_time_us: time,
-                message: Message::Estimate(Estimate { psi: Psi(psi), fitness, generation, capture_time_us: 0, status: evorec_core::status::Status::Tracking }),
+                message: Message::Estimate(Estimate {
+                    psi: Psi(psi),
+                    fitness,
+                    generation,
+                    capture_time_us: 0,
+                    status: evorec_core::status::Status::Tracking,
+                    target_measurement: Psi::new(measured, [psi[3], psi[4], psi[5]]),
+                }),
             };
             let bytes = encode(&env);
             let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
             let Message::Estimate(e) = back.message else { panic!("not an estimate") };
             prop_assert_eq!(e.psi.0.map(f32::to_bits), psi.map(f32::to_bits));
             prop_assert_eq!(e.fitness.to_bits(), fitness.to_bits());
+            prop_assert_eq!(e.target_measurement.0.map(f32::to_bits), Psi::new(measured, [psi[3], psi[4], psi[5]]).0.map(f32::to_bits));
             prop_assert_eq!(e.generation, generation);
             prop_assert_eq!((back.sequence, back.capture_time_us), (sequence, time));
         }

@@ -39,12 +39,12 @@ fn truth(k: u64) -> Psi {
 /// Frames at the end over which the filter's velocity is averaged (one frame's is noisy).
 const LAST: u64 = 20;
 
-/// Runs the sequence; returns the RMS position error (m) over frames 30.., the tracker, and
+/// Runs the sequence with GA seed `seed`; returns the RMS position error (m) over frames 30.., the tracker, and
 /// the filter's mean world velocity over the last [`LAST`] frames (zero where it has none).
-fn run(mode: Feedforward) -> (f32, Tracker, Vector3<f32>) {
+fn run(mode: Feedforward, seed: u64) -> (f32, Tracker, Vector3<f32>) {
     let rig = rig();
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(3);
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed);
     let mut tracker: Tracker = Tracker::new(config).unwrap();
     tracker.reset_around(&truth(0), &[0.002, 0.002, 0.002, 0.004, 0.004, 0.004]).unwrap();
     let mut sq = 0.0;
@@ -68,17 +68,30 @@ fn run(mode: Feedforward) -> (f32, Tracker, Vector3<f32>) {
     ((sq / n as f32).sqrt(), tracker, v_sum / LAST as f32)
 }
 
+/// The median of `v`.
+fn median(mut v: Vec<f32>) -> f32 {
+    v.sort_by(f32::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
 #[test]
 fn target_feedforward_follows_a_sliding_block() {
-    let (rms_ff, ..) = run(Feedforward::On);
-    let (rms_target, tracker, v_mean) = run(Feedforward::OnWithTarget);
-    assert!(rms_target < 0.5 * rms_ff, "FF + target {rms_target} m vs FF {rms_ff} m");
+    // One GA seed's RMS error is a draw (over seeds 1–12 the default's ranged from 1.8 to
+    // 19 mm), so the errors are compared as medians over eight seeds.
+    let seeds = 1..=8;
+    let rms_ff = median(seeds.clone().map(|s| run(Feedforward::On, s).0).collect());
+    let rms_target = median(seeds.map(|s| run(Feedforward::OnWithTarget, s).0).collect());
+    assert!(rms_target < 0.5 * rms_ff, "FF + target {rms_target} m vs FF {rms_ff} m (medians)");
     // The target term starts only once the ramping speed is significant against the filter's
-    // own uncertainty (2σ, `TargetFilterParams::significance_sigma`): with the first, slow
-    // tuning that took long (10.7 mm here); the fast constant-velocity filter (0.2 m²/s³,
-    // trusted at 0.1 m/s) followed the ramp sooner: 4.6 mm (FF alone 33.3 mm); the default
-    // with its acceleration state: measured 3.4 mm.
-    assert!(rms_target < 0.008, "FF + target {rms_target} m");
+    // own uncertainty (2σ, `TargetFilterParams::significance_sigma`), so the ramp from rest
+    // is where it lags. Medians over seeds 1–8, measured: FF alone 39.2 mm; FF + target with
+    // the best individual fed to the filter, 1.5 mm position noise and no acceleration lead
+    // (the session-11 default) 6.4 mm; with the crowd's centre (`measurement_fitness_margin`
+    // 0.01), 1 mm and the lead of half a frame (the default) 7.1 mm. Over seeds 1–12 the
+    // order flips (11.5 and 6.4 mm): the two are not told apart here.
+    assert!(rms_target < 0.008, "FF + target {rms_target} m (median)");
+    let (_, tracker, v_mean) = run(Feedforward::OnWithTarget, 3);
 
     // The filter has the block's velocity (the camera is the world's flange frame at q = 0, so
     // the world velocity is the camera-frame one rotated by the flange's rotation).
@@ -110,7 +123,7 @@ fn target_feedforward_follows_a_sliding_block() {
 
 #[test]
 fn a_reset_forgets_the_target_motion() {
-    let (_, mut tracker, _) = run(Feedforward::OnWithTarget);
+    let (_, mut tracker, _) = run(Feedforward::OnWithTarget, 3);
     assert!(tracker.target_filter().is_trusted());
     tracker.reset_uniform();
     assert!(!tracker.target_filter().has_track());

@@ -171,32 +171,39 @@ fn deadband_zeroes_slow_motion_only() {
 
 #[test]
 fn noise_of_a_still_target_is_not_fed_forward_but_slow_real_motion_is() {
-    // Estimates of a target at rest with uniform noise of ±2.5 mm (σ 1.4 mm, the filter's
-    // 1.5 mm) and ±0.02 rad: the filter's velocity wanders above the dead bands, but never
+    // Estimates of a target at rest with uniform noise of ±1.7 mm (σ 0.98 mm, the filter's
+    // 1 mm) and ±0.02 rad: the filter's velocity wanders above the dead bands, but never
     // reaches significance.
     let mut f = TargetFilter::with_defaults();
     let still = Vector3::zeros();
     let mut above_deadband = 0;
     for k in 0..600 {
-        f.update(&noisy(moving(k, still, still), k, 0.0025, 0.02), k * DT_US, 0.95);
+        f.update(&noisy(moving(k, still, still), k, 0.0017, 0.02), k * DT_US, 0.95);
         if let Some(vel) = f.velocity() {
             above_deadband += usize::from(vel.v.norm() >= TargetFilterParams::DEFAULT.deadband_m_s);
             assert_eq!(f.feedforward_velocity(), TargetVelocity::ZERO, "frame {k}: {vel:?}");
         }
     }
     assert!(above_deadband > 0, "the dead band alone would have let noise through");
-    // A conveyor with the same noise is fed forward once converged: at 0.1 m/s by the fast
-    // default (its velocity's σ at this noise is ~0.04 m/s, so 0.05 m/s is not significant
-    // here; with the acceleration state one frame's velocity is off by up to 0.07 m/s), at
-    // 0.05 m/s by the slow tuning (σ ~0.015 m/s).
-    for (params, speed, tol) in [(TargetFilterParams::DEFAULT, 0.1, 0.08), (SLOW, 0.05, 0.02)] {
+    // A conveyor with the same noise is fed forward in every frame once converged, at 0.1 m/s
+    // by the fast default, at 0.05 m/s by the slow tuning, and on average at its speed. One
+    // frame's fed velocity is noisy (the default's acceleration state, moved on by
+    // `acceleration_lead_s`, puts single frames several cm/s off here); the mean over the last
+    // 50 frames is within 0.01 m/s.
+    for (params, speed) in [(TargetFilterParams::DEFAULT, 0.1), (SLOW, 0.05)] {
         let mut f = TargetFilter::new(params).unwrap();
         let v = Vector3::new(0.0, speed, 0.0);
+        let mut sum = Vector3::zeros();
         for k in 0..200 {
-            f.update(&noisy(moving(k, v, still), k, 0.0025, 0.02), k * DT_US, 0.95);
+            f.update(&noisy(moving(k, v, still), k, 0.0017, 0.02), k * DT_US, 0.95);
+            if k >= 150 {
+                let fed = f.feedforward_velocity().v;
+                assert!(fed != Vector3::zeros(), "{speed}: frame {k} not fed forward");
+                sum += fed;
+            }
         }
-        let fed = f.feedforward_velocity().v;
-        assert!(fed != Vector3::zeros() && (fed - v).norm() < tol, "{speed}: {fed}");
+        let mean = sum / 50.0;
+        assert!((mean - v).norm() < 0.01, "{speed}: mean fed {mean}");
     }
 }
 

@@ -139,6 +139,10 @@ enum Command {
         /// Conveyor speeds (m/s), comma-separated (the turning block is always added).
         #[arg(long, value_delimiter = ',', default_values_t = [0.0, 0.05, 0.1, 0.2])]
         speeds: Vec<f64>,
+        /// Seed of every run's scenario (GA and renderer noise): one closed-loop run per cell
+        /// is a single draw, so compare grids over several seeds.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
         /// Hide the progress bar.
         #[arg(long)]
         quiet: bool,
@@ -520,12 +524,13 @@ fn execute(cli: Cli) -> Result<()> {
             }
             println!("wrote {} ({} frames, {} joint samples)", out.display(), stats.frames, stats.joint_samples);
         }
-        Command::Servo { out, duration, gains, delays, speeds, quiet } => {
+        Command::Servo { out, duration, gains, delays, speeds, seed, quiet } => {
             anyhow::ensure!(duration > 0.0 && duration <= 3600.0, "--duration: must be in (0, 3600], got {duration}");
             anyhow::ensure!(gains.iter().all(|g| *g > 0.0 && *g <= 50.0), "--gains: each must be in (0, 50]");
             anyhow::ensure!(delays.iter().all(|d| *d <= 10), "--delays: each must be in 0..=10");
             anyhow::ensure!(speeds.iter().all(|v| (0.0..=0.3).contains(v)), "--speeds: each must be in [0, 0.3]");
-            let mut g = servo::GridSettings { duration_s: duration, gains, delays, ..servo::GridSettings::default() };
+            let mut g =
+                servo::GridSettings { duration_s: duration, gains, delays, seed, ..servo::GridSettings::default() };
             g.targets = speeds.iter().map(|&speed_m_s| servo::TargetCase::Conveyor { speed_m_s }).collect();
             g.targets.push(servo::TargetCase::Rotating { omega_rad_s: 0.5 });
             let t0 = Instant::now();

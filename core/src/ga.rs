@@ -466,20 +466,24 @@ impl<const P: usize> Ga<P> {
     /// The mean position of the individuals in use whose fitness at the last evaluation is
     /// within `margin` of `best`'s (`best` itself always counts): the centre of the crowd at
     /// the top of the fitness peak, which wanders less from frame to frame than the single
-    /// best individual does. One pass over the population; a NaN `margin` counts `best` only.
+    /// best individual does. One pass over the population; a `margin` that is not positive
+    /// (0, or NaN) gives `best`'s own position, not the mean of the individuals tied with it.
     pub fn mean_translation_near(&self, best: &Best, margin: f32) -> [f32; 3] {
+        let t = best.psi.translation();
+        if margin.is_nan() || margin <= 0.0 {
+            return [t.x, t.y, t.z];
+        }
         let floor = best.fitness - margin;
         let (mut sum, mut n) = ([0.0f32; 3], 0u32);
         for (ind, f) in self.individuals().iter().zip(self.fitness().iter()) {
             if *f >= floor {
-                for (s, t) in sum.iter_mut().zip(ind.0.iter()) {
-                    *s += t;
+                for (s, x) in sum.iter_mut().zip(ind.0.iter()) {
+                    *s += x;
                 }
                 n += 1;
             }
         }
         if n == 0 {
-            let t = best.psi.translation();
             return [t.x, t.y, t.z];
         }
         let n = n as f32;

@@ -589,8 +589,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let status = self.monitor.update(best.fitness, &self.config.status);
 
         // The filter's measurement is taken from the evaluated population, before breeding.
-        let margin = self.target.params().measurement_fitness_margin;
-        let target_measurement = if feedforward == Feedforward::OnWithTarget && margin > 0.0 {
+        let target_measurement = if feedforward == Feedforward::OnWithTarget {
+            let margin = self.target.params().measurement_fitness_margin;
             Psi::new(self.ga.mean_translation_near(&best, margin), best.psi.eps().into())
         } else {
             best.psi

@@ -39,8 +39,8 @@ fn truth(k: u64) -> Psi {
 /// Frames at the end over which the filter's velocity is averaged (one frame's is noisy).
 const LAST: u64 = 20;
 
-/// Runs the sequence with GA seed `seed`; returns the RMS position error (m) over frames 30.., the tracker, and
-/// the filter's mean world velocity over the last [`LAST`] frames (zero where it has none).
+/// Runs the sequence with GA seed `seed`; returns the RMS position error (m) over frames
+/// 30.., the tracker, and the filter's mean world velocity over the last [`LAST`] frames (zero where it has none).
 fn run(mode: Feedforward, seed: u64) -> (f32, Tracker, Vector3<f32>) {
     let rig = rig();
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();

@@ -144,9 +144,9 @@ impl TargetFilterParams {
     /// `lost_fitness`, the dead bands, `significance_sigma`, `jerk_psd`,
     /// `initial_accel_sd_m_s2`, `acceleration_lead_s` and the slow angular model's
     /// `slow_angular_acceleration_psd`, `slow_deadband_rad_s` and `slow_min_fitness`, and
-    /// `measurement_fitness_margin` finite and non-negative; `depth_feedforward` in `[0, 1]`; the counts `max_outliers` and
-    /// `converge_updates` at least 1. The flags (`hold_motion`, `linear_motion_mutes_angular`)
-    /// have no rule.
+    /// `measurement_fitness_margin` finite and non-negative; `depth_feedforward` in `[0, 1]`;
+    /// the counts `max_outliers` and `converge_updates` at least 1. The flags (`hold_motion`,
+    /// `linear_motion_mutes_angular`) have no rule.
     ///
     /// # Errors
     /// [`FilterParamsError`] naming the first bad field.

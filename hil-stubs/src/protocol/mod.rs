@@ -77,8 +77,8 @@ pub const DOF: usize = PA10_DOF;
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
 /// Protocol version carried in every header (7: `ESTIMATE` carries the target filter's
-/// measured position; 6: `CONFIG` carries the GA's settled mutation levels; 5: COBS framing, header flags, drop counts in
-/// `DONE`; 4: `CONFIG` carries the population size; 3:
+/// measured position; 6: `CONFIG` carries the GA's settled mutation levels; 5: COBS framing,
+/// header flags, drop counts in `DONE`; 4: `CONFIG` carries the population size; 3:
 /// estimates carry the tracker's status; 2: frames carry the sensor's RGB565 pixels; 1: hue
 /// frames).
 pub const VERSION: u8 = 7;

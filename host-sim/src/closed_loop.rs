@@ -393,6 +393,7 @@ pub fn run(s: &Scenario, opts: &LoopOptions, on_frame: impl FnMut()) -> Result<C
 /// tracker and the frames it refused.
 fn run_host_tracker(s: &Scenario, board: &mut ServoBoard, mut on_frame: impl FnMut()) -> Result<(SimTracker, u32)> {
     let mut tracker = SimTracker::new(experiment::tracker_config(s)?).map_err(|e| anyhow!("tracker: {e}"))?;
+    tracker.set_target_filter_params(s.target_filter.0).map_err(|e| anyhow!("[target_filter]: {e}"))?;
     tracker.reset_around(&board.start_pose(), &INITIAL_SPREAD).map_err(|e| anyhow!("initial pose: {e}"))?;
     let ff = board.feedforward();
     let n = crate::sim::image_bytes(s);
@@ -472,7 +473,7 @@ impl ServoBoard {
         Ok(Self {
             world,
             ctl,
-            filter: TargetFilter::with_defaults(),
+            filter: crate::sim::target_filter(s)?,
             feedforward: opts.feedforward.unwrap_or_else(|| experiment::feedforward(s.method)),
             opts: *opts,
             desired,
@@ -642,6 +643,24 @@ mod tests {
         assert_eq!(rejected, 0);
         assert!(tracker.target_filter().has_track() && tracker.target_filter().is_trusted());
         assert_eq!(board.target_filter(), tracker.target_filter());
+    }
+
+    #[test]
+    fn a_tuned_target_filter_reaches_the_tracker_and_the_boards_copy() {
+        let mut s = scenario(2.0);
+        s.method = Method::FfTarget;
+        let default_run = {
+            let mut board = ServoBoard::new(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
+            run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}")).0
+        };
+        // Trusted only after 30 updates instead of 10, and 3 mm across the sight.
+        s.target_filter.0.converge_updates = 30;
+        s.target_filter.0.position_noise_m = 0.003;
+        let mut board = ServoBoard::new(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
+        let (tracker, _) = run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(tracker.target_filter().params(), &s.target_filter.0);
+        assert_eq!(board.target_filter(), tracker.target_filter());
+        assert_ne!(tracker.target_filter(), default_run.target_filter());
     }
 
     #[test]

@@ -299,7 +299,8 @@ pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -
     if s.tracker.initial == Initial::Truth {
         tracker.reset_around(&truth0, &INITIAL_SPREAD).map_err(|e| anyhow::anyhow!("initial pose: {e}"))?;
     }
-    let mut board = ProgressBoard { inner: SimBoard::new(world), on_frame: &mut on_frame };
+    tracker.set_target_filter_params(s.target_filter.0).map_err(|e| anyhow::anyhow!("[target_filter]: {e}"))?;
+    let mut board = ProgressBoard { inner: SimBoard::new(world)?, on_frame: &mut on_frame };
     let n = sim::image_bytes(s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let stats = board::run(&mut board, &mut tracker, feedforward(s.method), &mut left, &mut right, u32::MAX)

@@ -141,7 +141,7 @@ pub fn run_with_options(
     let world = World::new(s)?;
     let truth0 = world.truth();
     let mut session = start_session(s, &truth0, experiment::feedforward(s.method), firmware, workdir, options)?;
-    let mut board = SimBoard::new(world);
+    let mut board = SimBoard::new(world)?;
     let rejected = drive(&mut session, &mut board, on_frame)?;
     let link = finish(session)?;
     let rows = board.into_rows();
@@ -187,6 +187,12 @@ fn start_session(
              use a scenario at that size (e.g. scenarios/hil_motion_a_ff.toml)",
             s.camera.width,
             s.camera.height
+        );
+    }
+    if !s.target_filter.is_default() {
+        bail!(
+            "this scenario tunes [target_filter], but the firmware's CONFIG does not carry the target \
+             filter's parameters (it runs the core's defaults); remove the section to compare with the firmware"
         );
     }
     let config = experiment::tracker_config(s)?;

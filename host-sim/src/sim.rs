@@ -303,12 +303,17 @@ pub struct SimBoard {
 }
 
 impl SimBoard {
-    /// A board delivering [`frame_total`] frames of `world`'s scenario.
-    pub fn new(world: World) -> Self {
+    /// A board delivering [`frame_total`] frames of `world`'s scenario; its copy of the target
+    /// filter is tuned by the scenario's `[target_filter]`, as the tracker's is.
+    ///
+    /// # Errors
+    /// Invalid `[target_filter]` parameters (a scenario read from a file has them checked).
+    pub fn new(world: World) -> Result<Self> {
         let frames = frame_total(world.scenario());
         let flange_to_camera = flange_to_camera(world.scenario());
+        let filter = target_filter(world.scenario())?;
         let rows = Vec::with_capacity(frames as usize);
-        Self { world, frames, next: 0, current: None, rows, filter: TargetFilter::with_defaults(), flange_to_camera }
+        Ok(Self { world, frames, next: 0, current: None, rows, filter, flange_to_camera })
     }
 
     /// Frames this board delivers in all.
@@ -441,6 +446,14 @@ pub fn frame_time(s: &Scenario, frame: u32) -> Result<f64> {
         bail!("frame {frame} is at t = {t:.3} s, after the scenario's end ({} s)", s.duration_s);
     }
     Ok(t)
+}
+
+/// The target-velocity filter a scenario's `ff+target` runs with (its `[target_filter]`).
+///
+/// # Errors
+/// Parameters that [`TargetFilter::new`] refuses (a parsed scenario's never are).
+pub fn target_filter(s: &Scenario) -> Result<TargetFilter> {
+    TargetFilter::new(s.target_filter.0).map_err(|e| anyhow::anyhow!("[target_filter]: {e}"))
 }
 
 /// The flange-to-camera transform of a scenario (f32, for the tracker).
@@ -594,6 +607,22 @@ mod tests {
         }
         let last = rows[rows.len() - 1].handover.unwrap_or_else(|| unreachable!());
         assert!(last.true_velocity.v.y > 0.1, "{:?}", last.true_velocity);
+    }
+
+    #[test]
+    fn the_boards_filter_copy_runs_the_scenarios_tuning() {
+        let mut s = Scenario::new(3, 1.0, Method::FfTarget);
+        s.target_filter.0.acceleration_lead_s = 0.0;
+        let board = SimBoard::new(World::new(&s).unwrap_or_else(|e| unreachable!("{e}")))
+            .unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(board.filter.params(), &s.target_filter.0);
+        // Parameters the core refuses are refused here too, naming the section and the field.
+        s.target_filter.0.gate_sigma = 0.0;
+        let e = SimBoard::new(World::new(&s).unwrap_or_else(|e| unreachable!("{e}"))).err().map(|e| e.to_string());
+        assert_eq!(
+            e.as_deref(),
+            Some("[target_filter]: target filter parameter gate_sigma must be finite and positive")
+        );
     }
 
     #[test]

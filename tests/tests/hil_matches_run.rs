@@ -37,3 +37,19 @@ fn hil_trace_equals_host_trace() {
     assert_eq!(on_board.summary.accuracy, on_host.summary.accuracy);
     let _ = std::fs::remove_dir_all(&work);
 }
+
+/// The firmware's CONFIG carries no target-filter tuning, so a scenario that tunes
+/// `[target_filter]` is refused before QEMU starts rather than compared against a firmware that
+/// ran the defaults.
+#[test]
+fn hil_refuses_a_tuned_target_filter() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_b_ff.toml");
+    let text = std::fs::read_to_string(path).expect("scenario");
+    let mut s = Scenario::from_toml_str(&(text + "\n[target_filter]\nacceleration_lead_s = 0\n")).expect("valid");
+    s.duration_s = 0.1;
+    let work = std::env::temp_dir().join(format!("evorec-hil-tuned-filter-{}", std::process::id()));
+    let firmware = work.join("no-firmware-needed");
+    let e = hil::run(&s, &firmware, &work, || {}).err().map(|e| format!("{e:#}")).unwrap_or_default();
+    assert!(e.contains("tunes [target_filter]"), "{e}");
+    let _ = std::fs::remove_dir_all(&work);
+}

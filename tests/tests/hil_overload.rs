@@ -87,7 +87,7 @@ fn scene(seconds: f64) -> (Setup, Vec<Recorded>) {
     let config = experiment::tracker_config(&s).expect("tracker config");
     let setup = Setup::from_tracker_config(&config, experiment::feedforward(s.method), &world.truth(), &INITIAL_SPREAD)
         .expect("firmware setup");
-    let mut board = SimBoard::new(world);
+    let mut board = SimBoard::new(world).expect("board");
     let (mut left, mut right) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
     let mut frames = Vec::new();
     while let Ok(info) = board.next_frame(&mut left, &mut right) {

@@ -67,7 +67,7 @@ fn model_at_the_true_pose_fits_clean_rendered_frames() {
         let model = SurfaceStrips::<DEFAULT_GRID>::new(&sim::block(&s)).expect("model");
         let lut = HueLut::new(&model.faces().map(|f| f.hue), evorec_core::config::DEFAULT_HUE_TOLERANCE);
         let eval = Evaluator::new(&model, &lut, &rig);
-        let mut board = SimBoard::new(World::new(&s).expect("world"));
+        let mut board = SimBoard::new(World::new(&s).expect("world")).expect("board");
         let n = sim::image_bytes(&s);
         let (mut l, mut r) = (vec![0u8; n], vec![0u8; n]);
         let mut worst = 1.0f32;

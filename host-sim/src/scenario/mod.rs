@@ -380,6 +380,9 @@ pub struct Scenario {
     /// Times when the block is hidden.
     #[serde(skip_serializing_if = "Occlusions::is_empty")]
     pub occlusion: Occlusions,
+    /// The target-velocity filter's tuning (`[target_filter]`, used by `ff+target`).
+    #[serde(skip_serializing_if = "TargetFilterSection::is_default")]
+    pub target_filter: TargetFilterSection,
 }
 
 impl Scenario {
@@ -397,6 +400,7 @@ impl Scenario {
             servo: None,
             tracker: TrackerStart::new(0.033),
             occlusion: Occlusions::default(),
+            target_filter: TargetFilterSection::default(),
         }
     }
 
@@ -423,6 +427,7 @@ impl Scenario {
                 "tracker",
                 "occlusion",
                 "servo",
+                "target_filter",
             ],
         )?;
         let camera = parse_camera(&top.subtable("camera")?)?;
@@ -430,6 +435,7 @@ impl Scenario {
         let robot = parse_robot(&top.subtable("robot")?)?;
         let ga = parse_ga(&top.subtable("ga")?)?;
         let servo = parse_servo(&top.subtable("servo")?)?;
+        let target_filter = target_filter::parse_target_filter(&top.subtable("target_filter")?)?;
         let tracker_section = top.subtable("tracker")?;
         tracker_section.check_keys(&["initial", "delay_s"])?;
         let initial = acquisition::parse_initial(tracker_section.get("initial"))?;
@@ -450,7 +456,20 @@ impl Scenario {
         let delay_s = tracker_section.float_in("delay_s", frame_period_s, Bound::Closed(0.0), 1.0)?;
         let tracker = TrackerStart { initial, delay_s };
         let occlusion = acquisition::parse_occlusions(top.get("occlusion"), duration_s)?;
-        Ok(Self { seed, duration_s, frame_period_s, method, camera, target, robot, ga, servo, tracker, occlusion })
+        Ok(Self {
+            seed,
+            duration_s,
+            frame_period_s,
+            method,
+            camera,
+            target,
+            robot,
+            ga,
+            servo,
+            tracker,
+            occlusion,
+            target_filter,
+        })
     }
 
     /// Reads, parses and validates a scenario file.
@@ -701,6 +720,8 @@ fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
 
 mod acquisition;
 mod section;
+mod target_filter;
+pub use target_filter::TargetFilterSection;
 #[cfg(test)]
 mod tests;
 

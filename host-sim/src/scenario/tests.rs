@@ -208,3 +208,62 @@ fn shipped_scenarios_have_the_specified_settings() {
     );
     assert_eq!(load("static.toml").robot.motion, MotionKind::Static);
 }
+
+#[test]
+fn target_filter_section_tunes_the_filter_and_names_bad_fields() {
+    use evorec_core::target_motion::TargetFilterParams;
+    let s = Scenario::from_toml_str(&with(
+        "[target_filter]\nposition_noise_m = 0.0015\nacceleration_lead_s = 0\nconverge_updates = 6\nhold_motion = false\n",
+    ))
+    .unwrap_or_else(|e| unreachable!("{e}"));
+    let want = TargetFilterParams {
+        position_noise_m: 0.0015,
+        acceleration_lead_s: 0.0,
+        converge_updates: 6,
+        hold_motion: false,
+        ..TargetFilterParams::DEFAULT
+    };
+    assert_eq!(s.target_filter.0, want);
+    // Written back in full and read back to the same parameters.
+    let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
+    assert!(text.contains("[target_filter]") && text.contains("depth_noise_m = 0.008"), "{text}");
+    assert_eq!(Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{e}\n{text}")), s);
+    // Absent: the core's defaults, and nothing written.
+    let plain = Scenario::from_toml_str(BASE).unwrap_or_else(|e| unreachable!("{e}"));
+    assert!(plain.target_filter.is_default());
+    assert!(!plain.to_toml_string().unwrap_or_default().contains("target_filter"));
+
+    assert_eq!(
+        err(&with("[target_filter]\nposition_noise_m = -0.001\n")),
+        "target_filter.position_noise_m: finite and positive, got -0.001"
+    );
+    assert_eq!(
+        err(&with("[target_filter]\ndepth_feedforward = 1.5\n")),
+        "target_filter.depth_feedforward: between 0 and 1, got 1.5"
+    );
+    assert_eq!(
+        err(&with("[target_filter]\nconverge_updates = 0\n")),
+        "target_filter.converge_updates: at least 1, got 0"
+    );
+    assert_eq!(
+        err(&with("[target_filter]\nmax_outliers = 70000\n")),
+        "target_filter.max_outliers: must be in 0..=65535, got 70000"
+    );
+    assert_eq!(
+        err(&with("[target_filter]\nhold_motion = 1\n")),
+        "target_filter.hold_motion: expected true or false, got 1"
+    );
+    assert_eq!(
+        err(&with("[target_filter]\njerk_psd = \"fast\"\n")),
+        "target_filter.jerk_psd: expected a number, got a string (\"fast\")"
+    );
+    assert_eq!(
+        err(&with("[target_filter]\ngate_sigma = 1e40\n")),
+        "target_filter.gate_sigma: must fit a 32-bit float, got 10000000000000000000000000000000000000000"
+    );
+    assert!(
+        err(&with("[target_filter]\nposition_noise = 0.001\n"))
+            .starts_with("target_filter.position_noise: unknown key")
+    );
+    assert_eq!(err(&with("target_filter = 3\n")), "target_filter: expected a table, got an integer (3)");
+}

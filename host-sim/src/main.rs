@@ -143,6 +143,10 @@ enum Command {
         /// is a single draw, so compare grids over several seeds.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// A TOML file holding a `[target_filter]` table (as in a scenario): the "ff+target"
+        /// filter's tuning in every cell (default: the core's defaults).
+        #[arg(long, value_name = "FILE")]
+        target_filter: Option<PathBuf>,
         /// Hide the progress bar.
         #[arg(long)]
         quiet: bool,
@@ -524,7 +528,7 @@ fn execute(cli: Cli) -> Result<()> {
             }
             println!("wrote {} ({} frames, {} joint samples)", out.display(), stats.frames, stats.joint_samples);
         }
-        Command::Servo { out, duration, gains, delays, speeds, seed, quiet } => {
+        Command::Servo { out, duration, gains, delays, speeds, seed, target_filter, quiet } => {
             anyhow::ensure!(duration > 0.0 && duration <= 3600.0, "--duration: must be in (0, 3600], got {duration}");
             anyhow::ensure!(gains.iter().all(|g| *g > 0.0 && *g <= 50.0), "--gains: each must be in (0, 50]");
             anyhow::ensure!(delays.iter().all(|d| *d <= 10), "--delays: each must be in 0..=10");
@@ -533,6 +537,9 @@ fn execute(cli: Cli) -> Result<()> {
                 servo::GridSettings { duration_s: duration, gains, delays, seed, ..servo::GridSettings::default() };
             g.targets = speeds.iter().map(|&speed_m_s| servo::TargetCase::Conveyor { speed_m_s }).collect();
             g.targets.push(servo::TargetCase::Rotating { omega_rad_s: 0.5 });
+            if let Some(path) = target_filter {
+                g.target_filter = evorec_sim::scenario::TargetFilterSection::load(&path)?;
+            }
             let t0 = Instant::now();
             let results = servo::run_grid(&g, &out, !quiet)?;
             println!("{}", servo::markdown(&results).split("\n\n").next().unwrap_or_default());

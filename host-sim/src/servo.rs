@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use crate::closed_loop::{self, LoopOptions, Outcome, ServoSummary};
 use crate::plot::{FONT, draw_err, ensure_font, render_png};
-use crate::scenario::{Method, Scenario, ServoSection};
+use crate::scenario::{Method, Scenario, ServoSection, TargetFilterSection};
 use crate::sim::frame_total;
 use crate::target_path::Conveyor;
 
@@ -70,6 +70,9 @@ pub struct GridSettings {
     pub conveyor_accel_m_s2: f64,
     /// Seed of every run.
     pub seed: u64,
+    /// The target filter's tuning in every cell (`ff+target`; `--target-filter`).
+    #[serde(skip_serializing_if = "TargetFilterSection::is_default")]
+    pub target_filter: TargetFilterSection,
 }
 
 impl Default for GridSettings {
@@ -92,6 +95,7 @@ impl Default for GridSettings {
             conveyor_travel_m: 1.0,
             conveyor_accel_m_s2: 0.5,
             seed: 1,
+            target_filter: TargetFilterSection::default(),
         }
     }
 }
@@ -139,6 +143,7 @@ pub fn cells(g: &GridSettings) -> Vec<Cell> {
 /// The scenario and loop options of a cell.
 pub fn scenario_of(g: &GridSettings, cell: &Cell) -> (Scenario, LoopOptions) {
     let mut s = Scenario::new(g.seed, g.duration_s, cell.method);
+    s.target_filter = g.target_filter;
     let w = g.width;
     s.camera.width = w;
     s.camera.height = w / 4 * 3;
@@ -367,4 +372,22 @@ pub fn stability_map(
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_cell_runs_the_grids_target_filter() {
+        let mut g = GridSettings::default();
+        g.target_filter.0.position_noise_m = 0.0015;
+        for cell in cells(&g) {
+            assert_eq!(scenario_of(&g, &cell).0.target_filter, g.target_filter);
+        }
+        let json = serde_json::to_string(&g).unwrap_or_default();
+        assert!(json.contains("\"position_noise_m\":0.0015"), "{json}");
+        let plain = serde_json::to_string(&GridSettings::default()).unwrap_or_default();
+        assert!(!plain.contains("target_filter"), "{plain}");
+    }
 }

@@ -9,7 +9,7 @@ use serde::ser::{Serialize, SerializeMap, Serializer};
 use toml::Value;
 
 use super::section::Section;
-use super::{Result, invalid};
+use super::{Result, ScenarioError, invalid};
 
 /// Generates the name lists and the by-name accessors of the parameters' fields of one type.
 macro_rules! fields {
@@ -144,4 +144,31 @@ fn value_of(p: &TargetFilterParams, name: &str) -> String {
         .or_else(|| get_count(p, name).map(|v| v.to_string()))
         .or_else(|| get_flag(p, name).map(|v| v.to_string()))
         .unwrap_or_default()
+}
+
+impl TargetFilterSection {
+    /// Reads a `[target_filter]` table on its own (the same text as in a scenario file, and
+    /// nothing else), e.g. for `evorec servo --target-filter FILE`.
+    ///
+    /// # Errors
+    /// As [`Scenario::from_toml_str`](super::Scenario::from_toml_str) for that section, and a
+    /// top-level key other than `target_filter`.
+    pub fn from_toml_str(text: &str) -> Result<Self> {
+        let table: toml::Table =
+            toml::from_str(text).map_err(|e| ScenarioError::Syntax(e.to_string().trim_end().to_owned()))?;
+        let top = Section::new("", &table, &["target_filter"])?;
+        parse_target_filter(&top.subtable("target_filter")?)
+    }
+
+    /// [`TargetFilterSection::from_toml_str`] of a file.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Io`] if the file cannot be read, otherwise [`ScenarioError::InFile`]
+    /// naming it.
+    pub fn load(path: impl AsRef<std::path::Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let text =
+            std::fs::read_to_string(path).map_err(|source| ScenarioError::Io { path: path.to_path_buf(), source })?;
+        Self::from_toml_str(&text).map_err(|e| ScenarioError::InFile { path: path.to_path_buf(), source: Box::new(e) })
+    }
 }

@@ -267,3 +267,20 @@ fn target_filter_section_tunes_the_filter_and_names_bad_fields() {
     );
     assert_eq!(err(&with("target_filter = 3\n")), "target_filter: expected a table, got an integer (3)");
 }
+
+#[test]
+fn a_target_filter_file_holds_the_section_alone() {
+    let t = TargetFilterSection::from_toml_str("[target_filter]\nposition_noise_m = 0.0015\n")
+        .unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(t.0.position_noise_m, 0.0015);
+    assert_eq!(t.0.depth_noise_m, TargetFilterSection::default().0.depth_noise_m);
+    let bad = |text: &str| TargetFilterSection::from_toml_str(text).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(bad("seed = 1\n[target_filter]\n").starts_with("seed: unknown key (expected one of: target_filter)"));
+    assert_eq!(
+        bad("[target_filter]\nlost_fitness = -1\n"),
+        "target_filter.lost_fitness: finite and non-negative, got -1"
+    );
+    let missing = std::env::temp_dir().join("evorec-no-such-target-filter.toml");
+    let e = TargetFilterSection::load(&missing).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("evorec-no-such-target-filter.toml"), "{e}");
+}

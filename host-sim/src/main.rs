@@ -201,6 +201,10 @@ enum Command {
         /// Frame indices (frames.csv `index`) to draw the model at its estimate over, e.g. 0,90.
         #[arg(long, value_delimiter = ',')]
         overlay: Vec<u64>,
+        /// A TOML file holding a `[target_filter]` table (as in a scenario): the tuning of the
+        /// target-velocity filter that `ff+target` feeds forward (default: the core's).
+        #[arg(long, value_name = "FILE")]
+        target_filter: Option<PathBuf>,
         /// Hide the progress bar.
         #[arg(long)]
         quiet: bool,
@@ -504,8 +508,13 @@ fn execute(cli: Cli) -> Result<()> {
             frames,
             pixels,
             overlay,
+            target_filter,
             quiet,
         } => {
+            let target_filter = match target_filter {
+                Some(path) => evorec_sim::scenario::TargetFilterSection::load(&path)?,
+                None => evorec_sim::scenario::TargetFilterSection::default(),
+            };
             let opts = track::TrackOptions {
                 feedforward: if no_ff { Feedforward::Off } else { method.feedforward() },
                 seed,
@@ -515,6 +524,7 @@ fn execute(cli: Cli) -> Result<()> {
                 overlay: overlay.into_iter().collect(),
                 progress: !quiet,
                 pixels: pixels.into(),
+                target_filter: target_filter.0,
             };
             track_sequence(&seq, &out, &opts)?;
         }

@@ -92,3 +92,34 @@ fn a_bad_png_found_while_tracking_is_named_and_nothing_is_written() {
     assert!(err.contains("left/000000.png"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `ff+target` with a tuned `[target_filter]`: tracking the exported sequence with the same
+/// tuning (`evorec track --target-filter`) gives `evorec run`'s estimates bit for bit, and the
+/// tuning changed them (so it reached both trackers).
+#[test]
+fn a_tuned_target_filter_tracks_as_in_run() {
+    let mut s = scenario(Method::FfTarget);
+    s.target.conveyor_speed_m_s = 0.1;
+    let default_run = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    s.target_filter.0.converge_updates = 5;
+    s.target_filter.0.position_noise_m = 0.002;
+    let tuned_run = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    let differ = default_run.rows.iter().zip(&tuned_run.rows).any(|(a, b)| a.estimate != b.estimate);
+    assert!(differ, "the tuning changed nothing in 2 s: the test would prove nothing");
+    let dir = work_dir("tuned");
+    let seq_dir = dir.join("seq");
+    export::export(&s, "tuned", &seq_dir, None).unwrap_or_else(|e| panic!("{e:#}"));
+    let seq = Sequence::load(&seq_dir).unwrap_or_else(|e| panic!("{e}"));
+    let opts = track::TrackOptions {
+        feedforward: Feedforward::OnWithTarget,
+        seed: s.seed,
+        target_filter: s.target_filter.0,
+        ..Default::default()
+    };
+    let tracked = track::run(&seq, &opts).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(tracked.tracked.len(), tuned_run.rows.len());
+    for (t, r) in tracked.tracked.iter().zip(&tuned_run.rows) {
+        assert_eq!(t.estimate.0.map(f32::to_bits), r.estimate.0.map(f32::to_bits), "estimate at t = {}", r.t);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -29,6 +29,7 @@ use evorec_core::ga::{GaParams, SearchSpace};
 use evorec_core::kinematics::Chain;
 use evorec_core::pose::Psi;
 use evorec_core::status::StatusConfig;
+use evorec_core::target_motion::TargetFilterParams;
 use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
 use image::RgbImage;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -60,6 +61,8 @@ pub struct TrackOptions {
     pub progress: bool,
     /// The pixel format the tracker reads the PNGs in.
     pub pixels: Pixels,
+    /// The tuning of the target-velocity filter (`ff+target`; `--target-filter`).
+    pub target_filter: TargetFilterParams,
 }
 
 /// The pixel format `evorec track` hands the decoded PNGs to the tracker in.
@@ -94,6 +97,7 @@ impl Default for TrackOptions {
             overlay: BTreeSet::new(),
             progress: false,
             pixels: Pixels::default(),
+            target_filter: TargetFilterParams::DEFAULT,
         }
     }
 }
@@ -216,6 +220,7 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
 ) -> Result<TrackOutput> {
     let mut tracker: Tracker<DOF, HOST_POPULATION_CAPACITY, G> =
         Tracker::new(config(seq, arm, opts)?).map_err(|e| anyhow!("tracker: {e}"))?;
+    tracker.set_target_filter_params(opts.target_filter).map_err(|e| anyhow!("--target-filter: {e}"))?;
     match &seq.manifest.initial_pose {
         Some(pose) => {
             let psi = Psi::from_isometry(&pose.cast::<f32>());

@@ -35,8 +35,10 @@ pub struct TargetFilterParams {
     /// Prior standard deviation of the acceleration after a reset (m/s²).
     pub initial_accel_sd_m_s2: f32,
     /// The linear velocity fed forward is the filter's velocity moved on by its acceleration
-    /// over this time (s): `v + a·lead`; half a frame period would be the mean velocity over
-    /// the next frame, but the acceleration state is noisy (the default is 0).
+    /// over this time (s): `v + a·lead`; half a frame period is the mean velocity over the
+    /// next frame. The acceleration state is noisy, so the lead pays only when the filter is fed
+    /// a quiet position ([`TargetFilterParams::measurement_fitness_margin`]); 0 feeds the
+    /// velocity alone.
     pub acceleration_lead_s: f32,
     /// Prior standard deviation of the velocity after a reset (m/s).
     pub initial_speed_sd_m_s: f32,
@@ -95,17 +97,18 @@ impl TargetFilterParams {
     ///
     /// The linear part is tuned for a block that starts, stops and reverses on a conveyor
     /// (0.2 m/s, reversals at 0.54 m/s², `scenarios/conveyor_ff_target.toml`): a fast filter
-    /// (white acceleration 0.2 m²/s³ and white jerk 30 m²/s⁵ on an acceleration state, 1.5 mm
+    /// (white acceleration 0.2 m²/s³ and white jerk 30 m²/s⁵ on an acceleration state, 1 mm
     /// across the line of sight, 8 mm along it) that follows a reversal within a few frames,
     /// trusted once its velocity is known to 0.1 m/s, reset only when the fitness falls below
-    /// 0.3 (or the tracker's status leaves *tracking*); once fed forward its velocity is held
-    /// through the reversals ([`TargetFilterParams::hold_motion`]), not moved on by its
-    /// acceleration ([`TargetFilterParams::acceleration_lead_s`] 0: half a frame's lead made a
-    /// block accelerating from rest in front of a still camera 12 mm RMS off instead of 3.4 mm,
-    /// `core/tests/target_feedforward.rs`), and along the line of sight only what the axes
-    /// seen across it say is fed forward
-    /// ([`TargetFilterParams::depth_feedforward`] 0). The significance test still
-    /// decides whether a block moves at all, so a block at rest is tracked as with FF alone.
+    /// 0.3 (or the tracker's status leaves *tracking*). It is fed the centre of the GA's
+    /// individuals within 0.01 of the best fitness
+    /// ([`TargetFilterParams::measurement_fitness_margin`]), which jumps less than the best
+    /// individual, and the velocity it feeds forward is moved on by its acceleration over half a
+    /// frame ([`TargetFilterParams::acceleration_lead_s`] 0.0165 s). Once fed forward, its
+    /// velocity is held through the reversals ([`TargetFilterParams::hold_motion`]), and along
+    /// the line of sight only what the axes seen across it say is fed forward
+    /// ([`TargetFilterParams::depth_feedforward`] 0). The significance test still decides
+    /// whether a block moves at all, so a block at rest is tracked as with FF alone.
     /// While the block moves, the fast angular model is not fed forward
     /// ([`TargetFilterParams::linear_motion_mutes_angular`]): on the conveyor it lost the block
     /// in 5 of 20 runs by feeding forward the estimate's own turn.

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes the hand-made seed inputs of the fuzz corpora (fuzz/corpus/<target>/seed-*).
 
-Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 7: 24-byte header,
+Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 8: 24-byte header,
 payload, CRC-32/ISO-HDLC trailer = zlib.crc32, the whole COBS-framed between two zero bytes;
 frames carry RGB565 images, 2 bytes a pixel). Run from anywhere: python3 fuzz/make_seeds.py
 """
@@ -10,7 +10,7 @@ import struct
 import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-VERSION = 7
+VERSION = 8
 
 
 def cobs(raw):
@@ -49,10 +49,18 @@ def setup(width, height):
     p += f32s(-0.2, -0.2, 0.4) + f32s(0.2, 0.2, 1.0)  # search box
     p += struct.pack("<QBBH", 1, 5, 1, 0)  # seed, hue tolerance, feedforward on, reserved
     p += f32s(0.5)  # max dt
-    p += f32s(0.2, 0.9, 0.35) + struct.pack("<II", 1, 3) + f32s(0.25, 0.6) + f32s(0.15, 0.5, 0.95)
+    # GA (GaParams::DEFAULT): population, three probabilities, immigrants, tournament, the
+    # level CDF, the settled CDF and fitness, the mutation scales
+    p += struct.pack("<I", 40) + f32s(0.2, 0.9, 0.35) + struct.pack("<II", 1, 3)
+    p += f32s(0.25, 0.6) + f32s(0.15, 0.5, 0.95)
     p += f32s(0.02, 0.02, 0.02, 0.04, 0.04, 0.04, 0.004, 0.004, 0.004, 0.008, 0.008, 0.008)
-    p += f32s(0.001, 0.001, 0.001, 0.002, 0.002, 0.002)
+    p += f32s(0.001, 0.001, 0.001, 0.004, 0.004, 0.004)
     p += f32s(0, 0, 0.7, 0, 0, 0) + f32s(*[0.02] * 6)  # initial pose and spread
+    # target filter (TargetFilterParams::DEFAULT): 23 f32, max_outliers, converge_updates,
+    # flags (hold_motion | linear_motion_mutes_angular), reserved
+    p += f32s(0.001, 0.008, 0.02, 0.2, 0.01, 1e-4, 0.02, 0.96, 30.0, 1.0, 0.0165, 0.5, 2.0, 6.0)
+    p += f32s(0.1, 0.15, 0.3, 0.5, 0.01, 0.05, 2.0, 0.01, 0.0)
+    p += struct.pack("<HHBB", 3, 10, 3, 0)
     return p
 
 

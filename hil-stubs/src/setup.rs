@@ -4,7 +4,10 @@
 //! Both directions copy every number unchanged (no renormalisation, no unit conversion):
 //! `Setup::from_tracker_config(&c, ..)?.tracker_config()? == c` exactly. The arm is always
 //! the PA-10 and the rig two identical parallel cameras ([`StereoRig::parallel`]); other
-//! configurations cannot be sent and are refused by [`Setup::from_tracker_config`].
+//! configurations cannot be sent and are refused by [`Setup::from_tracker_config`]. The
+//! target filter's tuning is not part of a [`TrackerConfig`] (the tracker holds it): it travels
+//! in [`Setup::target_filter`] ([`Setup::with_target_filter`]) and is given to the tracker
+//! when it is built.
 
 use evorec_core::acquire::AcquireConfig;
 use evorec_core::camera::{CameraError, Pinhole, StereoRig};
@@ -13,6 +16,7 @@ use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::status::StatusConfig;
+use evorec_core::target_motion::{FilterParamsError, TargetFilterParams};
 use evorec_core::tracker::{ConfigError, Feedforward, StepError, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 
@@ -43,6 +47,8 @@ pub enum SetupError {
     /// Acquisition or status settings other than the defaults, which the firmware always
     /// uses (code 8, host side only).
     UnsupportedAcquisition,
+    /// The target filter's parameters (code 9).
+    TargetFilter(FilterParamsError),
 }
 
 impl SetupError {
@@ -57,6 +63,7 @@ impl SetupError {
             Self::UnsupportedRig => 6,
             Self::UnsupportedArm => 7,
             Self::UnsupportedAcquisition => 8,
+            Self::TargetFilter(_) => 9,
         }
     }
 
@@ -72,6 +79,7 @@ impl SetupError {
             6 => "rig is not two identical parallel cameras",
             7 => "arm is not the PA-10",
             8 => "acquisition or status settings differ from the firmware's defaults",
+            9 => "target filter parameters rejected",
             _ => "unknown setup error",
         }
     }
@@ -84,6 +92,7 @@ impl core::fmt::Display for SetupError {
             Self::Search(e) => write!(f, "search space: {e}"),
             Self::Tracker(e) => write!(f, "tracker: {e}"),
             Self::InitialPose(e) => write!(f, "initial pose: {e}"),
+            Self::TargetFilter(e) => write!(f, "target filter: {} {}", e.0, e.rule()),
             other => f.write_str(Self::describe_code(other.code())),
         }
     }
@@ -125,10 +134,11 @@ impl Setup {
     /// ([`Tracker::new`] then [`Tracker::reset_around`]).
     ///
     /// # Errors
-    /// As [`Setup::tracker_config`], plus [`SetupError::Tracker`] and
-    /// [`SetupError::InitialPose`].
+    /// As [`Setup::tracker_config`], plus [`SetupError::Tracker`],
+    /// [`SetupError::TargetFilter`] and [`SetupError::InitialPose`].
     pub fn build_tracker<const P: usize, const G: usize>(&self) -> Result<Tracker<DOF, P, G>, SetupError> {
         let mut tracker = Tracker::new(self.tracker_config()?).map_err(SetupError::Tracker)?;
+        tracker.set_target_filter_params(self.target_filter).map_err(SetupError::TargetFilter)?;
         tracker.reset_around(&self.initial_psi, &self.initial_spread).map_err(SetupError::InitialPose)?;
         Ok(tracker)
     }
@@ -145,12 +155,14 @@ impl Setup {
     ) -> Result<&'s mut Tracker<DOF, P, G>, SetupError> {
         let config = self.tracker_config()?;
         let tracker = Tracker::new_in(slot, config).map_err(SetupError::Tracker)?;
+        tracker.set_target_filter_params(self.target_filter).map_err(SetupError::TargetFilter)?;
         tracker.reset_around(&self.initial_psi, &self.initial_spread).map_err(SetupError::InitialPose)?;
         Ok(tracker)
     }
 
     /// The `Setup` of a tracker configuration plus the loop's feedforward switch and the
-    /// initial population.
+    /// initial population, with the target filter's defaults
+    /// ([`TargetFilterParams::DEFAULT`]; see [`Setup::with_target_filter`]).
     ///
     /// # Errors
     /// [`SetupError::UnsupportedRig`] unless the rig is [`StereoRig::parallel`] (identical
@@ -212,7 +224,14 @@ impl Setup {
             ga,
             initial_psi: *initial_psi,
             initial_spread: *initial_spread,
+            target_filter: TargetFilterParams::DEFAULT,
         })
+    }
+
+    /// This setup with the target filter tuned as `params` (checked when the tracker is
+    /// built: [`SetupError::TargetFilter`]).
+    pub fn with_target_filter(self, params: TargetFilterParams) -> Self {
+        Self { target_filter: params, ..self }
     }
 }
 
@@ -258,6 +277,23 @@ mod tests {
         let t: Tracker = setup.build_tracker().unwrap();
         assert_eq!(t.population().len(), 23);
         assert_eq!(setup.tracker_config().unwrap().ga.population, 23);
+    }
+
+    #[test]
+    fn the_setups_target_filter_reaches_the_tracker_and_bad_values_get_code_9() {
+        let mut params = TargetFilterParams::DEFAULT;
+        params.converge_updates = 4;
+        let setup = sample_setup().with_target_filter(params);
+        let t: Tracker = setup.build_tracker().unwrap();
+        assert_eq!(*t.target_filter().params(), params);
+        let mut slot = None;
+        let t: &mut Tracker = setup.build_tracker_in(&mut slot).unwrap();
+        assert_eq!(*t.target_filter().params(), params);
+        params.position_noise_m = -0.001;
+        let r: Result<Tracker, _> = sample_setup().with_target_filter(params).build_tracker();
+        let e = r.unwrap_err();
+        assert_eq!((e.code(), SetupError::describe_code(e.code())), (9, "target filter parameters rejected"));
+        assert_eq!(std::format!("{e}"), "target filter: position_noise_m finite and positive");
     }
 
     #[test]

@@ -189,15 +189,10 @@ fn start_session(
             s.camera.height
         );
     }
-    if !s.target_filter.is_default() {
-        bail!(
-            "this scenario tunes [target_filter], but the firmware's CONFIG does not carry the target \
-             filter's parameters (it runs the core's defaults); remove the section to compare with the firmware"
-        );
-    }
     let config = experiment::tracker_config(s)?;
     let setup = Setup::from_tracker_config(&config, feedforward, start, &INITIAL_SPREAD)
-        .map_err(|e| anyhow::anyhow!("firmware setup: {e:?}"))?;
+        .map_err(|e| anyhow::anyhow!("firmware setup: {e:?}"))?
+        .with_target_filter(s.target_filter.0);
     HilSession::start_with(firmware, workdir, &setup, options).map_err(|e| anyhow::anyhow!("{e}"))
 }
 

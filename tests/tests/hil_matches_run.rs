@@ -38,18 +38,38 @@ fn hil_trace_equals_host_trace() {
     let _ = std::fs::remove_dir_all(&work);
 }
 
-/// The firmware's CONFIG carries no target-filter tuning, so a scenario that tunes
-/// `[target_filter]` is refused before QEMU starts rather than compared against a firmware that
-/// ran the defaults.
+/// `CONFIG` carries the target filter's tuning (protocol version 8): an `ff+target` scenario
+/// with a conveyor and a tuned `[target_filter]` gives the same estimates on the firmware as on
+/// the host, and the tuning changed them (a firmware running the defaults would differ).
 #[test]
-fn hil_refuses_a_tuned_target_filter() {
+fn hil_runs_a_tuned_target_filter_as_the_host() {
+    if evorec_tests::hil_skipped("hil_matches_run") {
+        return;
+    }
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_b_ff.toml");
     let text = std::fs::read_to_string(path).expect("scenario");
-    let mut s = Scenario::from_toml_str(&(text + "\n[target_filter]\nacceleration_lead_s = 0\n")).expect("valid");
-    s.duration_s = 0.1;
+    let moving = text
+        .replace("method = \"ff\"", "method = \"ff+target\"")
+        .replace("[target]\n", "[target]\nconveyor_speed_m_s = 0.05\n");
+    assert_ne!(moving, text, "the scenario's method and [target] lines moved");
+    let scenario = |tuning: &str| {
+        let mut s = Scenario::from_toml_str(&format!("{moving}{tuning}")).expect("valid scenario");
+        s.duration_s = 3.0;
+        s
+    };
+    let tuned = scenario("\n[target_filter]\nposition_noise_m = 0.003\n");
+    let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));
     let work = std::env::temp_dir().join(format!("evorec-hil-tuned-filter-{}", std::process::id()));
-    let firmware = work.join("no-firmware-needed");
-    let e = hil::run(&s, &firmware, &work, || {}).err().map(|e| format!("{e:#}")).unwrap_or_default();
-    assert!(e.contains("tunes [target_filter]"), "{e}");
+    let on_board = hil::run(&tuned, &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    let on_host = experiment::run(&tuned, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    let untuned = experiment::run(&scenario(""), || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(on_board.rows.len(), 92);
+    assert_eq!(on_board.rows.len(), on_host.rows.len());
+    for (b, h) in on_board.rows.iter().zip(on_host.rows.iter()) {
+        assert_eq!(b.estimate.0.map(f32::to_bits), h.estimate.0.map(f32::to_bits), "t = {}", b.t);
+        assert_eq!(b.fitness.to_bits(), h.fitness.to_bits(), "t = {}", b.t);
+    }
+    let changed = on_host.rows.iter().zip(untuned.rows.iter()).filter(|(t, u)| t.estimate != u.estimate).count();
+    assert!(changed > 0, "the tuning did not change the run, so this test cannot tell it was sent");
     let _ = std::fs::remove_dir_all(&work);
 }

@@ -51,6 +51,7 @@
 use evorec_core::config::PA10_DOF;
 use evorec_core::ga::{GaParams, MUTATION_LEVELS};
 use evorec_core::pose::Psi;
+use evorec_core::target_motion::TargetFilterParams;
 use evorec_core::tracker::{Estimate, Feedforward, JointSample};
 
 use payload::{Dec, Enc};
@@ -76,12 +77,13 @@ pub const DOF: usize = PA10_DOF;
 
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
-/// Protocol version carried in every header (7: `ESTIMATE` carries the target filter's
+/// Protocol version carried in every header (8: `CONFIG` carries the target filter's
+/// parameters; 7: `ESTIMATE` carries the target filter's
 /// measured position; 6: `CONFIG` carries the GA's settled mutation levels; 5: COBS framing,
 /// header flags, drop counts in `DONE`; 4: `CONFIG` carries the population size; 3:
 /// estimates carry the tracker's status; 2: frames carry the sensor's RGB565 pixels; 1: hue
 /// frames).
-pub const VERSION: u8 = 7;
+pub const VERSION: u8 = 8;
 /// The pixel format of a frame's images on the link: the camera sensor's own RGB565, so the
 /// hue is computed on the board (see [`evorec_core::image::Rgb565`]).
 pub type LinkFormat = evorec_core::image::Rgb565;
@@ -95,10 +97,14 @@ pub const CRC_LEN: usize = 4;
 /// immigrants, tournament size, the mutation-level CDF, the settled CDF and its fitness, and
 /// the mutation scales.
 const GA_LEN: usize = 4 + 3 * 4 + 4 + 4 + 2 * 4 * (MUTATION_LEVELS - 1) + 4 + 4 * 6 * MUTATION_LEVELS;
+/// Size of the target filter's parameters inside `CONFIG`: 23 `f32`, the two counts (u16)
+/// and a flags byte plus a reserved one.
+const TARGET_FILTER_LEN: usize = 23 * 4 + 2 * 2 + 2;
 /// `CONFIG` payload size: intrinsics and image size, baseline, block, flange-to-camera,
 /// search box, seed, hue tolerance, feedforward flag (+2 reserved), `max_dt_s`, GA
-/// parameters, initial pose and spread.
-pub const CONFIG_LEN: usize = 4 * 4 + 2 * 2 + 4 + 4 * 9 + 4 * 7 + 4 * 6 + 8 + 4 + 4 + GA_LEN + 4 * 12;
+/// parameters, initial pose and spread, target filter parameters.
+pub const CONFIG_LEN: usize =
+    4 * 4 + 2 * 2 + 4 + 4 * 9 + 4 * 7 + 4 * 6 + 8 + 4 + 4 + GA_LEN + 4 * 12 + TARGET_FILTER_LEN;
 /// `FRAME` payload size before the two images.
 pub const FRAME_FIXED_LEN: usize = 2 + 2 + 8 + 4 * DOF * 2;
 /// `ESTIMATE` payload size: ψ, fitness, generation, status code, the filter's measured position.
@@ -303,6 +309,9 @@ pub struct Setup {
     pub initial_psi: Psi,
     /// Per-gene spread of the initial population.
     pub initial_spread: [f32; 6],
+    /// Tuning of the target filter that `ff+target` feeds forward
+    /// ([`evorec_core::Tracker::set_target_filter_params`]).
+    pub target_filter: TargetFilterParams,
 }
 
 /// A stereo frame with its joint sample (the `FRAME` payload); sequence number and capture

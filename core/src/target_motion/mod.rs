@@ -52,7 +52,7 @@ mod params;
 mod predict;
 use angular::SlowTurn;
 use axis::{Axis, PosAxis};
-pub use params::{FilterParamsError, TargetFilterParams};
+pub use params::{Field, FilterParamsError, TargetFilterParams};
 pub use predict::{PredictError, Prediction};
 
 /// The target's velocity screw in the world frame `Σ_W` (`^W ψ̇_M` with the angular part as

@@ -203,6 +203,68 @@ impl TargetFilterParams {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FilterParamsError(pub &'static str);
 
+/// One field of [`TargetFilterParams`] of type `T`, by name: for tools that read or send the
+/// parameters field by field (a scenario file's keys, a link message), so that the list of
+/// fields is kept once, here.
+#[derive(Clone, Copy)]
+pub struct Field<T: 'static> {
+    /// The field's name in [`TargetFilterParams`].
+    pub name: &'static str,
+    /// Reads the field.
+    pub get: fn(&TargetFilterParams) -> T,
+    /// Writes the field.
+    pub set: fn(&mut TargetFilterParams, T),
+}
+
+impl<T> core::fmt::Debug for Field<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Field").field("name", &self.name).finish_non_exhaustive()
+    }
+}
+
+/// The [`Field`]s of the listed fields of type `$ty`.
+macro_rules! fields {
+    ($ty:ty, [$($f:ident),* $(,)?]) => {
+        [$(Field::<$ty> { name: stringify!($f), get: |p| p.$f, set: |p, v| p.$f = v }),*]
+    };
+}
+
+impl TargetFilterParams {
+    /// Every `f32` field, in the order a link message carries them.
+    pub const REAL_FIELDS: [Field<f32>; 23] = fields!(
+        f32,
+        [
+            position_noise_m,
+            depth_noise_m,
+            rotation_noise_rad,
+            acceleration_psd,
+            angular_acceleration_psd,
+            slow_angular_acceleration_psd,
+            slow_deadband_rad_s,
+            slow_min_fitness,
+            jerk_psd,
+            initial_accel_sd_m_s2,
+            acceleration_lead_s,
+            initial_speed_sd_m_s,
+            initial_rate_sd_rad_s,
+            gate_sigma,
+            trusted_speed_sd_m_s,
+            trusted_rate_sd_rad_s,
+            lost_fitness,
+            max_gap_s,
+            deadband_m_s,
+            deadband_rad_s,
+            significance_sigma,
+            measurement_fitness_margin,
+            depth_feedforward,
+        ]
+    );
+    /// The two counts.
+    pub const COUNT_FIELDS: [Field<u16>; 2] = fields!(u16, [max_outliers, converge_updates]);
+    /// The two flags.
+    pub const FLAG_FIELDS: [Field<bool>; 2] = fields!(bool, [hold_motion, linear_motion_mutes_angular]);
+}
+
 impl FilterParamsError {
     /// The rule the field broke (see [`TargetFilterParams::validate`]).
     pub fn rule(&self) -> &'static str {

@@ -501,3 +501,40 @@ fn a_moving_block_gets_no_fast_angular_feedforward() {
     let (still, moves) = angular_while_moving(TargetFilterParams::DEFAULT, Vector3::zeros(), w);
     assert!(!moves && (still - w).norm() < 0.1, "a turn in place {w} is fed forward as {still}");
 }
+
+/// The by-name tables list every field of [`TargetFilterParams`] once (checked against the
+/// derived `Debug`, which names them all), and each entry reads and writes its own field.
+#[test]
+fn the_field_tables_cover_every_parameter_once() {
+    use std::string::{String, ToString};
+    use std::vec::Vec;
+    let debug = std::format!("{:?}", TargetFilterParams::DEFAULT);
+    let inner = debug.trim_start_matches("TargetFilterParams { ").trim_end_matches(" }");
+    let mut declared: Vec<String> =
+        inner.split(", ").map(|kv| kv.split(':').next().unwrap_or("").to_string()).collect();
+    let reals = TargetFilterParams::REAL_FIELDS.iter().map(|f| f.name);
+    let counts = TargetFilterParams::COUNT_FIELDS.iter().map(|f| f.name);
+    let flags = TargetFilterParams::FLAG_FIELDS.iter().map(|f| f.name);
+    let mut listed: Vec<String> = reals.chain(counts).chain(flags).map(ToString::to_string).collect();
+    declared.sort();
+    listed.sort();
+    assert_eq!(listed, declared);
+    assert_eq!(listed.len(), 27);
+    let d = TargetFilterParams::DEFAULT;
+    for f in TargetFilterParams::REAL_FIELDS {
+        let mut p = d;
+        (f.set)(&mut p, (f.get)(&d) + 0.5);
+        assert_eq!((f.get)(&p), (f.get)(&d) + 0.5, "{}", f.name);
+        assert!(std::format!("{p:?}").contains(&std::format!("{}: {:?}", f.name, (f.get)(&d) + 0.5)), "{}", f.name);
+    }
+    for f in TargetFilterParams::COUNT_FIELDS {
+        let mut p = d;
+        (f.set)(&mut p, 777);
+        assert!(std::format!("{p:?}").contains(&std::format!("{}: 777", f.name)), "{}", f.name);
+    }
+    for f in TargetFilterParams::FLAG_FIELDS {
+        let mut p = d;
+        (f.set)(&mut p, !(f.get)(&d));
+        assert!(std::format!("{p:?}").contains(&std::format!("{}: {}", f.name, !(f.get)(&d))), "{}", f.name);
+    }
+}

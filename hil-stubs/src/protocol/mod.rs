@@ -97,9 +97,11 @@ pub const CRC_LEN: usize = 4;
 /// immigrants, tournament size, the mutation-level CDF, the settled CDF and its fitness, and
 /// the mutation scales.
 const GA_LEN: usize = 4 + 3 * 4 + 4 + 4 + 2 * 4 * (MUTATION_LEVELS - 1) + 4 + 4 * 6 * MUTATION_LEVELS;
-/// Size of the target filter's parameters inside `CONFIG`: 23 `f32`, the two counts (u16)
-/// and a flags byte plus a reserved one.
-const TARGET_FILTER_LEN: usize = 23 * 4 + 2 * 2 + 2;
+/// Size of the target filter's parameters inside `CONFIG`: the `f32` fields (23), the counts
+/// (two u16) and a flags byte (at most 8 flags) plus a reserved one.
+const TARGET_FILTER_LEN: usize =
+    TargetFilterParams::REAL_FIELDS.len() * 4 + TargetFilterParams::COUNT_FIELDS.len() * 2 + 2;
+const _: () = assert!(TargetFilterParams::FLAG_FIELDS.len() <= 8, "the flags fill one byte");
 /// `CONFIG` payload size: intrinsics and image size, baseline, block, flange-to-camera,
 /// search box, seed, hue tolerance, feedforward flag (+2 reserved), `max_dt_s`, GA
 /// parameters, initial pose and spread, target filter parameters.

@@ -107,139 +107,43 @@ fn encode_setup(e: &mut Enc<'_>, s: &Setup) {
     encode_target_filter(e, &s.target_filter);
 }
 
-/// Bits of the target filter's flags byte.
-const HOLD_MOTION: u8 = 1;
-const LINEAR_MOTION_MUTES_ANGULAR: u8 = 2;
+/// The target filter's flags byte: bit `i` is [`TargetFilterParams::FLAG_FIELDS`]`[i]`
+/// (`hold_motion` 1, `linear_motion_mutes_angular` 2); the other bits must be 0.
+const FLAG_MASK: u8 = (1 << TargetFilterParams::FLAG_FIELDS.len()) - 1;
 
 fn encode_target_filter(e: &mut Enc<'_>, p: &TargetFilterParams) {
-    // Destructured so that a new filter parameter in the core fails to compile here.
-    let TargetFilterParams {
-        position_noise_m,
-        depth_noise_m,
-        rotation_noise_rad,
-        acceleration_psd,
-        angular_acceleration_psd,
-        slow_angular_acceleration_psd,
-        slow_deadband_rad_s,
-        slow_min_fitness,
-        jerk_psd,
-        initial_accel_sd_m_s2,
-        acceleration_lead_s,
-        initial_speed_sd_m_s,
-        initial_rate_sd_rad_s,
-        gate_sigma,
-        max_outliers,
-        converge_updates,
-        trusted_speed_sd_m_s,
-        trusted_rate_sd_rad_s,
-        lost_fitness,
-        max_gap_s,
-        deadband_m_s,
-        deadband_rad_s,
-        significance_sigma,
-        hold_motion,
-        linear_motion_mutes_angular,
-        measurement_fitness_margin,
-        depth_feedforward,
-    } = *p;
-    e.f32s(&[
-        position_noise_m,
-        depth_noise_m,
-        rotation_noise_rad,
-        acceleration_psd,
-        angular_acceleration_psd,
-        slow_angular_acceleration_psd,
-        slow_deadband_rad_s,
-        slow_min_fitness,
-        jerk_psd,
-        initial_accel_sd_m_s2,
-        acceleration_lead_s,
-        initial_speed_sd_m_s,
-        initial_rate_sd_rad_s,
-        gate_sigma,
-        trusted_speed_sd_m_s,
-        trusted_rate_sd_rad_s,
-        lost_fitness,
-        max_gap_s,
-        deadband_m_s,
-        deadband_rad_s,
-        significance_sigma,
-        measurement_fitness_margin,
-        depth_feedforward,
-    ]);
-    e.u16(max_outliers);
-    e.u16(converge_updates);
-    let flags = if hold_motion { HOLD_MOTION } else { 0 }
-        | if linear_motion_mutes_angular { LINEAR_MOTION_MUTES_ANGULAR } else { 0 };
-    e.u8(flags);
+    for f in TargetFilterParams::REAL_FIELDS {
+        e.f32((f.get)(p));
+    }
+    for f in TargetFilterParams::COUNT_FIELDS {
+        e.u16((f.get)(p));
+    }
+    let flags = TargetFilterParams::FLAG_FIELDS.iter().enumerate();
+    e.u8(flags.fold(0, |acc, (i, f)| if (f.get)(p) { acc | 1 << i } else { acc }));
     e.u8(0);
 }
 
-/// The target filter's parameters as sent; their values are checked when the tracker is
-/// built ([`crate::setup::SetupError::TargetFilter`]), a flag bit beyond the two is a
+/// The target filter's parameters as sent (the fields in the order of the core's tables,
+/// [`TargetFilterParams::REAL_FIELDS`]); their values are checked when the tracker is built
+/// ([`crate::setup::SetupError::TargetFilter`]), a flag bit beyond the two is a
 /// [`DecodeError::BadValue`].
 fn decode_target_filter(d: &mut Dec<'_>) -> Result<TargetFilterParams, DecodeError> {
-    let [
-        position_noise_m,
-        depth_noise_m,
-        rotation_noise_rad,
-        acceleration_psd,
-        angular_acceleration_psd,
-        slow_angular_acceleration_psd,
-        slow_deadband_rad_s,
-        slow_min_fitness,
-        jerk_psd,
-        initial_accel_sd_m_s2,
-        acceleration_lead_s,
-        initial_speed_sd_m_s,
-        initial_rate_sd_rad_s,
-        gate_sigma,
-        trusted_speed_sd_m_s,
-        trusted_rate_sd_rad_s,
-        lost_fitness,
-        max_gap_s,
-        deadband_m_s,
-        deadband_rad_s,
-        significance_sigma,
-        measurement_fitness_margin,
-        depth_feedforward,
-    ] = d.f32s::<23>();
-    let max_outliers = d.u16();
-    let converge_updates = d.u16();
+    let mut p = TargetFilterParams::DEFAULT;
+    for f in TargetFilterParams::REAL_FIELDS {
+        (f.set)(&mut p, d.f32());
+    }
+    for f in TargetFilterParams::COUNT_FIELDS {
+        (f.set)(&mut p, d.u16());
+    }
     let flags = d.u8();
     let _reserved = d.u8();
-    if flags & !(HOLD_MOTION | LINEAR_MOTION_MUTES_ANGULAR) != 0 {
+    if flags & !FLAG_MASK != 0 {
         return Err(DecodeError::BadValue);
     }
-    Ok(TargetFilterParams {
-        position_noise_m,
-        depth_noise_m,
-        rotation_noise_rad,
-        acceleration_psd,
-        angular_acceleration_psd,
-        slow_angular_acceleration_psd,
-        slow_deadband_rad_s,
-        slow_min_fitness,
-        jerk_psd,
-        initial_accel_sd_m_s2,
-        acceleration_lead_s,
-        initial_speed_sd_m_s,
-        initial_rate_sd_rad_s,
-        gate_sigma,
-        max_outliers,
-        converge_updates,
-        trusted_speed_sd_m_s,
-        trusted_rate_sd_rad_s,
-        lost_fitness,
-        max_gap_s,
-        deadband_m_s,
-        deadband_rad_s,
-        significance_sigma,
-        hold_motion: flags & HOLD_MOTION != 0,
-        linear_motion_mutes_angular: flags & LINEAR_MOTION_MUTES_ANGULAR != 0,
-        measurement_fitness_margin,
-        depth_feedforward,
-    })
+    for (i, f) in TargetFilterParams::FLAG_FIELDS.iter().enumerate() {
+        (f.set)(&mut p, flags & 1 << i != 0);
+    }
+    Ok(p)
 }
 
 fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {

@@ -138,14 +138,14 @@ impl Setup {
     /// [`SetupError::TargetFilter`] and [`SetupError::InitialPose`].
     pub fn build_tracker<const P: usize, const G: usize>(&self) -> Result<Tracker<DOF, P, G>, SetupError> {
         let mut tracker = Tracker::new(self.tracker_config()?).map_err(SetupError::Tracker)?;
-        tracker.set_target_filter_params(self.target_filter).map_err(SetupError::TargetFilter)?;
-        tracker.reset_around(&self.initial_psi, &self.initial_spread).map_err(SetupError::InitialPose)?;
+        self.prepare(&mut tracker)?;
         Ok(tracker)
     }
 
     /// [`Setup::build_tracker`] into `slot` (the firmware's static) through
     /// [`Tracker::new_in`], which builds it in place and keeps whole-tracker copies off the
-    /// stack. After an initial-pose error `slot` holds an unseeded tracker; do not use it.
+    /// stack. After a target-filter or initial-pose error `slot` holds a tracker that was not
+    /// prepared; do not use it.
     ///
     /// # Errors
     /// As [`Setup::build_tracker`].
@@ -155,9 +155,15 @@ impl Setup {
     ) -> Result<&'s mut Tracker<DOF, P, G>, SetupError> {
         let config = self.tracker_config()?;
         let tracker = Tracker::new_in(slot, config).map_err(SetupError::Tracker)?;
-        tracker.set_target_filter_params(self.target_filter).map_err(SetupError::TargetFilter)?;
-        tracker.reset_around(&self.initial_psi, &self.initial_spread).map_err(SetupError::InitialPose)?;
+        self.prepare(tracker)?;
         Ok(tracker)
+    }
+
+    /// What the setup holds beyond the tracker's configuration: the target filter's tuning,
+    /// then the population seeded around [`Setup::initial_psi`].
+    fn prepare<const P: usize, const G: usize>(&self, tracker: &mut Tracker<DOF, P, G>) -> Result<(), SetupError> {
+        tracker.set_target_filter_params(self.target_filter).map_err(SetupError::TargetFilter)?;
+        tracker.reset_around(&self.initial_psi, &self.initial_spread).map_err(SetupError::InitialPose)
     }
 
     /// The `Setup` of a tracker configuration plus the loop's feedforward switch and the

@@ -206,20 +206,14 @@ pub struct FilterParamsError(pub &'static str);
 /// One field of [`TargetFilterParams`] of type `T`, by name: for tools that read or send the
 /// parameters field by field (a scenario file's keys, a link message), so that the list of
 /// fields is kept once, here.
-#[derive(Clone, Copy)]
-pub struct Field<T: 'static> {
+#[derive(Clone, Copy, Debug)]
+pub struct Field<T> {
     /// The field's name in [`TargetFilterParams`].
     pub name: &'static str,
     /// Reads the field.
     pub get: fn(&TargetFilterParams) -> T,
     /// Writes the field.
     pub set: fn(&mut TargetFilterParams, T),
-}
-
-impl<T> core::fmt::Debug for Field<T> {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("Field").field("name", &self.name).finish_non_exhaustive()
-    }
 }
 
 /// The [`Field`]s of the listed fields of type `$ty`.

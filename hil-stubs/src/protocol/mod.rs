@@ -101,7 +101,7 @@ const GA_LEN: usize = 4 + 3 * 4 + 4 + 4 + 2 * 4 * (MUTATION_LEVELS - 1) + 4 + 4 
 /// (two u16) and a flags byte (at most 8 flags) plus a reserved one.
 const TARGET_FILTER_LEN: usize =
     TargetFilterParams::REAL_FIELDS.len() * 4 + TargetFilterParams::COUNT_FIELDS.len() * 2 + 2;
-const _: () = assert!(TargetFilterParams::FLAG_FIELDS.len() <= 8, "the flags fill one byte");
+const _: () = assert!(matches!(TargetFilterParams::FLAG_FIELDS.len(), 1..=8), "the flags fill one byte");
 /// `CONFIG` payload size: intrinsics and image size, baseline, block, flange-to-camera,
 /// search box, seed, hue tolerance, feedforward flag (+2 reserved), `max_dt_s`, GA
 /// parameters, initial pose and spread, target filter parameters.

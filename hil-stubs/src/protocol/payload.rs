@@ -109,7 +109,7 @@ fn encode_setup(e: &mut Enc<'_>, s: &Setup) {
 
 /// The target filter's flags byte: bit `i` is [`TargetFilterParams::FLAG_FIELDS`]`[i]`
 /// (`hold_motion` 1, `linear_motion_mutes_angular` 2); the other bits must be 0.
-const FLAG_MASK: u8 = (1 << TargetFilterParams::FLAG_FIELDS.len()) - 1;
+const FLAG_MASK: u8 = u8::MAX >> (8 - TargetFilterParams::FLAG_FIELDS.len());
 
 fn encode_target_filter(e: &mut Enc<'_>, p: &TargetFilterParams) {
     for f in TargetFilterParams::REAL_FIELDS {

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes the hand-made seed inputs of the fuzz corpora (fuzz/corpus/<target>/seed-*).
 
-Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 8: 24-byte header,
+Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 9: 24-byte header,
 payload, CRC-32/ISO-HDLC trailer = zlib.crc32, the whole COBS-framed between two zero bytes;
 frames carry RGB565 images, 2 bytes a pixel). Run from anywhere: python3 fuzz/make_seeds.py
 """
@@ -10,7 +10,7 @@ import struct
 import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-VERSION = 8
+VERSION = 9
 
 
 def cobs(raw):
@@ -56,11 +56,9 @@ def setup(width, height):
     p += f32s(0.02, 0.02, 0.02, 0.04, 0.04, 0.04, 0.004, 0.004, 0.004, 0.008, 0.008, 0.008)
     p += f32s(0.001, 0.001, 0.001, 0.004, 0.004, 0.004)
     p += f32s(0, 0, 0.7, 0, 0, 0) + f32s(*[0.02] * 6)  # initial pose and spread
-    # target filter (TargetFilterParams::DEFAULT): 23 f32, max_outliers, converge_updates,
-    # flags (hold_motion | linear_motion_mutes_angular), reserved
-    p += f32s(0.001, 0.008, 0.02, 0.2, 0.01, 1e-4, 0.02, 0.96, 30.0, 1.0, 0.0165, 0.5, 2.0, 6.0)
-    p += f32s(0.1, 0.15, 0.3, 0.5, 0.01, 0.05, 2.0, 0.01, 0.0)
-    p += struct.pack("<HHBB", 3, 10, 3, 0)
+    # target motion model (TargetFilterParams::DEFAULT): acceleration, angular acceleration,
+    # max speed, max rate, image noise, max gap
+    p += f32s(1.0, 2.0, 0.5, 1.0, 0.5, 0.5)
     return p
 
 

@@ -4,7 +4,7 @@
 //! invalid frame, joint sample or time step returns a [`StepError`] and leaves the population,
 //! the random generator and the generation counter exactly as they were.
 
-use nalgebra::{Isometry3, Matrix3};
+use nalgebra::Isometry3;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
@@ -22,8 +22,15 @@ use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
 use crate::status::{Status, StatusConfig, StatusError, StatusMonitor};
 use crate::target_motion::{
-    FilterParamsError, PredictError, Prediction, TargetFilter, TargetFilterParams, TargetVelocity,
+    FilterParamsError, Optics, PredictError, Prediction, TargetFilter, TargetFilterParams, TargetVelocity,
 };
+
+/// The target filter is fed the mean position of the individuals whose fitness is within this
+/// of the best's ([`Ga::mean_translation_near`](crate::ga::Ga::mean_translation_near)), with
+/// the best's orientation: the best jumps between the individuals at the top of a flat fitness
+/// peak from frame to frame, the centre of those individuals much less. 0.01 is one sample
+/// point in a hundred.
+pub const MEASUREMENT_FITNESS_MARGIN: f32 = 0.01;
 
 /// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -34,7 +41,7 @@ pub enum Feedforward {
     On,
     /// 1-step GA + feedforward of the arm's and the target's motion
     /// (`J_m q̇ + J_n ^W ψ̇_M`, eq. 23), the target's velocity from the tracker's
-    /// [`TargetFilter`] once it is trusted (until then as [`Feedforward::On`]).
+    /// [`TargetFilter`] once it has observed the velocity (until then as [`Feedforward::On`]).
     OnWithTarget,
 }
 
@@ -63,8 +70,8 @@ pub struct Estimate {
     pub capture_time_us: u64,
     /// The pose the target filter was fed with this estimate
     /// ([`Feedforward::OnWithTarget`]): the mean position of the individuals within
-    /// [`TargetFilterParams::measurement_fitness_margin`](crate::target_motion::TargetFilterParams::measurement_fitness_margin)
-    /// of the best fitness, with the best's orientation; `psi` itself in the other modes. A
+    /// [`MEASUREMENT_FITNESS_MARGIN`] of the best fitness, with the best's orientation; `psi`
+    /// itself in the other modes. A
     /// consumer running its own copy of the filter
     /// ([`TargetFilter::update_from_estimate`](crate::target_motion::TargetFilter::update_from_estimate))
     /// feeds it this to get the tracker's numbers.
@@ -290,7 +297,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             generation: 0,
             monitor: StatusMonitor::new(Status::Searching),
             acquisition: Acquisition::new(),
-            target: TargetFilter::with_defaults(),
+            target: TargetFilter::with_defaults().with_optics(Optics::of(&config.rig, &config.block)),
         })
     }
 
@@ -319,7 +326,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         t.generation = 0;
         t.monitor = StatusMonitor::new(Status::Searching);
         t.acquisition.reset();
-        t.target = TargetFilter::with_defaults();
+        t.target = TargetFilter::with_defaults().with_optics(Optics::of(&t.config.rig, &t.config.block));
         // Checked by `check_config` (2 ≤ population ≤ P), so this cannot fail.
         t.ga.set_len(t.config.ga.population)?;
         t.ga.reset_uniform(&t.config.search, &mut t.rng);
@@ -428,23 +435,11 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     }
 
     /// The target velocity (world frame) by which a [`Tracker::step`] with
-    /// [`Feedforward::OnWithTarget`] on `joints` would shift every individual, next to the
-    /// camera's motion: the target filter's
-    /// [`TargetFilter::feedforward_velocity_seen_along`] the line of sight from the camera at
-    /// `joints.q` to the elite. [`TargetVelocity::ZERO`] means such a step shifts by the
-    /// camera's motion alone (as [`Feedforward::On`] does).
-    pub fn target_feedforward_velocity(&self, joints: &JointSample<DOF>) -> TargetVelocity {
-        let motion = feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
-        self.target_velocity_seen_from(&motion.r_wc)
-    }
-
-    /// [`Tracker::target_feedforward_velocity`] for the camera's world rotation `r_wc`
-    /// (`^W R_CR`): the one computation of the velocity the step applies.
-    fn target_velocity_seen_from(&self, r_wc: &Matrix3<f32>) -> TargetVelocity {
-        // The line of sight to the elite (index 0 after the last breed), in the world.
-        let elite = self.ga.individuals().first().copied().unwrap_or(Psi::IDENTITY);
-        let sight = r_wc * elite.translation();
-        self.target.feedforward_velocity_seen_along(&sight)
+    /// [`Feedforward::OnWithTarget`] would shift every individual, next to the camera's motion:
+    /// the target filter's [`TargetFilter::feedforward_velocity`]. [`TargetVelocity::ZERO`]
+    /// means such a step shifts by the camera's motion alone (as [`Feedforward::On`] does).
+    pub fn target_feedforward_velocity(&self) -> TargetVelocity {
+        self.target.feedforward_velocity()
     }
 
     /// Re-seeds the population around a known pose (the paper starts with the true pose
@@ -567,7 +562,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             Feedforward::OnWithTarget => {
                 let motion =
                     feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
-                let velocity = self.target_velocity_seen_from(&motion.r_wc);
+                let velocity = self.target.feedforward_velocity();
                 let target = feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &velocity);
                 let shift = |psi: &mut Psi| {
                     let rate = feedforward::psi_rate_moving(&motion.twist, &target, psi);
@@ -590,8 +585,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
 
         // The filter's measurement is taken from the evaluated population, before breeding.
         let target_measurement = if feedforward == Feedforward::OnWithTarget {
-            let margin = self.target.params().measurement_fitness_margin;
-            Psi::new(self.ga.mean_translation_near(&best, margin), best.psi.eps().into())
+            Psi::new(self.ga.mean_translation_near(&best, MEASUREMENT_FITNESS_MARGIN), best.psi.eps().into())
         } else {
             best.psi
         };
@@ -609,7 +603,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // mode that uses it, so the other modes keep the paper's constant work per generation.
         if feedforward == Feedforward::OnWithTarget {
             let (arm, mount) = (&self.config.arm, &self.config.flange_to_camera);
-            self.target.update_from_estimate(arm, mount, joints, &target_measurement, best.fitness, status);
+            self.target.update_from_estimate(arm, mount, joints, &target_measurement, status);
         }
         probe.mark(Phase::Done);
 

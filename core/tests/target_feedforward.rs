@@ -82,14 +82,9 @@ fn target_feedforward_follows_a_sliding_block() {
     let seeds = 1..=8;
     let rms_ff = median(seeds.clone().map(|s| run(Feedforward::On, s).0).collect());
     let rms_target = median(seeds.map(|s| run(Feedforward::OnWithTarget, s).0).collect());
+    eprintln!("medians: FF {rms_ff} m, FF + target {rms_target} m");
     assert!(rms_target < 0.5 * rms_ff, "FF + target {rms_target} m vs FF {rms_ff} m (medians)");
-    // The target term starts only once the ramping speed is significant against the filter's
-    // own uncertainty (2σ, `TargetFilterParams::significance_sigma`), so the ramp from rest
-    // is where it lags. Medians over seeds 1–8, measured: FF alone 39.2 mm; FF + target with
-    // the best individual fed to the filter, 1.5 mm position noise and no acceleration lead
-    // (the session-11 default) 6.4 mm; with the crowd's centre (`measurement_fitness_margin`
-    // 0.01), 1 mm and the lead of half a frame (the default) 7.1 mm. Over seeds 1–12 the
-    // order flips (11.5 and 6.4 mm): the two are not told apart here.
+    // Medians over seeds 1–8, measured: FF alone MEASURE_FF mm, FF + target MEASURE_T mm.
     assert!(rms_target < 0.008, "FF + target {rms_target} m (median)");
     let (_, tracker, v_mean) = run(Feedforward::OnWithTarget, 3);
 
@@ -103,12 +98,9 @@ fn target_feedforward_follows_a_sliding_block() {
     // the fitness before and after its face weights): the mean over the last frames is tested
     // (0.002 m/s off, measured).
     assert!((v_mean - expected).norm() < 0.01, "mean v {v_mean} vs {expected}");
-    // What the next step would shift every individual by: that velocity seen along the line of
-    // sight to the elite, across which the block slides (so it is kept nearly whole).
-    let next = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: FRAMES * DT_US };
-    let shift = tracker.target_feedforward_velocity(&next);
-    let seen = filter.feedforward_velocity_seen_along(&(cam.rotation * tracker.population()[0].translation()));
-    assert!((shift.v - seen.v).norm() < 1e-6 && shift.w == seen.w, "{shift:?} vs {seen:?}");
+    // What the next step would shift every individual by: the filter's velocity.
+    let shift = tracker.target_feedforward_velocity();
+    assert_eq!(shift, filter.feedforward_velocity());
     assert!((shift.v - expected).norm() < 0.03, "shift {} vs {expected}", shift.v);
 
     // Hand-over: the pose 50 ms after the last capture is ahead by about 5 mm.
@@ -128,6 +120,6 @@ fn a_reset_forgets_the_target_motion() {
     tracker.reset_uniform();
     assert!(!tracker.target_filter().has_track());
     let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
-    assert_eq!(tracker.target_feedforward_velocity(&joints), TargetVelocity::ZERO);
+    assert_eq!(tracker.target_feedforward_velocity(), TargetVelocity::ZERO);
     assert_eq!(tracker.predict(&joints, 0), Err(PredictError::NoTrack));
 }

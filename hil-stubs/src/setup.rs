@@ -288,18 +288,18 @@ mod tests {
     #[test]
     fn the_setups_target_filter_reaches_the_tracker_and_bad_values_get_code_9() {
         let mut params = TargetFilterParams::DEFAULT;
-        params.converge_updates = 4;
+        params.acceleration_m_s2 = 0.4;
         let setup = sample_setup().with_target_filter(params);
         let t: Tracker = setup.build_tracker().unwrap();
         assert_eq!(*t.target_filter().params(), params);
         let mut slot = None;
         let t: &mut Tracker = setup.build_tracker_in(&mut slot).unwrap();
         assert_eq!(*t.target_filter().params(), params);
-        params.position_noise_m = -0.001;
+        params.image_noise_px = -0.5;
         let r: Result<Tracker, _> = sample_setup().with_target_filter(params).build_tracker();
         let e = r.unwrap_err();
         assert_eq!((e.code(), SetupError::describe_code(e.code())), (9, "target filter parameters rejected"));
-        assert_eq!(std::format!("{e}"), "target filter: position_noise_m finite and positive");
+        assert_eq!(std::format!("{e}"), "target filter: image_noise_px finite and positive");
     }
 
     #[test]

@@ -218,7 +218,7 @@ pub const CONVEYOR_SPEED_M_S: f32 = 0.1;
 pub const CONVEYOR_TRAVEL_M: f32 = 0.12;
 
 /// The blocks of a run in order: every kind once, [`CaseKind::Conveyor`] three times in a row
-/// (the target filter needs about ten accepted estimates before it is trusted).
+/// (the target motion model's velocity, once observed, is fed forward in the later blocks).
 const SLOTS: [CaseKind; 15] = [
     CaseKind::Tracking,
     CaseKind::Conveyor,
@@ -623,9 +623,8 @@ impl fmt::Display for DeadlineReport {
 /// `GEN p=40 g=8 k=3 kind=blank status=lost method=ff+target tshift=1 call=… ff=… eval=… breed=…
 /// stack=… fitness=…`: the status the generation started in, the feedforward mode
 /// ([`method_name`]) and whether the generation fed a non-zero target velocity forward
-/// (`tshift`: `Tracker::target_feedforward_velocity` at the generation's joint sample, the
-/// target filter's trusted, significant velocity seen along the line of sight to the elite,
-/// which the generation adds to every individual's shift, is not zero), ticks of the whole `step_probed` call and of its three phases, the painted
+/// (`tshift`: `Tracker::target_feedforward_velocity`, the target motion model's velocity, which
+/// the generation adds to every individual's shift, is not zero), ticks of the whole `step_probed` call and of its three phases, the painted
 /// stack high-water mark of the generation (bytes below the top of RAM) and the estimate's
 /// fitness.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -552,7 +552,7 @@ impl CameraController<DOF> for ServoBoard {
         let Some(Capture { t, joints, occluded, steady }) = self.current.take() else { return Ok(()) };
         if self.feedforward == Feedforward::OnWithTarget {
             let measured = &est.target_measurement;
-            self.filter.update_from_estimate(&PA10, &self.ctl.mount, &joints, measured, est.fitness, est.status);
+            self.filter.update_from_estimate(&PA10, &self.ctl.mount, &joints, measured, est.status);
         }
         let tracking = est.status == Status::Tracking;
         let released = Released { psi: est.psi, q: joints.q, filter: self.filter, tracking };
@@ -653,9 +653,9 @@ mod tests {
             let mut board = ServoBoard::new(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
             run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}")).0
         };
-        // Trusted only after 30 updates instead of 10, and 3 mm across the sight.
-        s.target_filter.0.converge_updates = 30;
-        s.target_filter.0.position_noise_m = 0.003;
+        // A slower block and noisier estimates than the defaults say.
+        s.target_filter.0.acceleration_m_s2 = 0.2;
+        s.target_filter.0.image_noise_px = 2.0;
         let mut board = ServoBoard::new(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
         let (tracker, _) = run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}"));
         assert_eq!(tracker.target_filter().params(), &s.target_filter.0);

@@ -381,12 +381,12 @@ mod tests {
     #[test]
     fn every_cell_runs_the_grids_target_filter() {
         let mut g = GridSettings::default();
-        g.target_filter.0.position_noise_m = 0.0015;
+        g.target_filter.0.image_noise_px = 0.75;
         for cell in cells(&g) {
             assert_eq!(scenario_of(&g, &cell).0.target_filter, g.target_filter);
         }
         let json = serde_json::to_string(&g).unwrap_or_default();
-        assert!(json.contains("\"position_noise_m\":0.0015"), "{json}");
+        assert!(json.contains("\"image_noise_px\":0.75"), "{json}");
         let plain = serde_json::to_string(&GridSettings::default()).unwrap_or_default();
         assert!(!plain.contains("target_filter"), "{plain}");
     }

@@ -25,7 +25,7 @@ use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
-use evorec_core::target_motion::{TargetFilter, TargetVelocity};
+use evorec_core::target_motion::{Optics, TargetFilter, TargetVelocity};
 use evorec_core::tracker::{Estimate, JointSample};
 use nalgebra::Isometry3;
 use rand_core::SeedableRng;
@@ -410,7 +410,6 @@ impl SimBoard {
             &self.flange_to_camera,
             joints,
             &estimate.target_measurement,
-            estimate.fitness,
             estimate.status,
         );
         let t_out = t + self.world.scenario().tracker.delay_s;
@@ -448,12 +447,24 @@ pub fn frame_time(s: &Scenario, frame: u32) -> Result<f64> {
     Ok(t)
 }
 
-/// The target-velocity filter a scenario's `ff+target` runs with (its `[target_filter]`).
+/// The target motion model a scenario's `ff+target` runs with (its `[target_filter]`, seen
+/// through its cameras and block as the tracker's is).
 ///
 /// # Errors
 /// Parameters that [`TargetFilter::new`] refuses (a parsed scenario's never are).
 pub fn target_filter(s: &Scenario) -> Result<TargetFilter> {
-    TargetFilter::new(s.target_filter.0).map_err(|e| anyhow::anyhow!("[target_filter]: {e}"))
+    let filter = TargetFilter::new(s.target_filter.0).map_err(|e| anyhow::anyhow!("[target_filter]: {e}"))?;
+    Ok(filter.with_optics(optics(s)))
+}
+
+/// The camera model of a scenario's rig and block, as [`Optics::of`] makes it for the tracker.
+pub fn optics(s: &Scenario) -> Optics {
+    let sizes = s.target.size_m.map(|v| v as f32);
+    Optics {
+        focal_px: 0.5 * (s.camera.fx as f32 + s.camera.fy as f32),
+        baseline_m: s.camera.baseline_m as f32,
+        radius_m: (sizes[0] + sizes[1] + sizes[2]) / 6.0,
+    }
 }
 
 /// The flange-to-camera transform of a scenario (f32, for the tracker).
@@ -612,16 +623,16 @@ mod tests {
     #[test]
     fn the_boards_filter_copy_runs_the_scenarios_tuning() {
         let mut s = Scenario::new(3, 1.0, Method::FfTarget);
-        s.target_filter.0.acceleration_lead_s = 0.0;
+        s.target_filter.0.max_gap_s = 0.3;
         let board = SimBoard::new(World::new(&s).unwrap_or_else(|e| unreachable!("{e}")))
             .unwrap_or_else(|e| unreachable!("{e}"));
         assert_eq!(board.filter.params(), &s.target_filter.0);
         // Parameters the core refuses are refused here too, naming the section and the field.
-        s.target_filter.0.gate_sigma = 0.0;
+        s.target_filter.0.image_noise_px = 0.0;
         let e = SimBoard::new(World::new(&s).unwrap_or_else(|e| unreachable!("{e}"))).err().map(|e| e.to_string());
         assert_eq!(
             e.as_deref(),
-            Some("[target_filter]: target filter parameter gate_sigma must be finite and positive")
+            Some("[target_filter]: target motion parameter image_noise_px must be finite and positive")
         );
     }
 

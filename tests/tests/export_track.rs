@@ -101,8 +101,8 @@ fn a_tuned_target_filter_tracks_as_in_run() {
     let mut s = scenario(Method::FfTarget);
     s.target.conveyor_speed_m_s = 0.1;
     let default_run = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
-    s.target_filter.0.converge_updates = 5;
-    s.target_filter.0.position_noise_m = 0.002;
+    s.target_filter.0.acceleration_m_s2 = 0.3;
+    s.target_filter.0.image_noise_px = 1.5;
     let tuned_run = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
     let differ = default_run.rows.iter().zip(&tuned_run.rows).any(|(a, b)| a.estimate != b.estimate);
     assert!(differ, "the tuning changed nothing in 2 s: the test would prove nothing");

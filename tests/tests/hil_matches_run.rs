@@ -38,7 +38,7 @@ fn hil_trace_equals_host_trace() {
     let _ = std::fs::remove_dir_all(&work);
 }
 
-/// `CONFIG` carries the target filter's tuning (protocol version 8): an `ff+target` scenario
+/// `CONFIG` carries the target filter's tuning : an `ff+target` scenario
 /// with a conveyor and a tuned `[target_filter]` gives the same estimates on the firmware as on
 /// the host, and the tuning changed them (a firmware running the defaults would differ).
 #[test]
@@ -57,7 +57,7 @@ fn hil_runs_a_tuned_target_filter_as_the_host() {
         s.duration_s = 3.0;
         s
     };
-    let tuned = scenario("\n[target_filter]\nposition_noise_m = 0.003\n");
+    let tuned = scenario("\n[target_filter]\nimage_noise_px = 2.0\n");
     let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));
     let work = std::env::temp_dir().join(format!("evorec-hil-tuned-filter-{}", std::process::id()));
     let on_board = hil::run(&tuned, &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));

@@ -3,57 +3,63 @@
 //!
 //! Every estimate `^CR ψ_M` is taken into the world through the arm's forward kinematics and
 //! the hand-eye transform, `^W T_M = ^W T_H(q) · ^H T_CR · ^CR T_M` ([`world_pose`]). A
-//! [`TargetFilter`] — a Kalman filter, one independent filter per axis — estimates from that
-//! sequence
+//! [`TargetFilter`] — two constant-velocity Kalman filters, one on the block's centre and one
+//! on its orientation (an error state: the orientation is kept as a unit quaternion, the
+//! innovation is the rotation vector `log(Q_meas · Q̂⁻¹)` in `Σ_W`) — estimates from that
+//! sequence the block's velocity screw `^W ψ̇_M` in every direction, towards and away from the
+//! cameras too. The tracker feeds it forward to the population as eq. 23's `J_n` term.
 //!
-//! - the linear velocity `^W ṙ_M` of the block's centre (three position axes, each
-//!   `[x, ẋ, ẍ]` with white jerk: a block that starts, stops and reverses is followed without
-//!   a constant-velocity model's lag), and
-//! - the angular velocity `^W ω_M` (three axes of an error state: the orientation is kept as a
-//!   unit quaternion, the innovation is the rotation vector `log(Q_meas · Q̂⁻¹)` in `Σ_W`).
+//! **Depth is weighed as the cameras see it.** Stereo resolves the position across the line of
+//! sight far better than along it. With an estimate's image noise `σ` (px,
+//! [`TargetFilterParams::image_noise_px`]) and the rig's focal length `f` and baseline `b`
+//! ([`Optics`]), a block at range `Z` is measured to `Z·σ/f` across the line of sight and to
+//! `Z²·σ/(f·b)` along it. The position's measurement covariance is that ellipsoid turned into
+//! the world, `R = σ⊥² I + (σ∥² − σ⊥²) u uᵀ` (`u` the unit line of sight), so the filter learns
+//! a motion in depth from many estimates and a motion across the view from few. The
+//! orientation's noise is `Z·σ/f` over the block's mean half-extent, per axis.
 //!
-//! Work per update is a fixed handful of products (no loops over data), storage is a few
+//! **What the block may do** is said in physical units: the largest acceleration and angular
+//! acceleration expected (the process noise), and the largest speed and angular speed when it
+//! is first seen (the prior of a restart, so a block already moving when it is acquired is
+//! followed from its first estimates). There is no trust threshold, dead band or switch: the
+//! velocity fed forward is the filter's estimate, weighed by its own covariance.
+//!
+//! **Outliers and restarts.** An estimate whose innovation lies outside the 99.9 % ellipsoid
+//! of its predicted covariance ([`GATE_CHI2`], position and orientation each) is rejected;
+//! [`MAX_OUTLIERS`] rejections in a row restart the filter at the newest estimate, as do a time
+//! step backwards or longer than [`TargetFilterParams::max_gap_s`]. An estimate the tracker does
+//! not report as [`Status::Tracking`] resets the filter.
+//!
+//! Work per update is a fixed handful of 3 × 3 products (no loops over data), storage a few
 //! dozen floats, and all transcendental functions go through [`crate::math`], so the filter is
 //! bit-identical on host and board.
 //!
-//! The filter **resets** when the tracker loses the target (fitness below
-//! [`TargetFilterParams::lost_fitness`]), when time runs backwards or jumps by more than
-//! [`TargetFilterParams::max_gap_s`], and after [`TargetFilterParams::max_outliers`]
-//! consecutive rejected measurements. A measurement is **rejected** (an outlier) when its
-//! innovation on any axis exceeds [`TargetFilterParams::gate_sigma`] standard deviations. The
-//! velocity is **trusted** once [`TargetFilterParams::converge_updates`] consecutive updates
-//! have been accepted with the velocity's standard deviation below
-//! [`TargetFilterParams::trusted_speed_sd_m_s`] and [`TargetFilterParams::trusted_rate_sd_rad_s`]
-//! (the bound of a position axis grows with its measurement noise), and stays trusted until the
-//! filter restarts or is reset.
-//!
-//! The tracker feeds it through [`TargetFilter::update_from_estimate`], which knows the camera: stereo
-//! depth is far noisier than the position across the view, so a position is weighed with
-//! [`TargetFilterParams::depth_noise_m`] along the line of sight and
-//! [`TargetFilterParams::position_noise_m`] across it, and the velocity fed forward
-//! ([`TargetFilter::feedforward_velocity_seen_along`]) keeps along the line of sight only what
-//! the world axes seen across it say (plus [`TargetFilterParams::depth_feedforward`] of the
-//! rest).
-//!
-//! [`TargetFilter::predict`] hands the pose over to a later time `t`: the last accepted
-//! measurement moved by the trusted velocity over `t − t_capture`, seen from the camera at the
-//! joint state of `t` (`q + q̇ (t − t_joints)`, forward kinematics).
+//! [`TargetFilter::predict`] hands the pose over to a later time `t`: the filtered pose moved
+//! by the filtered velocity over `t − t_update`, seen from the camera at the joint state of `t`
+//! (`q + q̇ (t − t_joints)`, forward kinematics).
 
 use nalgebra::{Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
+use crate::camera::StereoRig;
 use crate::kinematics::{Chain, JointSample};
+use crate::model::Block;
 use crate::pose::Psi;
 use crate::status::Status;
 use crate::{math, quat};
 
-mod angular;
-mod axis;
+mod kalman;
 mod params;
 mod predict;
-use angular::SlowTurn;
-use axis::{Axis, PosAxis};
+use kalman::CvFilter;
 pub use params::{Field, FilterParamsError, TargetFilterParams};
 pub use predict::{PredictError, Prediction};
+
+/// The gate on an innovation's squared Mahalanobis length: the 99.9 % quantile of χ² with three
+/// degrees of freedom.
+pub const GATE_CHI2: f32 = 16.27;
+
+/// Consecutive rejected estimates after which the filter restarts at the newest.
+pub const MAX_OUTLIERS: u16 = 3;
 
 /// The target's velocity screw in the world frame `Σ_W` (`^W ψ̇_M` with the angular part as
 /// an angular velocity, see [`crate::feedforward::jn`]).
@@ -68,6 +74,42 @@ pub struct TargetVelocity {
 impl TargetVelocity {
     /// A target at rest.
     pub const ZERO: TargetVelocity = TargetVelocity { v: Vector3::new(0.0, 0.0, 0.0), w: Vector3::new(0.0, 0.0, 0.0) };
+}
+
+/// What the camera model says of one estimate's precision: the rig's focal length and baseline
+/// and the block's size (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Optics {
+    /// Focal length (px).
+    pub focal_px: f32,
+    /// Stereo baseline (m).
+    pub baseline_m: f32,
+    /// The block's mean half-extent (m): the lever arm of a turn.
+    pub radius_m: f32,
+}
+
+impl Optics {
+    /// The evorec simulator's rig (800 px, 0.1 m) and the paper's block.
+    pub const DEFAULT: Optics = Optics { focal_px: 800.0, baseline_m: 0.1, radius_m: 0.075 };
+
+    /// The optics of `rig` (the right camera's mean focal length, the distance between the
+    /// cameras) looking at `block`.
+    pub fn of(rig: &StereoRig, block: &Block) -> Self {
+        let b = rig.left_from_right.translation.vector;
+        let [x, y, z] = block.size_m;
+        Self {
+            focal_px: 0.5 * (rig.right.fx() + rig.right.fy()),
+            baseline_m: math::sqrt(b.dot(&b)),
+            radius_m: (x + y + z) / 6.0,
+        }
+    }
+
+    /// `(σ⊥, σ∥)`: the standard deviations (m) across and along the line of sight of a block
+    /// at `range_m` seen with image noise `sigma_px`.
+    pub fn position_noise(&self, range_m: f32, sigma_px: f32) -> (f32, f32) {
+        let across = range_m * sigma_px / self.focal_px;
+        (across, across * range_m / self.baseline_m)
+    }
 }
 
 /// What one [`TargetFilter::update`] did.
@@ -87,30 +129,21 @@ pub enum UpdateOutcome {
 /// The filter's state while it holds a track.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Track {
-    pos: [PosAxis; 3],
-    /// Error-state axes of the orientation (`x` is 0 between updates).
-    rot: [Axis; 3],
+    pos: CvFilter,
+    /// The orientation's error state (its position part is 0 between updates).
+    rot: CvFilter,
     orientation: UnitQuaternion<f32>,
-    /// The slow angular model (a steady turn).
-    slow: SlowTurn,
     time_us: u64,
-    /// The last accepted measurement and its time (the base of [`TargetFilter::predict`]).
-    last: Isometry3<f32>,
-    last_time_us: u64,
-    streak: u16,
+    /// Accepted estimates since the (re)start, the starting one included.
+    updates: u16,
     outliers: u16,
-    /// Set once the track has converged; cleared only by a restart.
-    converged: bool,
-    /// Set once the converged linear velocity was fed forward with
-    /// [`TargetFilterParams::hold_motion`]; cleared only by a restart.
-    moving: bool,
 }
 
-/// Kalman filter of the target's world pose: constant acceleration per position axis, constant
-/// velocity per rotation axis (see the module docs).
+/// Constant-velocity Kalman filter of the target's world pose (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TargetFilter {
     params: TargetFilterParams,
+    optics: Optics,
     track: Option<Track>,
     last_outcome: Option<UpdateOutcome>,
     last_innovation: [f32; 6],
@@ -149,24 +182,62 @@ fn log_rotation(q: &UnitQuaternion<f32>) -> Vector3<f32> {
     if n < 1e-12 { e * 2.0 } else { e * (2.0 * math::atan2(n, c.w) / n) }
 }
 
+/// The measurement covariances `(R_position, R_orientation)` of an estimate `measured` seen from
+/// a camera at `camera_at` (world).
+fn measurement_noise(
+    params: &TargetFilterParams,
+    optics: &Optics,
+    measured: &Isometry3<f32>,
+    camera_at: &Vector3<f32>,
+) -> (Matrix3<f32>, Matrix3<f32>) {
+    let sight = measured.translation.vector - camera_at;
+    let range = math::sqrt(sight.dot(&sight));
+    let (across, along) = optics.position_noise(range, params.image_noise_px);
+    let u = if range > 1e-6 { sight / range } else { Vector3::zeros() };
+    let i = Matrix3::<f32>::identity();
+    let r_pos = i * (across * across) + u * u.transpose() * (along * along - across * across);
+    let sd_rot = across / optics.radius_m;
+    (r_pos, i * (sd_rot * sd_rot))
+}
+
 impl TargetFilter {
-    /// An empty filter (no track).
+    /// An empty filter (no track) seeing through the default [`Optics`].
     ///
     /// # Errors
     /// [`FilterParamsError`] for invalid parameters.
     pub fn new(params: TargetFilterParams) -> Result<Self, FilterParamsError> {
         params.validate()?;
-        Ok(Self { params, track: None, last_outcome: None, last_innovation: [0.0; 6] })
+        Ok(Self { params, ..Self::with_defaults() })
     }
 
-    /// An empty filter with [`TargetFilterParams::DEFAULT`].
+    /// An empty filter with [`TargetFilterParams::DEFAULT`] and [`Optics::DEFAULT`].
     pub const fn with_defaults() -> Self {
-        Self { params: TargetFilterParams::DEFAULT, track: None, last_outcome: None, last_innovation: [0.0; 6] }
+        Self {
+            params: TargetFilterParams::DEFAULT,
+            optics: Optics::DEFAULT,
+            track: None,
+            last_outcome: None,
+            last_innovation: [0.0; 6],
+        }
+    }
+
+    /// Builder: the camera model (forgets the track). The tracker's filter has its rig's and
+    /// block's ([`Optics::of`]); a board's copy must have the same.
+    #[must_use]
+    pub fn with_optics(mut self, optics: Optics) -> Self {
+        self.optics = optics;
+        self.track = None;
+        self
     }
 
     /// The parameters.
     pub fn params(&self) -> &TargetFilterParams {
         &self.params
+    }
+
+    /// The camera model.
+    pub fn optics(&self) -> &Optics {
+        &self.optics
     }
 
     /// Replaces the parameters and forgets the track.
@@ -190,27 +261,12 @@ impl TargetFilter {
         self.track.is_some()
     }
 
-    /// Feeds one estimate `measured = ^W T_M` captured at `time_us` with fitness `fitness`.
-    pub fn update(&mut self, measured: &Isometry3<f32>, time_us: u64, fitness: f32) -> UpdateOutcome {
-        let outcome = self.update_inner(measured, time_us, fitness, None);
+    /// Feeds one estimate `measured = ^W T_M` captured at `time_us` by a camera at `camera_at`
+    /// (world): its noise is the camera model's for that line of sight (see the module docs).
+    pub fn update(&mut self, measured: &Isometry3<f32>, camera_at: &Vector3<f32>, time_us: u64) -> UpdateOutcome {
+        let outcome = self.update_inner(measured, camera_at, time_us);
         self.last_outcome = Some(outcome);
         outcome
-    }
-
-    /// As [`TargetFilter::update`] for an estimate the tracker reported with `status`
-    /// ([`crate::status`]): an estimate that is not [`Status::Tracking`] is no measurement of
-    /// the block (searching, or carried along after the block was lost), so the filter resets.
-    pub fn update_with_status(
-        &mut self,
-        measured: &Isometry3<f32>,
-        time_us: u64,
-        fitness: f32,
-        status: Status,
-    ) -> UpdateOutcome {
-        if status != Status::Tracking {
-            return self.lose();
-        }
-        self.update(measured, time_us, fitness)
     }
 
     /// What the last [`TargetFilter::update`] did (`None` before the first).
@@ -224,236 +280,129 @@ impl TargetFilter {
         self.last_innovation
     }
 
-    /// Feeds the tracker's estimate `psi` (`^CR ψ_M`, with its `fitness` and `status`) of the
-    /// frame captured with `joints`: the estimate taken into the world through `chain` at
-    /// `joints.q` and `flange_to_camera` ([`world_pose`]) at `joints.time_us`. The position is
-    /// weighed with [`TargetFilterParams::position_noise_m`] across the camera's line of sight
-    /// to the block and [`TargetFilterParams::depth_noise_m`] along it (per world axis
-    /// `σ² = σ_across² + (σ_depth² − σ_across²) uᵢ²`, `u` the unit line of sight), otherwise as
-    /// [`TargetFilter::update_with_status`]. The tracker feeds its own filter with this call; a
-    /// board that receives only the estimates feeds its copy with the same call on the same
-    /// numbers, so its predictions are the tracker's.
+    /// Feeds the tracker's estimate `psi` (`^CR ψ_M`, with its `status`) of the frame captured
+    /// with `joints`: the estimate taken into the world through `chain` at `joints.q` and
+    /// `flange_to_camera` ([`world_pose`]) at `joints.time_us`. An estimate that is not
+    /// [`Status::Tracking`] is no measurement of the block (searching, or carried along after
+    /// the block was lost), so the filter resets. The tracker feeds its own filter with this
+    /// call; a board that receives only the estimates feeds its copy with the same call on the
+    /// same numbers, so its predictions are the tracker's.
     pub fn update_from_estimate<const DOF: usize>(
         &mut self,
         chain: &Chain<DOF>,
         flange_to_camera: &Isometry3<f32>,
         joints: &JointSample<DOF>,
         psi: &Psi,
-        fitness: f32,
         status: Status,
     ) -> UpdateOutcome {
         if status != Status::Tracking {
-            return self.lose();
+            self.track = None;
+            self.last_outcome = Some(UpdateOutcome::Lost);
+            return UpdateOutcome::Lost;
         }
         let camera = chain.forward(&joints.q) * flange_to_camera;
-        let measured = camera_to_world(&camera, psi);
-        let los = unit(&(measured.translation.vector - camera.translation.vector));
-        let outcome = self.update_inner(&measured, joints.time_us, fitness, los);
-        self.last_outcome = Some(outcome);
-        outcome
+        self.update(&camera_to_world(&camera, psi), &camera.translation.vector, joints.time_us)
     }
 
-    /// The tracker does not hold the target: forget the track.
-    fn lose(&mut self) -> UpdateOutcome {
-        self.track = None;
-        self.last_outcome = Some(UpdateOutcome::Lost);
-        UpdateOutcome::Lost
-    }
-
-    fn update_inner(
-        &mut self,
-        measured: &Isometry3<f32>,
-        time_us: u64,
-        fitness: f32,
-        los: Option<Vector3<f32>>,
-    ) -> UpdateOutcome {
-        // A fitness drop stands for a lost target here; `update_with_status` also resets on the
-        // tracker's status.
-        let found = fitness >= self.params.lost_fitness; // false for NaN
-        if !found || !finite(measured) {
+    fn update_inner(&mut self, measured: &Isometry3<f32>, camera_at: &Vector3<f32>, time_us: u64) -> UpdateOutcome {
+        if !finite(measured) || !camera_at.iter().all(|v| v.is_finite()) {
             self.track = None;
             return UpdateOutcome::Lost;
         }
-        let r_pos = self.position_variance(los);
+        let (r_pos, r_rot) = measurement_noise(&self.params, &self.optics, measured, camera_at);
         let Some(track) = self.track.as_mut() else {
-            self.start(measured, time_us, los);
+            self.start(measured, &r_pos, &r_rot, time_us);
             return UpdateOutcome::Started;
         };
         let dt = if time_us >= track.time_us { (time_us - track.time_us) as f32 * 1e-6 } else { -1.0 };
         if !(dt >= 0.0 && dt <= self.params.max_gap_s) {
-            self.start(measured, time_us, los);
+            self.start(measured, &r_pos, &r_rot, time_us);
             return UpdateOutcome::Started;
         }
-        let p = &self.params;
-        let r_rot = p.rotation_noise_rad * p.rotation_noise_rad;
-        let mut predicted = *track;
-        predicted.pos.iter_mut().for_each(|a| a.predict(dt, p.acceleration_psd, p.jerk_psd));
-        predicted.rot.iter_mut().for_each(|a| a.predict(dt, p.angular_acceleration_psd));
-        predicted.slow.predict(dt, p.slow_angular_acceleration_psd);
-        let turn = Vector3::new(predicted.rot[0].x, predicted.rot[1].x, predicted.rot[2].x);
-        predicted.orientation = exp_rotation(&turn) * predicted.orientation;
-        predicted.rot.iter_mut().for_each(|a| a.x = 0.0);
-        predicted.time_us = time_us;
+        let p = self.params;
+        let mut next = *track;
+        next.pos.predict(dt, p.acceleration_m_s2);
+        next.rot.predict(dt, p.angular_acceleration_rad_s2);
+        next.orientation = exp_rotation(&next.rot.x) * next.orientation;
+        next.rot.set_position(Vector3::zeros());
+        next.time_us = time_us;
 
-        let t = measured.translation.vector;
-        let y_pos = [t.x - predicted.pos[0].x, t.y - predicted.pos[1].x, t.z - predicted.pos[2].x];
-        let y_rot = log_rotation(&(measured.rotation * predicted.orientation.inverse()));
-        self.last_innovation = [y_pos[0], y_pos[1], y_pos[2], y_rot.x, y_rot.y, y_rot.z];
-        let inlier =
-            predicted.pos.iter().zip(y_pos.iter()).zip(r_pos.iter()).all(|((a, y), r)| a.inlier(*y, *r, p.gate_sigma))
-                && predicted.rot.iter().zip(y_rot.iter()).all(|(a, y)| a.inlier(*y, r_rot, p.gate_sigma));
-        if !inlier {
-            predicted.streak = 0;
-            predicted.outliers = predicted.outliers.saturating_add(1);
-            if predicted.outliers >= p.max_outliers {
-                self.start(measured, time_us, los);
+        let turn = log_rotation(&(measured.rotation * next.orientation.inverse()));
+        let (pos_inn, rot_inn) =
+            (next.pos.innovation(&measured.translation.vector, &r_pos), next.rot.innovation(&turn, &r_rot));
+        let (Some(pos_inn), Some(rot_inn)) = (pos_inn, rot_inn) else {
+            self.start(measured, &r_pos, &r_rot, time_us);
+            return UpdateOutcome::Started;
+        };
+        self.last_innovation = [pos_inn.y.x, pos_inn.y.y, pos_inn.y.z, rot_inn.y.x, rot_inn.y.y, rot_inn.y.z];
+        if !(pos_inn.distance2() <= GATE_CHI2 && rot_inn.distance2() <= GATE_CHI2) {
+            next.outliers = next.outliers.saturating_add(1);
+            if next.outliers >= MAX_OUTLIERS {
+                self.start(measured, &r_pos, &r_rot, time_us);
                 return UpdateOutcome::Started;
             }
-            *track = predicted;
+            *track = next;
             return UpdateOutcome::Rejected;
         }
-        for ((a, y), r) in predicted.pos.iter_mut().zip(y_pos.iter()).zip(r_pos.iter()) {
-            a.update(*y, *r);
-        }
-        for (a, y) in predicted.rot.iter_mut().zip(y_rot.iter()) {
-            a.update(*y, r_rot);
-        }
-        // The slow model is for a turn too slow for the fast one to see: it restarts while the
-        // fast model's angular velocity is significant, or the block is poorly seen.
-        let fast_turn = Self::significant(p, &angular(&predicted.rot), p.deadband_rad_s) != Vector3::zeros();
-        if fitness >= p.slow_min_fitness && !fast_turn {
-            predicted.slow.update(&measured.rotation, r_rot);
-        } else {
-            let w0 = p.initial_rate_sd_rad_s * p.initial_rate_sd_rad_s;
-            predicted.slow = SlowTurn::start(measured.rotation, r_rot, w0);
-        }
-        let correction = Vector3::new(predicted.rot[0].x, predicted.rot[1].x, predicted.rot[2].x);
-        predicted.orientation = exp_rotation(&correction) * predicted.orientation;
-        predicted.rot.iter_mut().for_each(|a| a.x = 0.0);
-        predicted.last = *measured;
-        predicted.last_time_us = time_us;
-        predicted.streak = predicted.streak.saturating_add(1);
-        predicted.outliers = 0;
-        let (sv, sw) =
-            (p.trusted_speed_sd_m_s * p.trusted_speed_sd_m_s, p.trusted_rate_sd_rad_s * p.trusted_rate_sd_rad_s);
-        // An axis along the line of sight is measured worse: its bound grows in proportion.
-        let r_across = p.position_noise_m * p.position_noise_m;
-        predicted.converged |= predicted.streak >= p.converge_updates
-            && predicted.pos.iter().zip(r_pos.iter()).all(|(a, r)| a.var_v() <= sv * (r / r_across))
-            && predicted.rot.iter().all(|a| a.p[2] <= sw);
-        *track = predicted;
-        if p.hold_motion && track.converged && !track.moving {
-            track.moving = Self::significant(p, &linear(&track.pos), p.deadband_m_s) != Vector3::zeros();
-        }
+        next.pos.update(&pos_inn);
+        let correction = next.rot.update(&rot_inn);
+        next.orientation = exp_rotation(&correction) * next.orientation;
+        next.rot.set_position(Vector3::zeros());
+        next.updates = next.updates.saturating_add(1);
+        next.outliers = 0;
+        *track = next;
         UpdateOutcome::Accepted
     }
 
-    /// Variance of a position measurement per world axis for the unit line of sight `los`.
-    fn position_variance(&self, los: Option<Vector3<f32>>) -> [f32; 3] {
+    fn start(&mut self, measured: &Isometry3<f32>, r_pos: &Matrix3<f32>, r_rot: &Matrix3<f32>, time_us: u64) {
         let p = &self.params;
-        let r_across = p.position_noise_m * p.position_noise_m;
-        let r_depth = p.depth_noise_m * p.depth_noise_m - r_across;
-        core::array::from_fn(|i| r_across + los.map_or(0.0, |u| r_depth * u[i] * u[i]))
-    }
-
-    fn start(&mut self, measured: &Isometry3<f32>, time_us: u64, los: Option<Vector3<f32>>) {
-        let r_pos = self.position_variance(los);
-        let p = &self.params;
-        let r_rot = p.rotation_noise_rad * p.rotation_noise_rad;
-        let (v0, w0) =
-            (p.initial_speed_sd_m_s * p.initial_speed_sd_m_s, p.initial_rate_sd_rad_s * p.initial_rate_sd_rad_s);
-        let a0 = p.initial_accel_sd_m_s2 * p.initial_accel_sd_m_s2;
-        let t = measured.translation.vector;
         self.track = Some(Track {
-            pos: core::array::from_fn(|i| PosAxis::start(t[i], r_pos[i], v0, a0)),
-            rot: [Axis::start(0.0, r_rot, w0); 3],
+            pos: CvFilter::start(measured.translation.vector, r_pos, p.max_speed_m_s),
+            rot: CvFilter::start(Vector3::zeros(), r_rot, p.max_rate_rad_s),
             orientation: measured.rotation,
-            slow: SlowTurn::start(measured.rotation, r_rot, w0),
             time_us,
-            last: *measured,
-            last_time_us: time_us,
-            streak: 0,
+            updates: 1,
             outliers: 0,
-            converged: false,
-            moving: false,
         });
     }
 
-    /// Whether the velocity has converged (see the module docs).
-    /// It stays trusted through single outliers until the filter restarts or is reset.
+    /// Whether the velocity has been observed: the track holds at least two accepted
+    /// estimates (one alone says nothing of the motion).
     pub fn is_trusted(&self) -> bool {
-        self.track.as_ref().is_some_and(|t| t.converged)
+        self.track.as_ref().is_some_and(|t| t.updates >= 2)
     }
 
-    /// The estimated `^W ψ̇_M`, whether trusted or not (`None` without a track).
+    /// The estimated `^W ψ̇_M` (`None` without a track).
     pub fn velocity_estimate(&self) -> Option<TargetVelocity> {
-        self.track.as_ref().map(|t| TargetVelocity { v: linear(&t.pos).0, w: angular(&t.rot).0 })
+        self.track.as_ref().map(|t| TargetVelocity { v: t.pos.v, w: t.rot.v })
     }
 
-    /// The trusted velocity, or `None` while the filter has not converged.
+    /// The velocity once observed ([`TargetFilter::is_trusted`]), else `None`.
     pub fn velocity(&self) -> Option<TargetVelocity> {
         if self.is_trusted() { self.velocity_estimate() } else { None }
     }
 
-    /// The velocity to feed forward: the trusted velocity, its linear (angular) part set to 0
-    /// while inside the dead band or not significant against its own uncertainty
-    /// ([`TargetFilterParams::significance_sigma`]); zero while not trusted.
+    /// The velocity to feed forward: the filter's once observed, zero before.
     pub fn feedforward_velocity(&self) -> TargetVelocity {
-        let Some(track) = self.track.as_ref().filter(|t| t.converged) else { return TargetVelocity::ZERO };
-        let p = &self.params;
-        let lin = linear(&track.pos);
-        let v = if track.moving { lin.0 } else { Self::significant(p, &lin, p.deadband_m_s) };
-        let lead = Vector3::new(track.pos[0].a, track.pos[1].a, track.pos[2].a) * p.acceleration_lead_s;
-        let v = if v == Vector3::zeros() { v } else { v + lead };
-        TargetVelocity { v, w: Self::angular_feedforward(p, track) }
+        self.velocity().unwrap_or(TargetVelocity::ZERO)
     }
 
-    /// The angular velocity fed forward: the slow model's once it has learnt from
-    /// [`TargetFilterParams::converge_updates`] updates since its last restart, if significant
-    /// and outside [`TargetFilterParams::slow_deadband_rad_s`]; otherwise the fast model's, if
-    /// significant and outside [`TargetFilterParams::deadband_rad_s`] and the linear motion is
-    /// not held with [`TargetFilterParams::linear_motion_mutes_angular`].
-    fn angular_feedforward(p: &TargetFilterParams, track: &Track) -> Vector3<f32> {
-        let slow = if p.slow_angular_acceleration_psd > 0.0 && track.slow.updates() >= p.converge_updates {
-            Self::significant(p, &track.slow.velocity(), p.slow_deadband_rad_s)
-        } else {
-            Vector3::zeros()
-        };
-        if slow != Vector3::zeros() || (p.linear_motion_mutes_angular && track.moving) {
-            slow
-        } else {
-            Self::significant(p, &angular(&track.rot), p.deadband_rad_s)
-        }
+    /// The standard deviations of the velocity's and the angular velocity's largest
+    /// components (`None` without a track): the largest diagonal elements of their covariances.
+    pub fn velocity_sd(&self) -> Option<(f32, f32)> {
+        let largest = |m: &Matrix3<f32>| math::sqrt(m[(0, 0)].max(m[(1, 1)]).max(m[(2, 2)]));
+        self.track.as_ref().map(|t| (largest(t.pos.velocity_covariance()), largest(t.rot.velocity_covariance())))
     }
 
-    /// The velocity `(v, σ²)` if it is outside the dead band and significant, else zero.
-    fn significant(p: &TargetFilterParams, (v, var): &(Vector3<f32>, Vector3<f32>), deadband: f32) -> Vector3<f32> {
-        let v = *v;
-        let sigmas2: f32 = v.iter().zip(var.iter()).map(|(v, s2)| v * v / s2.max(f32::MIN_POSITIVE)).sum();
-        let significant = sigmas2 >= p.significance_sigma * p.significance_sigma;
-        if significant && v.dot(&v) >= deadband * deadband { v } else { Vector3::zeros() }
+    /// The filtered world pose `^W T_M` at the last update (`None` without a track).
+    pub fn pose(&self) -> Option<Isometry3<f32>> {
+        self.track.as_ref().map(|t| Isometry3::from_parts(Translation3::from(t.pos.x), t.orientation))
     }
 
-    /// [`TargetFilter::feedforward_velocity`] with its linear part along the line of sight
-    /// `sight` (world frame, camera to block; `u` its unit vector) kept only as far as the world
-    /// axes seen across the sight say, plus [`TargetFilterParams::depth_feedforward`] `d` of
-    /// the rest: `v − (1 − d)(v·u − Σᵢ (1 − uᵢ²) vᵢ uᵢ) u`. A world axis across the view
-    /// (`uᵢ = 0`) is measured well, and its velocity's part along a slanted sight is real
-    /// motion in depth; an axis along the sight (`uᵢ = ±1`) is measured by the stereo depth.
-    pub fn feedforward_velocity_seen_along(&self, sight: &Vector3<f32>) -> TargetVelocity {
-        let mut vel = self.feedforward_velocity();
-        vel.v = self.seen_along(vel.v, sight);
-        vel
-    }
-
-    /// `v` with its part along the line of sight `sight` kept as the feedforward keeps it.
-    fn seen_along(&self, v: Vector3<f32>, sight: &Vector3<f32>) -> Vector3<f32> {
-        let Some(u) = unit(sight).filter(|_| v != Vector3::zeros()) else { return v };
-        // What the world axes say along the sight, each weighed by the share of it the camera
-        // sees across the sight (`1 − uᵢ²`): an axis across the view is measured well, and its
-        // velocity's part along the sight is real motion in depth.
-        let across: f32 = (0..3).map(|i| (1.0 - u[i] * u[i]) * v[i] * u[i]).sum();
-        v - u * ((v.dot(&u) - across) * (1.0 - self.params.depth_feedforward))
+    /// The standard deviation of the filtered position's largest component (m).
+    pub fn position_sd(&self) -> Option<f32> {
+        let m = self.track.as_ref()?.pos.position_covariance();
+        Some(math::sqrt(m[(0, 0)].max(m[(1, 1)]).max(m[(2, 2)])))
     }
 }
 
@@ -461,22 +410,6 @@ impl Default for TargetFilter {
     fn default() -> Self {
         Self::with_defaults()
     }
-}
-
-/// The velocity `[ẋ₀, ẋ₁, ẋ₂]` of the position axes and its variances.
-fn linear(axes: &[PosAxis; 3]) -> (Vector3<f32>, Vector3<f32>) {
-    (Vector3::new(axes[0].v, axes[1].v, axes[2].v), Vector3::new(axes[0].p[3], axes[1].p[3], axes[2].p[3]))
-}
-
-/// The angular velocity of the rotation axes and its variances.
-fn angular(axes: &[Axis; 3]) -> (Vector3<f32>, Vector3<f32>) {
-    (Vector3::new(axes[0].v, axes[1].v, axes[2].v), Vector3::new(axes[0].p[2], axes[1].p[2], axes[2].p[2]))
-}
-
-/// The unit vector along `v` (a line of sight), `None` for a (near) zero vector.
-fn unit(v: &Vector3<f32>) -> Option<Vector3<f32>> {
-    let n2 = v.dot(v);
-    if n2 > 1e-12 { Some(v / math::sqrt(n2)) } else { None }
 }
 
 fn finite(iso: &Isometry3<f32>) -> bool {

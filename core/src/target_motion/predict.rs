@@ -1,6 +1,6 @@
 //! The hand-over of the target's pose to a later time ([`TargetFilter::predict`]).
 
-use nalgebra::{Isometry3, Translation3, Vector3};
+use nalgebra::{Isometry3, Translation3};
 
 use super::{TargetFilter, TargetVelocity, exp_rotation};
 use crate::kinematics::{Chain, JointSample};
@@ -13,10 +13,10 @@ pub struct Prediction {
     pub psi: Psi,
     /// The target velocity used (zero unless [`Prediction::trusted`]).
     pub velocity: TargetVelocity,
-    /// Whether the filter's velocity was trusted (otherwise the target is held still in the
-    /// world and only the camera's motion is accounted for).
+    /// Whether the filter's velocity had been observed (otherwise the target is held still in
+    /// the world and only the camera's motion is accounted for).
     pub trusted: bool,
-    /// Capture time of the measurement the prediction starts from (µs).
+    /// Capture time of the last estimate the filter took (µs): the prediction starts there.
     pub base_time_us: u64,
 }
 
@@ -42,11 +42,9 @@ impl core::fmt::Display for PredictError {
 impl core::error::Error for PredictError {}
 
 impl TargetFilter {
-    /// Hands the pose over to time `t_us`: the last accepted estimate moved by the trusted
-    /// velocity over `τ = t − t_capture` (held still while not trusted), seen from the camera at
-    /// the joint state extrapolated to `t` (`q + q̇ (t − joints.time_us)`). The linear velocity
-    /// is the mean over `τ` (`v + a τ/2`), its part along the line of sight from that camera
-    /// kept as [`TargetFilter::feedforward_velocity_seen_along`] keeps it.
+    /// Hands the pose over to time `t_us`: the filtered pose moved by the filtered velocity
+    /// over `τ = t − t_update` (held still until the velocity has been observed), seen from the
+    /// camera at the joint state extrapolated to `t` (`q + q̇ (t − joints.time_us)`).
     ///
     /// # Errors
     /// [`PredictError::NoTrack`] or [`PredictError::NonFiniteJoint`].
@@ -62,23 +60,17 @@ impl TargetFilter {
             return Err(PredictError::NonFiniteJoint);
         }
         let trusted = self.is_trusted();
-        let mut velocity =
-            if trusted { self.velocity_estimate().unwrap_or(TargetVelocity::ZERO) } else { TargetVelocity::ZERO };
-        let tau = seconds_between(track.last_time_us, t_us);
+        let velocity = self.feedforward_velocity();
+        let tau = seconds_between(track.time_us, t_us);
         let dtj = seconds_between(joints.time_us, t_us);
         let q: [f32; DOF] = core::array::from_fn(|i| joints.q[i] + joints.qd[i] * dtj);
         let camera = chain.forward(&q) * flange_to_camera;
-        if trusted {
-            let accel = Vector3::new(track.pos[0].a, track.pos[1].a, track.pos[2].a);
-            let sight = track.last.translation.vector - camera.translation.vector;
-            velocity.v = self.seen_along(velocity.v + accel * (0.5 * tau), &sight);
-        }
         let target = Isometry3::from_parts(
-            Translation3::from(track.last.translation.vector + velocity.v * tau),
-            exp_rotation(&(velocity.w * tau)) * track.last.rotation,
+            Translation3::from(track.pos.x + velocity.v * tau),
+            exp_rotation(&(velocity.w * tau)) * track.orientation,
         );
         let psi = Psi::from_isometry(&(camera.inverse() * target));
-        Ok(Prediction { psi, velocity, trusted, base_time_us: track.last_time_us })
+        Ok(Prediction { psi, velocity, trusted, base_time_us: track.time_us })
     }
 }
 

@@ -210,7 +210,7 @@ mod firmware {
             // The target velocity this generation shifts the individuals by (the tracker's own
             // computation of it, read outside the measured window).
             let target_shift = feedforward == Feedforward::OnWithTarget
-                && tracker.target_feedforward_velocity(&joints) != TargetVelocity::ZERO;
+                && tracker.target_feedforward_velocity() != TargetVelocity::ZERO;
             cmsdk_timer::repaint_free_stack();
             let measured = C::generation(tracker, &frame, &joints, dt_s, feedforward, timer);
             let stack = sys::stack_usage().used_bytes;

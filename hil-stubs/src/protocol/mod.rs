@@ -9,7 +9,7 @@
 //! ```text
 //!  offset  size  field
 //!       0     4  magic "EVRC"
-//!       4     1  version (VERSION, 7)
+//!       4     1  version ([`VERSION`])
 //!       5     1  message type (MsgType)
 //!       6     2  flags (FLAG_NEWER_FOLLOWS on a FRAME; 0 otherwise)
 //!       8     4  sequence number: the frame a FRAME/ESTIMATE/REJECTED is about; 0 otherwise
@@ -83,7 +83,7 @@ pub const MAGIC: [u8; 4] = *b"EVRC";
 /// header flags, drop counts in `DONE`; 4: `CONFIG` carries the population size; 3:
 /// estimates carry the tracker's status; 2: frames carry the sensor's RGB565 pixels; 1: hue
 /// frames).
-pub const VERSION: u8 = 8;
+pub const VERSION: u8 = 9;
 /// The pixel format of a frame's images on the link: the camera sensor's own RGB565, so the
 /// hue is computed on the board (see [`evorec_core::image::Rgb565`]).
 pub type LinkFormat = evorec_core::image::Rgb565;
@@ -97,11 +97,8 @@ pub const CRC_LEN: usize = 4;
 /// immigrants, tournament size, the mutation-level CDF, the settled CDF and its fitness, and
 /// the mutation scales.
 const GA_LEN: usize = 4 + 3 * 4 + 4 + 4 + 2 * 4 * (MUTATION_LEVELS - 1) + 4 + 4 * 6 * MUTATION_LEVELS;
-/// Size of the target filter's parameters inside `CONFIG`: the `f32` fields (23), the counts
-/// (two u16) and a flags byte (at most 8 flags) plus a reserved one.
-const TARGET_FILTER_LEN: usize =
-    TargetFilterParams::REAL_FIELDS.len() * 4 + TargetFilterParams::COUNT_FIELDS.len() * 2 + 2;
-const _: () = assert!(matches!(TargetFilterParams::FLAG_FIELDS.len(), 1..=8), "the flags fill one byte");
+/// Size of the target motion model's parameters inside `CONFIG`: its `f32` fields.
+const TARGET_FILTER_LEN: usize = TargetFilterParams::REAL_FIELDS.len() * 4;
 /// `CONFIG` payload size: intrinsics and image size, baseline, block, flange-to-camera,
 /// search box, seed, hue tolerance, feedforward flag (+2 reserved), `max_dt_s`, GA
 /// parameters, initial pose and spread, target filter parameters.

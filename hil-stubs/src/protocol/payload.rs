@@ -107,43 +107,21 @@ fn encode_setup(e: &mut Enc<'_>, s: &Setup) {
     encode_target_filter(e, &s.target_filter);
 }
 
-/// The target filter's flags byte: bit `i` is [`TargetFilterParams::FLAG_FIELDS`]`[i]`
-/// (`hold_motion` 1, `linear_motion_mutes_angular` 2); the other bits must be 0.
-const FLAG_MASK: u8 = u8::MAX >> (8 - TargetFilterParams::FLAG_FIELDS.len());
-
 fn encode_target_filter(e: &mut Enc<'_>, p: &TargetFilterParams) {
     for f in TargetFilterParams::REAL_FIELDS {
         e.f32((f.get)(p));
     }
-    for f in TargetFilterParams::COUNT_FIELDS {
-        e.u16((f.get)(p));
-    }
-    let flags = TargetFilterParams::FLAG_FIELDS.iter().enumerate();
-    e.u8(flags.fold(0, |acc, (i, f)| if (f.get)(p) { acc | 1 << i } else { acc }));
-    e.u8(0);
 }
 
-/// The target filter's parameters as sent (the fields in the order of the core's tables,
+/// The target motion model's parameters as sent (the fields in the order of the core's table,
 /// [`TargetFilterParams::REAL_FIELDS`]); their values are checked when the tracker is built
-/// ([`crate::setup::SetupError::TargetFilter`]), a flag bit beyond the two is a
-/// [`DecodeError::BadValue`].
-fn decode_target_filter(d: &mut Dec<'_>) -> Result<TargetFilterParams, DecodeError> {
+/// ([`crate::setup::SetupError::TargetFilter`]).
+fn decode_target_filter(d: &mut Dec<'_>) -> TargetFilterParams {
     let mut p = TargetFilterParams::DEFAULT;
     for f in TargetFilterParams::REAL_FIELDS {
         (f.set)(&mut p, d.f32());
     }
-    for f in TargetFilterParams::COUNT_FIELDS {
-        (f.set)(&mut p, d.u16());
-    }
-    let flags = d.u8();
-    let _reserved = d.u8();
-    if flags & !FLAG_MASK != 0 {
-        return Err(DecodeError::BadValue);
-    }
-    for (i, f) in TargetFilterParams::FLAG_FIELDS.iter().enumerate() {
-        (f.set)(&mut p, flags & 1 << i != 0);
-    }
-    Ok(p)
+    p
 }
 
 fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {
@@ -182,7 +160,7 @@ fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {
     }
     let initial_psi = Psi(d.f32s());
     let initial_spread = d.f32s();
-    let target_filter = decode_target_filter(d)?;
+    let target_filter = decode_target_filter(d);
     Ok(Setup {
         fx,
         fy,

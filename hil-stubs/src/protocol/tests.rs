@@ -122,11 +122,9 @@ fn the_population_crosses_the_link() {
 fn the_target_filter_crosses_the_link() {
     let mut setup = sample_setup();
     let f = &mut setup.target_filter;
-    f.position_noise_m = 0.0015;
-    f.depth_feedforward = 0.25;
-    f.converge_updates = 7;
-    f.max_outliers = 5;
-    f.hold_motion = false;
+    f.image_noise_px = 0.75;
+    f.acceleration_m_s2 = 0.25;
+    f.max_gap_s = 0.2;
     assert_ne!(setup, sample_setup());
     let bytes = encode(&Envelope::bare(Message::Config(setup)));
     let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
@@ -134,17 +132,16 @@ fn the_target_filter_crosses_the_link() {
 }
 
 #[test]
-fn an_unknown_target_filter_flag_is_rejected() {
+fn the_target_motion_parameters_close_config() {
     let mut payload = [0u8; MAX_SMALL_PAYLOAD];
     let (len, _) = encode_payload(&Message::Config(sample_setup()), &mut payload);
     assert_eq!(len, CONFIG_LEN);
-    // The flags byte is the last but one: hold_motion and linear_motion_mutes_angular.
-    assert_eq!(payload[len - 2], 3);
-    payload[len - 2] = 4;
-    assert_eq!(decode_small(MsgType::Config, &payload[..len]), Err(DecodeError::BadValue));
-    payload[len - 2] = 1;
+    // The last field is max_gap_s, little-endian.
+    let max_gap = evorec_core::target_motion::TargetFilterParams::DEFAULT.max_gap_s;
+    assert_eq!(payload[len - 4..len], max_gap.to_le_bytes());
+    payload[len - 4..len].copy_from_slice(&0.25f32.to_le_bytes());
     let Ok(Message::Config(s)) = decode_small(MsgType::Config, &payload[..len]) else { panic!("decodes") };
-    assert!(s.target_filter.hold_motion && !s.target_filter.linear_motion_mutes_angular);
+    assert_eq!(s.target_filter.max_gap_s, 0.25);
 }
 
 /// `fuzz/make_seeds.py` writes the link seeds by hand, field by field: its `CONFIG` must be

@@ -1,26 +1,18 @@
-//! `[target_filter]`: the tuning of the target-velocity filter that `method = "ff+target"`
+//! `[target_filter]`: the parameters of the target motion model that `method = "ff+target"`
 //! feeds forward (the core's [`TargetFilterParams`]). Every key is optional and named as the
 //! core's field; an absent key keeps [`TargetFilterParams::DEFAULT`]. A rig whose blocks move
-//! differently from the simulator's (a faster belt, a hand) tunes it here instead of in a
-//! rebuilt core.
+//! differently from the defaults' (a faster belt, a hand) says so here instead of in a rebuilt
+//! core.
 
 use evorec_core::target_motion::{Field, TargetFilterParams};
 use serde::ser::{Serialize, SerializeMap, Serializer};
-use toml::Value;
 
 use super::section::Section;
 use super::{Result, ScenarioError, invalid};
 
-/// The core's by-name tables of the parameters ([`TargetFilterParams::REAL_FIELDS`] and its
-/// siblings): the keys, their order in the written section, and the accessors.
+/// The core's by-name table of the parameters ([`TargetFilterParams::REAL_FIELDS`]): the keys,
+/// their order in the written section, and the accessors.
 const REALS: &[Field<f32>] = &TargetFilterParams::REAL_FIELDS;
-const COUNTS: &[Field<u16>] = &TargetFilterParams::COUNT_FIELDS;
-const FLAGS: &[Field<bool>] = &TargetFilterParams::FLAG_FIELDS;
-
-/// The value of the field `name` of type `T`, if `fields` has it.
-fn get<T>(fields: &[Field<T>], p: &TargetFilterParams, name: &str) -> Option<T> {
-    fields.iter().find(|f| f.name == name).map(|f| (f.get)(p))
-}
 
 /// The `[target_filter]` section: the filter's parameters (the defaults when the section is
 /// absent). Written back to TOML and into `summary.json` only when it differs from the
@@ -44,17 +36,11 @@ impl TargetFilterSection {
 impl Serialize for TargetFilterSection {
     fn serialize<S: Serializer>(&self, ser: S) -> std::result::Result<S::Ok, S::Error> {
         let p = &self.0;
-        let mut map = ser.serialize_map(Some(REALS.len() + COUNTS.len() + FLAGS.len()))?;
+        let mut map = ser.serialize_map(Some(REALS.len()))?;
         for f in REALS {
             // Through the shortest decimal of the f32, so that 0.001 is written as 0.001.
             let v: f64 = (f.get)(p).to_string().parse().unwrap_or(f64::NAN);
             map.serialize_entry(f.name, &v)?;
-        }
-        for f in COUNTS {
-            map.serialize_entry(f.name, &(f.get)(p))?;
-        }
-        for f in FLAGS {
-            map.serialize_entry(f.name, &(f.get)(p))?;
         }
         map.end()
     }
@@ -63,8 +49,7 @@ impl Serialize for TargetFilterSection {
 /// Parses `[target_filter]`: known keys, each of its type, then the core's own validation
 /// ([`TargetFilterParams::validate`]), whose rule is reported with the key's path.
 pub(super) fn parse_target_filter(s: &Section<'_>) -> Result<TargetFilterSection> {
-    let names = REALS.iter().map(|f| f.name).chain(COUNTS.iter().map(|f| f.name));
-    let known: Vec<&str> = names.chain(FLAGS.iter().map(|f| f.name)).collect();
+    let known: Vec<&str> = REALS.iter().map(|f| f.name).collect();
     s.check_keys(&known)?;
     let mut p = TargetFilterParams::DEFAULT;
     for f in REALS {
@@ -78,30 +63,13 @@ pub(super) fn parse_target_filter(s: &Section<'_>) -> Result<TargetFilterSection
             (f.set)(&mut p, v as f32);
         }
     }
-    for f in COUNTS {
-        if s.get(f.name).is_some() {
-            let v = s.int_in(f.name, 0, 0, i64::from(u16::MAX))?;
-            (f.set)(&mut p, u16::try_from(v).unwrap_or(u16::MAX));
-        }
-    }
-    for f in FLAGS {
-        match s.get(f.name) {
-            None => {}
-            Some(Value::Boolean(b)) => (f.set)(&mut p, *b),
-            Some(v) => return Err(invalid(s.path(f.name), format!("expected true or false, got {v}"))),
-        }
-    }
     p.validate().map_err(|e| invalid(s.path(e.0), format!("{}, got {}", e.rule(), value_of(&p, e.0))))?;
     Ok(TargetFilterSection(p))
 }
 
 /// The value of the field `name` as text (for an error message).
 fn value_of(p: &TargetFilterParams, name: &str) -> String {
-    get(REALS, p, name)
-        .map(|v| v.to_string())
-        .or_else(|| get(COUNTS, p, name).map(|v| v.to_string()))
-        .or_else(|| get(FLAGS, p, name).map(|v| v.to_string()))
-        .unwrap_or_default()
+    REALS.iter().find(|f| f.name == name).map(|f| (f.get)(p).to_string()).unwrap_or_default()
 }
 
 impl TargetFilterSection {

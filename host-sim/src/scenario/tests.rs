@@ -212,21 +212,13 @@ fn shipped_scenarios_have_the_specified_settings() {
 #[test]
 fn target_filter_section_tunes_the_filter_and_names_bad_fields() {
     use evorec_core::target_motion::TargetFilterParams;
-    let s = Scenario::from_toml_str(&with(
-        "[target_filter]\nposition_noise_m = 0.0015\nacceleration_lead_s = 0\nconverge_updates = 6\nhold_motion = false\n",
-    ))
-    .unwrap_or_else(|e| unreachable!("{e}"));
-    let want = TargetFilterParams {
-        position_noise_m: 0.0015,
-        acceleration_lead_s: 0.0,
-        converge_updates: 6,
-        hold_motion: false,
-        ..TargetFilterParams::DEFAULT
-    };
+    let s = Scenario::from_toml_str(&with("[target_filter]\nacceleration_m_s2 = 0.3\nimage_noise_px = 1\n"))
+        .unwrap_or_else(|e| unreachable!("{e}"));
+    let want = TargetFilterParams { acceleration_m_s2: 0.3, image_noise_px: 1.0, ..TargetFilterParams::DEFAULT };
     assert_eq!(s.target_filter.0, want);
     // Written back in full and read back to the same parameters.
     let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
-    assert!(text.contains("[target_filter]") && text.contains("depth_noise_m = 0.008"), "{text}");
+    assert!(text.contains("[target_filter]") && text.contains("max_speed_m_s = 0.5"), "{text}");
     assert_eq!(Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{e}\n{text}")), s);
     // Absent: the core's defaults, and nothing written.
     let plain = Scenario::from_toml_str(BASE).unwrap_or_else(|e| unreachable!("{e}"));
@@ -234,51 +226,36 @@ fn target_filter_section_tunes_the_filter_and_names_bad_fields() {
     assert!(!plain.to_toml_string().unwrap_or_default().contains("target_filter"));
 
     assert_eq!(
-        err(&with("[target_filter]\nposition_noise_m = -0.001\n")),
-        "target_filter.position_noise_m: finite and positive, got -0.001"
+        err(&with("[target_filter]\nimage_noise_px = -0.5\n")),
+        "target_filter.image_noise_px: finite and positive, got -0.5"
+    );
+    assert_eq!(err(&with("[target_filter]\nmax_gap_s = 0\n")), "target_filter.max_gap_s: finite and positive, got 0");
+    assert_eq!(
+        err(&with("[target_filter]\nacceleration_m_s2 = \"fast\"\n")),
+        "target_filter.acceleration_m_s2: expected a number, got a string (\"fast\")"
     );
     assert_eq!(
-        err(&with("[target_filter]\ndepth_feedforward = 1.5\n")),
-        "target_filter.depth_feedforward: between 0 and 1, got 1.5"
-    );
-    assert_eq!(
-        err(&with("[target_filter]\nconverge_updates = 0\n")),
-        "target_filter.converge_updates: at least 1, got 0"
-    );
-    assert_eq!(
-        err(&with("[target_filter]\nmax_outliers = 70000\n")),
-        "target_filter.max_outliers: must be in 0..=65535, got 70000"
-    );
-    assert_eq!(
-        err(&with("[target_filter]\nhold_motion = 1\n")),
-        "target_filter.hold_motion: expected true or false, got 1"
-    );
-    assert_eq!(
-        err(&with("[target_filter]\njerk_psd = \"fast\"\n")),
-        "target_filter.jerk_psd: expected a number, got a string (\"fast\")"
-    );
-    assert_eq!(
-        err(&with("[target_filter]\ngate_sigma = 1e40\n")),
-        "target_filter.gate_sigma: must fit a 32-bit float, got 10000000000000000000000000000000000000000"
+        err(&with("[target_filter]\nmax_speed_m_s = 1e40\n")),
+        "target_filter.max_speed_m_s: must fit a 32-bit float, got 10000000000000000000000000000000000000000"
     );
     assert!(
-        err(&with("[target_filter]\nposition_noise = 0.001\n"))
-            .starts_with("target_filter.position_noise: unknown key")
+        err(&with("[target_filter]\nposition_noise_m = 0.001\n"))
+            .starts_with("target_filter.position_noise_m: unknown key")
     );
     assert_eq!(err(&with("target_filter = 3\n")), "target_filter: expected a table, got an integer (3)");
 }
 
 #[test]
 fn a_target_filter_file_holds_the_section_alone() {
-    let t = TargetFilterSection::from_toml_str("[target_filter]\nposition_noise_m = 0.0015\n")
+    let t = TargetFilterSection::from_toml_str("[target_filter]\nimage_noise_px = 0.75\n")
         .unwrap_or_else(|e| unreachable!("{e}"));
-    assert_eq!(t.0.position_noise_m, 0.0015);
-    assert_eq!(t.0.depth_noise_m, TargetFilterSection::default().0.depth_noise_m);
+    assert_eq!(t.0.image_noise_px, 0.75);
+    assert_eq!(t.0.max_speed_m_s, TargetFilterSection::default().0.max_speed_m_s);
     let bad = |text: &str| TargetFilterSection::from_toml_str(text).err().map(|e| e.to_string()).unwrap_or_default();
     assert!(bad("seed = 1\n[target_filter]\n").starts_with("seed: unknown key (expected one of: target_filter)"));
     assert_eq!(
-        bad("[target_filter]\nlost_fitness = -1\n"),
-        "target_filter.lost_fitness: finite and non-negative, got -1"
+        bad("[target_filter]\nmax_rate_rad_s = -1\n"),
+        "target_filter.max_rate_rad_s: finite and positive, got -1"
     );
     let missing = std::env::temp_dir().join("evorec-no-such-target-filter.toml");
     let e = TargetFilterSection::load(&missing).err().map(|e| e.to_string()).unwrap_or_default();

@@ -71,6 +71,9 @@ enum Command {
         /// Override the scenario's method: ga, ff or ff+target.
         #[arg(long, value_parser = Method::parse)]
         method: Option<Method>,
+        /// Override the scenario's seed (GA and image noise), 0 ..= 2^63−1: for seed sweeps.
+        #[arg(long, value_parser = clap::value_parser!(u64).range(0..=i64::MAX as u64))]
+        seed: Option<u64>,
     },
     /// The paper's experiment: motions A and B × ω ∈ {0, 0.125, 0.25, 0.5, 1.0} × (GA, GA + FF,
     /// GA + FF + target), 72 s each, in parallel; writes DIR/paper_table.csv, DIR/paper_table.md
@@ -431,8 +434,9 @@ fn hil_servo(
 
 fn execute(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Run { scenario, out, method } => {
-            let s = load_with(&scenario, method)?;
+        Command::Run { scenario, out, method, seed } => {
+            let mut s = load_with(&scenario, method)?;
+            s.seed = seed.unwrap_or(s.seed);
             io::create_out_dir(&out)?;
             let t0 = Instant::now();
             if s.servo.is_some() {

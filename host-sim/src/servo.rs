@@ -162,8 +162,7 @@ pub fn scenario_of(g: &GridSettings, cell: &Cell) -> (Scenario, LoopOptions) {
         TargetCase::Conveyor { speed_m_s } => {
             s.target.omega_rad_s = 0.0;
             if speed_m_s > 0.0 {
-                opts.conveyor =
-                    Some(Conveyor { speed_m_s, travel_m: g.conveyor_travel_m, accel_m_s2: g.conveyor_accel_m_s2 });
+                opts.conveyor = Some(Conveyor::along_world_y(speed_m_s, g.conveyor_travel_m, g.conveyor_accel_m_s2));
             }
         }
         TargetCase::Rotating { omega_rad_s } => s.target.omega_rad_s = omega_rad_s,

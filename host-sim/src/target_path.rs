@@ -4,10 +4,12 @@
 //! ([`crate::motion::TargetMotion`]). On top of that, the centre (and the orientation) can
 //! follow a [`TargetPath`] (scenario keys `[target] conveyor_*` and `random_*`):
 //!
-//! - [`TargetPath::Conveyor`]: a part on a conveyor along world `y` (across the view), starting
-//!   at rest at `y = −travel/2`, accelerating to `speed`, and reversing smoothly at each end
-//!   (half-cosine velocity profiles with peak acceleration `accel`), back and forth, so it
-//!   stays in view;
+//! - [`TargetPath::Conveyor`]: a part on a conveyor along a unit direction `u` (by default
+//!   world `y`, across the view; `[target] conveyor_direction`, given in the world or in the
+//!   right camera's frame at `t = 0`), starting at rest at `−u·travel/2`, accelerating to
+//!   `speed`, and reversing smoothly at each end (half-cosine velocity profiles with peak
+//!   acceleration `accel`), back and forth, so it stays in view; or (`conveyor_start =
+//!   "moving"`) already at full speed along `+u` in the middle of its travel at `t = 0`;
 //! - [`TargetPath::Random`]: a seeded random smooth motion, each position axis and each angle
 //!   a sum of [`RANDOM_COMPONENTS`] sinusoids, zero at `t = 0` (an object in a person's hand).
 //!
@@ -17,7 +19,7 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
 use crate::motion::{TargetMotion, Twist};
-use crate::scenario::Scenario;
+use crate::scenario::{ConveyorFrame, ConveyorStart, Scenario};
 
 /// Number of sinusoids per axis of [`TargetPath::Random`].
 pub const RANDOM_COMPONENTS: usize = 3;
@@ -50,12 +52,12 @@ impl Sinusoid {
 pub enum TargetPath {
     /// The centre stays where it is (the paper).
     Fixed,
-    /// A conveyor along world `y` (see the module docs).
+    /// A conveyor along its [`Conveyor::direction`] (see the module docs).
     Conveyor {
         /// The shuttle.
         conveyor: Conveyor,
-        /// The conveyor's own time at `t = 0` (s): 0 starts at rest at the −y end,
-        /// [`Conveyor::middle_time`] in the middle at full speed towards +y.
+        /// The conveyor's own time at `t = 0` (s): 0 starts at rest at the −direction end,
+        /// [`Conveyor::middle_time`] in the middle at full speed towards +direction.
         start_s: f64,
     },
     /// A seeded random smooth motion: each position axis and each rotation angle (about world
@@ -69,12 +71,14 @@ pub enum TargetPath {
     },
 }
 
-/// A conveyor along world `y` shuttling back and forth over `travel_m`: straight runs at
-/// `speed_m_s`, reversals with half-cosine velocity profiles of peak acceleration `accel_m_s2`
-/// (a real shuttle's finite deceleration at each end). Its own clock starts at rest at the
-/// `−y` end.
+/// A conveyor along the unit vector `direction` (world) shuttling back and forth over
+/// `travel_m`: straight runs at `speed_m_s`, reversals with half-cosine velocity profiles of
+/// peak acceleration `accel_m_s2` (a real shuttle's finite deceleration at each end). Its own
+/// clock starts at rest at the `−direction` end.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Conveyor {
+    /// Direction of travel (world, unit): [`Conveyor::WORLD_Y`] unless configured.
+    pub direction: Vector3<f64>,
     /// Speed of the straight runs (m/s).
     pub speed_m_s: f64,
     /// Length of the shuttle (m).
@@ -84,6 +88,14 @@ pub struct Conveyor {
 }
 
 impl Conveyor {
+    /// The default direction of travel: world `y` (across the view).
+    pub const WORLD_Y: Vector3<f64> = Vector3::new(0.0, 1.0, 0.0);
+
+    /// A conveyor along world `y` ([`Conveyor::WORLD_Y`]).
+    pub fn along_world_y(speed_m_s: f64, travel_m: f64, accel_m_s2: f64) -> Self {
+        Self { direction: Self::WORLD_Y, speed_m_s, travel_m, accel_m_s2 }
+    }
+
     /// `(t_r, d_r, straight, half)`: duration and distance of a whole reversal's half-cosine
     /// (rest → speed takes `t_r/2` over `d_r`), length of the straight run, and the time from
     /// one end to the other.
@@ -96,8 +108,8 @@ impl Conveyor {
         (t_r, d_r, straight, t_r + straight / v)
     }
 
-    /// Position (relative to the shuttle's middle) and velocity along `y` at the conveyor's
-    /// own time `t`.
+    /// Position (relative to the shuttle's middle) and velocity along [`Conveyor::direction`]
+    /// at the conveyor's own time `t`.
     pub fn state(&self, t: f64) -> (f64, f64) {
         use std::f64::consts::PI;
         let (t_r, d_r, straight, half) = self.profile();
@@ -116,8 +128,16 @@ impl Conveyor {
         if out { (y - 0.5 * self.travel_m, vy) } else { (0.5 * self.travel_m - y, -vy) }
     }
 
+    /// Displacement from the shuttle's middle and velocity (world) at the conveyor's own
+    /// time `t`: [`Conveyor::state`] along [`Conveyor::direction`].
+    pub fn offset(&self, t: f64) -> (Vector3<f64>, Vector3<f64>) {
+        let (s, v) = self.state(t);
+        (self.direction * s, self.direction * v)
+    }
+
     /// The conveyor's time at which it first passes the middle of its travel (at full speed
-    /// towards +y when the travel has a straight run).
+    /// towards +direction: on a straight run, or at the peak of the reversals' profile when
+    /// the travel has none).
     pub fn middle_time(&self) -> f64 {
         0.5 * self.profile().3
     }
@@ -158,15 +178,22 @@ impl PathOffset {
 
 impl TargetPath {
     /// The path of a scenario's `[target]` (the random one seeded by the scenario's seed).
+    /// A conveyor's direction given in the camera frame is turned into the world once, here,
+    /// with the right camera's orientation at `t = 0` ([`conveyor_direction_world`]).
     pub fn from_scenario(s: &Scenario) -> Self {
         let t = &s.target;
         if t.conveyor_speed_m_s > 0.0 {
             let conveyor = Conveyor {
+                direction: conveyor_direction_world(s),
                 speed_m_s: t.conveyor_speed_m_s,
                 travel_m: t.conveyor_travel_m,
                 accel_m_s2: t.conveyor_accel_m_s2,
             };
-            return Self::Conveyor { conveyor, start_s: 0.0 };
+            let start_s = match t.conveyor_start {
+                ConveyorStart::Rest => 0.0,
+                ConveyorStart::Moving => conveyor.middle_time(),
+            };
+            return Self::Conveyor { conveyor, start_s };
         }
         if t.random_amplitude_m > 0.0 {
             return Self::random(
@@ -213,15 +240,23 @@ impl TargetPath {
         match *self {
             Self::Fixed => PathOffset::none(),
             Self::Conveyor { conveyor, start_s } => {
-                let (y, vy) = conveyor.state(start_s + t);
-                PathOffset {
-                    position: Vector3::new(0.0, y, 0.0),
-                    velocity: Vector3::new(0.0, vy, 0.0),
-                    ..PathOffset::none()
-                }
+                let (position, velocity) = conveyor.offset(start_s + t);
+                PathOffset { position, velocity, ..PathOffset::none() }
             }
             Self::Random { position, angles } => random_offset(&position, &angles, t),
         }
+    }
+}
+
+/// A scenario's `[target] conveyor_direction` in the world (unit): as given with
+/// `conveyor_direction_frame = "world"`; with `"camera"`, turned by the right camera's
+/// orientation at `t = 0` ([`crate::motion::initial_camera_pose`]; the flange starts there for
+/// every motion), so `[0, 0, −1]` runs along its optical axis towards the cameras.
+pub fn conveyor_direction_world(s: &Scenario) -> Vector3<f64> {
+    let d = Vector3::from(s.target.conveyor_direction);
+    match s.target.conveyor_direction_frame {
+        ConveyorFrame::World => d,
+        ConveyorFrame::Camera => crate::motion::initial_camera_pose(s.camera.baseline_m).rotation * d,
     }
 }
 
@@ -286,17 +321,75 @@ mod tests {
     #[test]
     fn target_path_twists_are_derivatives() {
         check_path_twist(&TargetPath::Fixed);
-        let c = Conveyor { speed_m_s: 0.2, travel_m: 0.2, accel_m_s2: 0.5 };
+        let c = Conveyor::along_world_y(0.2, 0.2, 0.5);
         check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: 0.0 });
         check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: c.middle_time() });
-        let c = Conveyor { speed_m_s: 0.3, travel_m: 0.2, accel_m_s2: 0.9 };
+        let c = Conveyor::along_world_y(0.3, 0.2, 0.9);
         check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: 0.0 });
+        // A slanted belt, from rest and already moving; and one with no straight run.
+        let slant = Vector3::new(0.6, -0.3, 0.5).normalize();
+        let c = Conveyor { direction: slant, ..Conveyor::along_world_y(0.15, 0.25, 0.4) };
+        check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: 0.0 });
+        check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: c.middle_time() });
+        let c = Conveyor { direction: -slant, ..Conveyor::along_world_y(0.2, 0.05, 10.0) };
+        check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: c.middle_time() });
         check_path_twist(&TargetPath::random(7, 0.05, 10f64.to_radians(), 1.0));
     }
 
     #[test]
+    fn conveyor_moves_along_its_direction_only() {
+        let u = Vector3::new(1.0, 2.0, -2.0) / 3.0;
+        let c = Conveyor { direction: u, ..Conveyor::along_world_y(0.1, 0.2, 0.5) };
+        let path = TargetPath::Conveyor { conveyor: c, start_s: c.middle_time() };
+        for k in 0..400 {
+            let t = 0.05 * k as f64;
+            let o = path.offset(t);
+            let (s, v) = c.state(c.middle_time() + t);
+            assert!((o.position - u * s).norm() < 1e-15 && (o.velocity - u * v).norm() < 1e-15, "t={t}");
+            assert!(o.position.cross(&u).norm() < 1e-15 && o.velocity.cross(&u).norm() < 1e-15);
+            assert!(o.position.norm() <= 0.1 + 1e-12);
+        }
+        // Moving start: in the middle, at full speed along +u.
+        let o = path.offset(0.0);
+        assert!(o.position.norm() < 1e-12 && (o.velocity - 0.1 * u).norm() < 1e-12, "{o:?}");
+        // At rest: at the −u end, still.
+        let o = TargetPath::Conveyor { conveyor: c, start_s: 0.0 }.offset(0.0);
+        assert!((o.position + 0.1 * u).norm() < 1e-12 && o.velocity == Vector3::zeros(), "{o:?}");
+    }
+
+    #[test]
+    fn scenario_sets_the_conveyor_s_direction_frame_and_start() {
+        use crate::scenario::{ConveyorFrame, ConveyorStart, Method};
+        let mut s = Scenario::new(1, 10.0, Method::FfTarget);
+        s.target.conveyor_speed_m_s = 0.1;
+        let Some((c, start)) = conveyor_of(&TargetPath::from_scenario(&s)) else { unreachable!() };
+        assert_eq!((c.direction, start), (Conveyor::WORLD_Y, 0.0));
+        s.target.conveyor_start = ConveyorStart::Moving;
+        s.target.conveyor_direction = [0.0, 0.0, -1.0];
+        s.target.conveyor_direction_frame = ConveyorFrame::Camera;
+        let Some((c, start)) = conveyor_of(&TargetPath::from_scenario(&s)) else { unreachable!() };
+        assert_eq!(start, c.middle_time());
+        // Towards the right camera along its optical axis at t = 0.
+        let cam = crate::motion::initial_camera_pose(s.camera.baseline_m);
+        assert!((c.direction + cam.rotation * Vector3::z()).norm() < 1e-15, "{}", c.direction);
+        let tilt = crate::motion::CAMERA_TILT_DEG.to_radians();
+        assert!((c.direction - Vector3::new(-tilt.cos(), 0.0, tilt.sin())).norm() < 1e-15);
+        // The same direction given in the world.
+        s.target.conveyor_direction_frame = ConveyorFrame::World;
+        let Some((c, _)) = conveyor_of(&TargetPath::from_scenario(&s)) else { unreachable!() };
+        assert_eq!(c.direction, Vector3::new(0.0, 0.0, -1.0));
+    }
+
+    fn conveyor_of(path: &TargetPath) -> Option<(Conveyor, f64)> {
+        match *path {
+            TargetPath::Conveyor { conveyor, start_s } => Some((conveyor, start_s)),
+            _ => None,
+        }
+    }
+
+    #[test]
     fn conveyor_shuttles_within_its_travel_at_its_speed() {
-        let conveyor = Conveyor { speed_m_s: 0.2, travel_m: 0.2, accel_m_s2: 0.5 };
+        let conveyor = Conveyor::along_world_y(0.2, 0.2, 0.5);
         let path = TargetPath::Conveyor { conveyor, start_s: 0.0 };
         let (mut lo, mut hi, mut vmax, mut amax): (f64, f64, f64, f64) = (0.0, 0.0, 0.0, 0.0);
         let dt = 1e-3;
@@ -319,7 +412,7 @@ mod tests {
     #[test]
     fn conveyor_started_in_the_middle_runs_steadily_until_its_reversal() {
         // 1 m of travel at 0.2 m/s, reversing at 0.5 m/s²: 0.08 m to stop, 4.2 s of straight run.
-        let c = Conveyor { speed_m_s: 0.2, travel_m: 1.0, accel_m_s2: 0.5 };
+        let c = Conveyor::along_world_y(0.2, 1.0, 0.5);
         let path = TargetPath::Conveyor { conveyor: c, start_s: c.middle_time() };
         let o = path.offset(0.0);
         assert!(o.position.y.abs() < 1e-12 && (o.velocity.y - 0.2).abs() < 1e-12, "{o:?}");

@@ -30,9 +30,14 @@
 //! amplitude_deg = 15.0     # [0, 180]: yaw oscillation amplitude
 //! omega_rad_s = 0.125      # [0, 10]: yaw oscillation angular frequency; 0 = still
 //! yaw0_deg = 25.0          # [-180, 180]: initial yaw about world z
-//! conveyor_speed_m_s = 0.0 # 0 (off) or [0.05, 0.3]: the centre shuttles along world y
-//! conveyor_travel_m = 0.2  # (0, 0.5]: length of the shuttle (starts at rest at its −y end)
+//! conveyor_speed_m_s = 0.0 # 0 (off) or [0.05, 0.3]: the centre shuttles along conveyor_direction
+//! conveyor_travel_m = 0.2  # (0, 0.5]: length of the shuttle
 //! conveyor_accel_m_s2 = 0.5 # (0, 10], ≥ 2·speed²/travel: peak acceleration of the reversals
+//! conveyor_direction = [0, 1, 0] # direction of travel, finite and non-zero (normalised on load)
+//! conveyor_direction_frame = "world" # "world" | "camera": the right camera's frame at t = 0
+//!                          #   ([0, 0, -1]: along its optical axis towards the cameras)
+//! conveyor_start = "rest"  # "rest": at rest at the −direction end | "moving": at full speed
+//!                          #   along +direction in the middle of its travel at t = 0
 //! random_amplitude_m = 0.0 # [0, 0.1]: 0 = off; seeded smooth random motion, per-axis scale
 //! random_amplitude_deg = 10.0 # [0, 30]: its rotation scale per axis
 //! random_omega_rad_s = 1.0 # (0, 2]: its highest angular frequency
@@ -235,6 +240,18 @@ pub struct TargetConfig {
     pub conveyor_travel_m: f64,
     /// Peak acceleration of the conveyor's reversals (m/s²).
     pub conveyor_accel_m_s2: f64,
+    /// The conveyor's direction of travel (unit, in [`conveyor_direction_frame`]); written
+    /// only when not world `y`, so older scenarios' outputs stay as they were.
+    ///
+    /// [`conveyor_direction_frame`]: TargetConfig::conveyor_direction_frame
+    #[serde(skip_serializing_if = "is_world_y")]
+    pub conveyor_direction: [f64; 3],
+    /// The frame [`conveyor_direction`](TargetConfig::conveyor_direction) is given in.
+    #[serde(skip_serializing_if = "ConveyorFrame::is_default")]
+    pub conveyor_direction_frame: ConveyorFrame,
+    /// Where the conveyor is at `t = 0`.
+    #[serde(skip_serializing_if = "ConveyorStart::is_default")]
+    pub conveyor_start: ConveyorStart,
     /// Scale of the random smooth motion per axis (m); 0 = off.
     pub random_amplitude_m: f64,
     /// Scale of the random smooth rotation per axis (degrees).
@@ -256,10 +273,58 @@ impl Default for TargetConfig {
             conveyor_speed_m_s: 0.0,
             conveyor_travel_m: 0.2,
             conveyor_accel_m_s2: 0.5,
+            conveyor_direction: WORLD_Y,
+            conveyor_direction_frame: ConveyorFrame::World,
+            conveyor_start: ConveyorStart::Rest,
             random_amplitude_m: 0.0,
             random_amplitude_deg: 10.0,
             random_omega_rad_s: 1.0,
         }
+    }
+}
+
+/// The default `[target] conveyor_direction`: world `y`.
+pub const WORLD_Y: [f64; 3] = [0.0, 1.0, 0.0];
+
+fn is_world_y(d: &[f64; 3]) -> bool {
+    *d == WORLD_Y
+}
+
+/// `[target] conveyor_direction_frame`: the frame the conveyor's direction is given in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+pub enum ConveyorFrame {
+    /// The world (the PA-10's base frame, `z` up).
+    #[default]
+    #[serde(rename = "world")]
+    World,
+    /// The right camera's frame at `t = 0` (`z` its optical axis, away from the camera),
+    /// turned into the world once when the run is set up ([`crate::target_path`]).
+    #[serde(rename = "camera")]
+    Camera,
+}
+
+impl ConveyorFrame {
+    fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
+/// `[target] conveyor_start`: where the conveyor is at `t = 0`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+pub enum ConveyorStart {
+    /// At rest at the −direction end of its travel (the tracker starts on a still block).
+    #[default]
+    #[serde(rename = "rest")]
+    Rest,
+    /// In the middle of its travel at full speed along +direction
+    /// ([`crate::target_path::Conveyor::middle_time`]): the tracker starts on a moving block.
+    #[serde(rename = "moving")]
+    Moving,
+}
+
+impl ConveyorStart {
+    fn is_default(&self) -> bool {
+        *self == Self::default()
     }
 }
 
@@ -545,6 +610,9 @@ fn parse_target(s: &Section<'_>) -> Result<TargetConfig> {
         "conveyor_speed_m_s",
         "conveyor_travel_m",
         "conveyor_accel_m_s2",
+        "conveyor_direction",
+        "conveyor_direction_frame",
+        "conveyor_start",
         "random_amplitude_m",
         "random_amplitude_deg",
         "random_omega_rad_s",
@@ -611,15 +679,61 @@ fn parse_target_path(s: &Section<'_>, base: TargetConfig) -> Result<TargetConfig
             "the block follows one path: set conveyor_speed_m_s or random_amplitude_m to 0",
         ));
     }
+    let direction = s.floats("conveyor_direction", d.conveyor_direction)?;
+    let conveyor_direction = unit_direction(direction).ok_or_else(|| {
+        let [x, y, z] = direction;
+        invalid(s.path("conveyor_direction"), format!("must be a finite, non-zero vector, got [{x}, {y}, {z}]"))
+    })?;
+    let conveyor_direction_frame = match s.string("conveyor_direction_frame", Some("world"))?.as_str() {
+        "world" => ConveyorFrame::World,
+        "camera" => ConveyorFrame::Camera,
+        other => {
+            return Err(invalid(
+                s.path("conveyor_direction_frame"),
+                format!("expected \"world\" or \"camera\", got \"{other}\""),
+            ));
+        }
+    };
+    let conveyor_start = match s.string("conveyor_start", Some("rest"))?.as_str() {
+        "rest" => ConveyorStart::Rest,
+        "moving" => ConveyorStart::Moving,
+        other => {
+            return Err(invalid(s.path("conveyor_start"), format!("expected \"rest\" or \"moving\", got \"{other}\"")));
+        }
+    };
     Ok(TargetConfig {
         conveyor_speed_m_s,
         conveyor_travel_m,
         conveyor_accel_m_s2,
+        conveyor_direction,
+        conveyor_direction_frame,
+        conveyor_start,
         random_amplitude_m,
         random_amplitude_deg,
         random_omega_rad_s,
         ..base
     })
+}
+
+/// `v` as a unit vector: `None` if a component is not finite or all are zero. A vector whose
+/// norm is already 1 to within a few ulps is kept as it is, so that a scenario written by
+/// [`Scenario::to_toml_string`] reads back bit for bit.
+fn unit_direction(v: [f64; 3]) -> Option<[f64; 3]> {
+    if !v.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let largest = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    if largest == 0.0 {
+        return None;
+    }
+    let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() <= 8.0 * f64::EPSILON {
+        return Some(v);
+    }
+    // Scaled first so that neither tiny nor huge components under- or overflow.
+    let scaled = v.map(|x| x / largest);
+    let norm = scaled.iter().map(|x| x * x).sum::<f64>().sqrt();
+    Some(scaled.map(|x| x / norm))
 }
 
 fn parse_robot(s: &Section<'_>) -> Result<RobotConfig> {

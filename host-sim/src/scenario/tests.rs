@@ -261,3 +261,104 @@ fn a_target_filter_file_holds_the_section_alone() {
     let e = TargetFilterSection::load(&missing).err().map(|e| e.to_string()).unwrap_or_default();
     assert!(e.contains("evorec-no-such-target-filter.toml"), "{e}");
 }
+
+#[test]
+fn conveyor_direction_frame_and_start_are_read_and_checked() {
+    let s = Scenario::from_toml_str(&with(
+        "[target]\nconveyor_speed_m_s = 0.1\nconveyor_direction = [0, 0, -2]\nconveyor_direction_frame = \
+         \"camera\"\nconveyor_start = \"moving\"\n",
+    ))
+    .unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(s.target.conveyor_direction, [0.0, 0.0, -1.0], "normalised on load");
+    assert_eq!(s.target.conveyor_direction_frame, ConveyorFrame::Camera);
+    assert_eq!(s.target.conveyor_start, ConveyorStart::Moving);
+    let s = Scenario::from_toml_str(&with(
+        "[target]\nconveyor_direction = [3, 4, 0]\nconveyor_direction_frame = \"world\"\nconveyor_start = \"rest\"\n",
+    ))
+    .unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(s.target.conveyor_direction, [0.6, 0.8, 0.0]);
+    assert_eq!(
+        (s.target.conveyor_direction_frame, s.target.conveyor_start),
+        (ConveyorFrame::World, ConveyorStart::Rest)
+    );
+    // Tiny and huge vectors normalise without under- or overflow.
+    for text in ["[1e-200, 0, 1e-200]", "[1e300, 0, 1e300]"] {
+        let s = Scenario::from_toml_str(&with(&format!("[target]\nconveyor_direction = {text}\n")))
+            .unwrap_or_else(|e| unreachable!("{text}: {e}"));
+        let d = s.target.conveyor_direction;
+        assert!((d[0] - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-15 && d[0] == d[2] && d[1] == 0.0, "{d:?}");
+    }
+    // Absent: world y, at rest (today's conveyor).
+    let d = Scenario::from_toml_str(BASE).unwrap_or_else(|e| unreachable!("{e}")).target;
+    assert_eq!(
+        (d.conveyor_direction, d.conveyor_direction_frame, d.conveyor_start),
+        (WORLD_Y, ConveyorFrame::World, ConveyorStart::Rest)
+    );
+
+    assert_eq!(
+        err(&with("[target]\nconveyor_direction = [0, 0, 0]\n")),
+        "target.conveyor_direction: must be a finite, non-zero vector, got [0, 0, 0]"
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_direction = [1, nan, 0]\n")),
+        "target.conveyor_direction: must be a finite, non-zero vector, got [1, NaN, 0]"
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_direction = [inf, 0, 0]\n")),
+        "target.conveyor_direction: must be a finite, non-zero vector, got [inf, 0, 0]"
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_direction = [1, 0]\n")),
+        "target.conveyor_direction: expected 3 values, got 2"
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_direction = [1, \"up\", 0]\n")),
+        "target.conveyor_direction[1]: expected a number, got a string (\"up\")"
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_direction_frame = \"flange\"\n")),
+        "target.conveyor_direction_frame: expected \"world\" or \"camera\", got \"flange\""
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_direction_frame = 1\n")),
+        "target.conveyor_direction_frame: expected a string, got an integer (1)"
+    );
+    assert_eq!(
+        err(&with("[target]\nconveyor_start = \"middle\"\n")),
+        "target.conveyor_start: expected \"rest\" or \"moving\", got \"middle\""
+    );
+    assert!(err(&with("[target]\nconveyor_dir = [1, 0, 0]\n")).starts_with("target.conveyor_dir: unknown key"));
+}
+
+#[test]
+fn conveyor_keys_round_trip_and_are_written_only_when_not_default() {
+    // Defaults: nothing written, so the outputs of older scenarios stay as they were.
+    let mut s = Scenario::new(2, 8.0, Method::FfTarget);
+    s.target.conveyor_speed_m_s = 0.1;
+    let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
+    assert!(!text.contains("conveyor_direction") && !text.contains("conveyor_start"), "{text}");
+    let json = serde_json::to_string(&s).unwrap_or_else(|e| unreachable!("{e}"));
+    assert!(!json.contains("conveyor_direction") && !json.contains("conveyor_start"), "{json}");
+    // Set: written, and read back bit for bit, also for directions normalised on load.
+    s.target.conveyor_direction_frame = ConveyorFrame::Camera;
+    s.target.conveyor_start = ConveyorStart::Moving;
+    let mut x = 0x2545_F491_4F6C_DD1D_u64;
+    for k in 0..200 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let raw: [f64; 3] = core::array::from_fn(|i| ((x >> (20 * i)) & 0xF_FFFF) as f64 / 524_288.0 - 1.0 + 1e-3);
+        let Some(d) = unit_direction(raw) else { unreachable!("{raw:?}") };
+        s.target.conveyor_direction = d;
+        if k == 0 {
+            s.target.conveyor_direction = [0.0, 0.0, -1.0];
+        }
+        let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
+        assert!(k > 0 || text.contains("conveyor_direction = [0.0, 0.0, -1.0]"), "{text}");
+        assert!(text.contains("conveyor_direction_frame = \"camera\"") && text.contains("conveyor_start = \"moving\""));
+        assert_eq!(Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{e}\n{text}")), s, "{raw:?}");
+    }
+    let json = serde_json::to_value(s).unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(json["target"]["conveyor_start"], "moving");
+    assert_eq!(json["target"]["conveyor_direction_frame"], "camera");
+}

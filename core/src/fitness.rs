@@ -15,9 +15,9 @@
 //! paper's eq. 34. The weight (our addition) ramps up as
 //! a face turns into view ([`FULL_VISIBLE_COS`], [`FULL_FACE_PX`]): a face seen as a sliver of
 //! a few pixels cannot hold its rows, and counted at full weight it made the true pose score
-//! below a pose turned a degree or two to hide it (the x/pitch excursions of the README's
-//! link-reliability section). A pose whose block is not entirely in front of a camera scores 0
-//! in that camera.
+//! below a pose turned a degree or two to hide it (x/pitch excursions; the measurement is in
+//! `docs/method.md`). A pose whose block is not entirely in front of a camera scores 0 in that
+//! camera.
 //!
 //! **Bounded work.** Of each pair of opposite faces exactly one can face a camera, so each
 //! camera evaluates three faces (the one of each pair on the camera's side): on the board their inner rows
@@ -25,8 +25,8 @@
 //! outer rows only where they count, on the silhouette edges of visible faces. Those are at
 //! most [`MAX_OUTER_EDGES`] = 6 edges per camera, and the walk is padded to that many, so every
 //! pose walks [`SurfaceStrips::WALKED_PER_CAMERA`] points per camera (48·G, 80 % of
-//! [`SurfaceStrips::POINTS_PER_CAMERA`]; the outer rows of the other edges used to be walked
-//! and discarded). That constant work is the board's (so the measured worst case is every
+//! [`SurfaceStrips::POINTS_PER_CAMERA`]; the outer rows of the other edges are never walked).
+//! That constant work is the board's (so the measured worst case is every
 //! case); the host walks only the rows that count, the inner rows of visible faces and the
 //! outer rows of their silhouette edges (at most as many: the same counts, less work for a
 //! pose that shows fewer than three faces or silhouette edges; see `CONSTANT_WORK`). Points

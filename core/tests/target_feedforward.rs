@@ -87,7 +87,7 @@ fn target_feedforward_follows_a_sliding_block() {
     // own uncertainty (2σ, `TargetFilterParams::significance_sigma`), so the ramp from rest
     // is where it lags. Medians over seeds 1–8, measured: FF alone 39.2 mm; FF + target with
     // the best individual fed to the filter, 1.5 mm position noise and no acceleration lead
-    // (the session-11 default) 6.4 mm; with the crowd's centre (`measurement_fitness_margin`
+    // 6.4 mm; with the crowd's centre (`measurement_fitness_margin`
     // 0.01), 1 mm and the lead of half a frame (the default) 7.1 mm. Over seeds 1–12 the
     // order flips (11.5 and 6.4 mm): the two are not told apart here.
     assert!(rms_target < 0.008, "FF + target {rms_target} m (median)");

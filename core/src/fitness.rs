@@ -328,7 +328,7 @@ struct Affine<'v, 'p, F: PixelFormat> {
 impl<F: PixelFormat> RowWalk for Affine<'_, '_, F> {
     #[inline(always)]
     fn count_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, plane: &[u8; 256]) -> u32 {
-        // The same rows either way; the board's code (and instruction count) stays as it was.
+        // The same rows on host and board: the board walks them inline, the host in `host_edge`.
         #[cfg(target_arch = "arm")]
         let rows = edge.starts.map(|start| FixedRow::new::<G>(start, edge.span));
         #[cfg(target_arch = "arm")]
@@ -467,8 +467,8 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
 }
 
 /// [`camera_counts`], walking every row (`WALK_ALL`, the board's constant work) or only the
-/// rows that count: the same counts either way. Out of line, as `camera_counts` itself was
-/// (the wrapper inlines, this does not, so the board's code stays in one place per instance).
+/// rows that count: the same counts either way. Out of line (the wrapper inlines, this does
+/// not, so the board's code stays in one place per instance).
 #[inline(never)]
 fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat, const WALK_ALL: bool>(
     model: &SurfaceStrips<G>,

@@ -9,7 +9,7 @@
 //! ```text
 //!  offset  size  field
 //!       0     4  magic "EVRC"
-//!       4     1  version (VERSION, 7)
+//!       4     1  version (VERSION, 8)
 //!       5     1  message type (MsgType)
 //!       6     2  flags (FLAG_NEWER_FOLLOWS on a FRAME; 0 otherwise)
 //!       8     4  sequence number: the frame a FRAME/ESTIMATE/REJECTED is about; 0 otherwise

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Compares two scripts/paper_seeds.py tables cell by cell: the median over the seeds of each
-RMS entry in NEW against OLD, their ratio, and the entries whose ratio exceeds LIMIT (issue 9:
-1.10 against the older tree; issue 12: 1.05 for FF + target against FF). Prints markdown.
+RMS entry in NEW against OLD, their ratio, and the entries whose ratio exceeds LIMIT (e.g.
+1.10 for a tree against an older one, 1.05 for FF + target against FF). Prints markdown.
 
 NEW and OLD may each be several tables joined with commas (e.g. seeds 1-20 and 21-40 run
 separately); a cell's seeds are then pooled, and a seed that appears twice in one side is an

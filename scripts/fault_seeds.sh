@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Link faults over GA seeds (issue 11): for each GA seed N of scenarios/hil_motion_a_ff.toml,
+# Link faults over GA seeds: for each GA seed N of scenarios/hil_motion_a_ff.toml,
 # one fault-free `evorec run` and one `evorec hil --faults RATE --fault-seed N` (QEMU), then a
 # CSV of both runs' summary.json per seed.
 # Usage: scripts/fault_seeds.sh RATE FIRST LAST OUT   (e.g. 0.01 1 40 out/faults)

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""The paper grid's FF cells over GA seeds, for the 10 % / 5 % checks of issues 9 and 12.
+"""The paper grid's FF cells over GA seeds, for checks of a change against another tree
+(10 %) or of FF + target against FF (5 %).
 
 A single seed cannot carry a 10 % comparison (the spread between seeds is about that), so each
 cell (motion A at ω = 0, 0.125, 0.25, 0.5, 1 rad/s; motion B at 0.125 … 1, B at rest being A at

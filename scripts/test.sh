@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The project's test command (README): installs what the tests need if it is missing, builds
+# The project's test command (README.md, .ci/run): installs what the tests need if it is missing, builds
 # the firmware, then runs every test: the workspace's (host, simulator, and the HIL tests that
 # drive the firmware under QEMU) and the firmware's on-target tests under QEMU.
 set -euo pipefail

@@ -15,9 +15,9 @@
 //! paper's eq. 34. The weight (our addition) ramps up as
 //! a face turns into view ([`FULL_VISIBLE_COS`], [`FULL_FACE_PX`]): a face seen as a sliver of
 //! a few pixels cannot hold its rows, and counted at full weight it made the true pose score
-//! below a pose turned a degree or two to hide it (the x/pitch excursions of the README's
-//! link-reliability section). A pose whose block is not entirely in front of a camera scores 0
-//! in that camera.
+//! below a pose turned a degree or two to hide it (x/pitch excursions; the measurement is in
+//! `docs/method.md`). A pose whose block is not entirely in front of a camera scores 0 in that
+//! camera.
 //!
 //! **Bounded work.** Of each pair of opposite faces exactly one can face a camera, so each
 //! camera evaluates three faces (the one of each pair on the camera's side): on the board their inner rows
@@ -25,8 +25,8 @@
 //! outer rows only where they count, on the silhouette edges of visible faces. Those are at
 //! most [`MAX_OUTER_EDGES`] = 6 edges per camera, and the walk is padded to that many, so every
 //! pose walks [`SurfaceStrips::WALKED_PER_CAMERA`] points per camera (48·G, 80 % of
-//! [`SurfaceStrips::POINTS_PER_CAMERA`]; the outer rows of the other edges used to be walked
-//! and discarded). That constant work is the board's (so the measured worst case is every
+//! [`SurfaceStrips::POINTS_PER_CAMERA`]; the outer rows of the other edges are never walked).
+//! That constant work is the board's (so the measured worst case is every
 //! case); the host walks only the rows that count, the inner rows of visible faces and the
 //! outer rows of their silhouette edges (at most as many: the same counts, less work for a
 //! pose that shows fewer than three faces or silhouette edges; see `CONSTANT_WORK`). Points
@@ -328,7 +328,7 @@ struct Affine<'v, 'p, F: PixelFormat> {
 impl<F: PixelFormat> RowWalk for Affine<'_, '_, F> {
     #[inline(always)]
     fn count_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, plane: &[u8; 256]) -> u32 {
-        // The same rows either way; the board's code (and instruction count) stays as it was.
+        // The same rows on host and board: the board walks them inline, the host in `host_edge`.
         #[cfg(target_arch = "arm")]
         let rows = edge.starts.map(|start| FixedRow::new::<G>(start, edge.span));
         #[cfg(target_arch = "arm")]
@@ -467,8 +467,8 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
 }
 
 /// [`camera_counts`], walking every row (`WALK_ALL`, the board's constant work) or only the
-/// rows that count: the same counts either way. Out of line, as `camera_counts` itself was
-/// (the wrapper inlines, this does not, so the board's code stays in one place per instance).
+/// rows that count: the same counts either way. Out of line (the wrapper inlines, this does
+/// not, so the board's code stays in one place per instance).
 #[inline(never)]
 fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat, const WALK_ALL: bool>(
     model: &SurfaceStrips<G>,

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# No panic path from the link decoder and Tracker::step (issue #11.3). Two checks on the panic
+# No panic path from the link decoder and Tracker::step. Two checks on the panic
 # probe image (src/bin/evorec-panic-check.rs: only `read_message` and `Tracker::step` behind
 # the `#[inline(never)]` roots `decode_root` and `step_root`):
 #
@@ -14,8 +14,8 @@
 #    make none).
 #
 # Prints every panic call site of the image with its source line, and `panic call sites
-# reachable from decode_root: N` / `step_root: M`; exits non-zero if N or M is not zero (the
-# target of issue #11.3). Usage: hil-stubs/scripts/panic-check.sh
+# reachable from decode_root: N` / `step_root: M`; exits non-zero if N or M is not zero.
+# Usage: hil-stubs/scripts/panic-check.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

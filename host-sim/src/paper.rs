@@ -1,6 +1,6 @@
 //! The paper's experiment grid (§5, Fig. 17 and Fig. 24): motions A and B, robot frequency
 //! ω ∈ {0, 0.125, 0.25, 0.5, 1.0} rad/s, with and without feedforward, and beyond the paper
-//! with the feedforward of the target's own motion too ("1-step GA + FF + target", issue 12),
+//! with the feedforward of the target's own motion too ("1-step GA + FF + target"),
 //! 72 s each, and the comparison with the published tables. The grid over the target's own
 //! motions is [`crate::target_grid`].
 

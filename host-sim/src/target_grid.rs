@@ -1,4 +1,4 @@
-//! `evorec paper --grid target`: the block's own motion beyond the paper (issue 12), under
+//! `evorec paper --grid target`: the block's own motion beyond the paper, under
 //! motion A at ω = [`ROBOT_OMEGA`] rad/s, for the base scenario's duration (72 s by default):
 //! a conveyor along world y at [`SPEEDS`] (with the
 //! paper's yaw oscillation `ω_o = 0.125` rad/s), and faster yaw oscillations `ω_o` ∈

@@ -1,4 +1,4 @@
-//! The block's own path in the world, beyond the paper's slow yaw oscillation (issue 12).
+//! The block's own path in the world, beyond the paper's slow yaw oscillation.
 //!
 //! The paper's target turns about the vertical axis through its fixed centre
 //! ([`crate::motion::TargetMotion`]). On top of that, the centre (and the orientation) can

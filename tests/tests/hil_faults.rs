@@ -1,4 +1,4 @@
-//! Link fault injection between the host and the firmware on QEMU (#11.2).
+//! Link fault injection between the host and the firmware on QEMU.
 //!
 //! - Damaged, dropped, duplicated, truncated and delayed REPLIES at 10 % (the firmware's input
 //!   clean): the firmware's tracker sees exactly what the host's sees, so every estimate the

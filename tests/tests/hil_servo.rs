@@ -1,4 +1,4 @@
-//! `evorec hil` on a `[servo]` scenario equals `evorec run` on it (#13 part 4): the closed loop
+//! `evorec hil` on a `[servo]` scenario equals `evorec run` on it: the closed loop
 //! with the tracker in the firmware under QEMU — every frame rendered from the arm's current
 //! state, its estimate computed by the firmware, the servo acting on that estimate — follows
 //! bit for bit the same trajectory, with the same estimates, as the loop with the host's

@@ -1,7 +1,7 @@
 //! The few matrix operations of the acquisition whose nalgebra versions keep a dimension or
 //! bounds assertion in the firmware (a run-time column index, the LU inverse): written on
-//! fixed-size arrays with `get`, so no panic path is left in `Tracker::step` (issue #11.3,
-//! `hil-stubs/scripts/panic-check.sh`).
+//! fixed-size arrays with `get`, so no panic path is left in `Tracker::step`
+//! (`hil-stubs/scripts/panic-check.sh`).
 //!
 //! [`gauss_newton_step`] performs exactly the floating-point operations of nalgebra's
 //! `-(a.try_inverse()? * b)` for a 6×6 matrix, in the same order, so the estimates did not

@@ -147,7 +147,7 @@ fn the_target_motion_parameters_close_config() {
 /// `fuzz/make_seeds.py` writes the link seeds by hand, field by field: its `CONFIG` must be
 /// one this protocol decodes and the firmware accepts (the tests' sample setup at 16×12, with
 /// seed 1, no hand-eye rotation and a plainer initial pose), or the fuzzers start from a
-/// message the decoder refuses on its length (as version 7's seeds were, 4 bytes short).
+/// message the decoder refuses on its length (a `CONFIG` missing one field is 4 bytes short).
 #[test]
 fn the_fuzz_seeds_config_decodes_to_the_sample_setup() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../fuzz/corpus/link_decode/seed-config");
@@ -228,7 +228,7 @@ fn frame_larger_than_buffers_is_refused() {
         decode(&bytes, &mut lb, &mut rb).unwrap_err(),
         ReadError::Decode(DecodeError::FrameTooLarge { pixels: 144, capacity: 143 })
     );
-    // Hue-sized buffers (1 byte per pixel, the protocol before version 2) are too small.
+    // Hue-sized buffers (1 byte per pixel) are too small for RGB565 frames.
     let (mut lb, mut rb) = ([0u8; 144], [0u8; 144]);
     assert_eq!(
         decode(&bytes, &mut lb, &mut rb).unwrap_err(),

@@ -148,7 +148,7 @@ pub enum Method {
     #[serde(rename = "ff")]
     Ff,
     /// The 1-step GA with feedforward of the arm's and the target's own motion
-    /// (`Feedforward::OnWithTarget`, issue 12).
+    /// (`Feedforward::OnWithTarget`).
     #[serde(rename = "ff+target")]
     FfTarget,
 }

@@ -2,8 +2,8 @@
 //!
 //! A sequence directory holds `sequence.toml` (the only file that names the others), the
 //! arm's URDF, two ROS camera_info YAML files, one PNG per camera and frame, `frames.csv`,
-//! `joints.csv` and optionally `groundtruth.tum` (see the format's specification; the layout
-//! is summarised in the README's "Your own rig" section).
+//! `joints.csv` and optionally `groundtruth.tum` (the layout and its conventions are described
+//! in `docs/own-rig.md`).
 //!
 //! [`Sequence::load`] reads and checks **all** metadata: every bad input is one
 //! [`SequenceError`] naming the file and, where it applies, the line and the field — a missing

@@ -568,7 +568,18 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
                     let rate = feedforward::psi_rate_moving(&motion.twist, &target, psi);
                     feedforward::shift(psi, &rate, dt_s);
                 };
-                self.ga.shift_all(&self.config.search, shift);
+                // The elite (index 0) is moved by the camera's motion alone: the hypothesis that
+                // the block stands still, which the fitness weighs against the children moved
+                // by the model's velocity as well.
+                let mut index = 0usize;
+                self.ga.shift_all(&self.config.search, |psi| {
+                    if index == 0 {
+                        feedforward::shift(psi, &feedforward::psi_rate(&motion.twist, psi), dt_s);
+                    } else {
+                        shift(psi);
+                    }
+                    index += 1;
+                });
                 if acquiring {
                     self.acquisition.shift(shift);
                 }

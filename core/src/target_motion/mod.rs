@@ -21,8 +21,13 @@
 //! **What the block may do** is said in physical units: the largest acceleration and angular
 //! acceleration expected (the process noise), and the largest speed and angular speed when it
 //! is first seen (the prior of a restart, so a block already moving when it is acquired is
-//! followed from its first estimates). There is no trust threshold, dead band or switch: the
-//! velocity fed forward is the filter's estimate, weighed by its own covariance.
+//! followed from its first estimates). The velocity fed forward is the filter's estimate; there
+//! is no trust threshold, dead band or switch. Whether it is real is left to the fitness: the
+//! tracker moves its elite by the camera's motion alone (the hypothesis that the block stands
+//! still) and every other individual by the filter's velocity as well, and the selection keeps
+//! whichever fits the next frame better ([`crate::tracker::Tracker::step`]). Without that, a
+//! noisy velocity fed forward to every individual drags the estimate along its own noise where
+//! the fitness is flat (depth above all), and the filter reads that back as motion.
 //!
 //! **Outliers and restarts.** An estimate whose innovation lies outside the 99.9 % ellipsoid
 //! of its predicted covariance ([`GATE_CHI2`], position and orientation each) is rejected;

@@ -31,7 +31,7 @@ use crate::motion;
 use crate::render;
 use crate::robot::{ArmModel, PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF};
 use crate::scenario::Scenario;
-use crate::sequence::manifest::{FORMAT, to_rows};
+use crate::sequence::write::{ManifestFields, joints_header, joints_row, manifest_text};
 use crate::sequence::{camera_info, tum};
 use crate::sim::{self, World, search_space};
 
@@ -96,11 +96,7 @@ fn write_sequence(s: &Scenario, name: &str, dir: &Path, progress: Option<Progres
     let mut samples = 0;
     let mut record = |world: &World, joints: &mut String| {
         let a = world.arm();
-        let _ = write!(joints, "{:.6}", a.time());
-        for v in a.q().iter().chain(a.qd().iter()) {
-            let _ = write!(joints, ",{v}");
-        }
-        joints.push('\n');
+        joints_row(joints, &format!("{:.6}", a.time()), a.q(), a.qd());
         samples += 1;
     };
     record(&world, &mut joints);
@@ -135,43 +131,21 @@ fn write_sequence(s: &Scenario, name: &str, dir: &Path, progress: Option<Progres
     Ok(ExportStats { frames: total as usize, joint_samples: samples })
 }
 
-fn joints_header(names: &[String]) -> String {
-    let mut h = String::from("t_s");
-    for prefix in ["pos_", "vel_"] {
-        for n in names {
-            h.push(',');
-            h.push_str(prefix);
-            h.push_str(n);
-        }
-    }
-    h.push('\n');
-    h
-}
-
-fn floats(v: &[f64]) -> String {
-    let cells: Vec<String> = v.iter().map(|x| format!("{x:?}")).collect();
-    format!("[{}]", cells.join(", "))
-}
-
 fn manifest(s: &Scenario, name: &str, world: &World) -> String {
-    let rig = world.rig();
     let pose = world.target_in_camera();
     let (t, q) = (pose.translation.vector, pose.rotation.coords);
     let space = search_space();
     let to64 = |a: [f32; 3]| a.map(f64::from);
-    format!(
-        "format = \"{FORMAT}\"\nname = {name:?}\n\n[robot]\nurdf = \"robot.urdf\"\nbase_link = \"{PA10_BASE_LINK}\"\n\
-         flange_link = \"{PA10_FLANGE_LINK}\"\n\n[cameras]\nleft = \"calib/left.yaml\"\nright = \"calib/right.yaml\"\n\
-         # ^CL T_CR (4x4, row-major, m)\nright_to_left = {}\n# ^H T_CR (4x4, row-major, m)\nflange_to_right = {}\n\n\
-         [target]\nsize_m = {}\nface_hues_deg = {}\ninitial_pose = {{ t_m = {}, q_xyzw = {} }}\n\n\
-         [search]\nmin_m = {}\nmax_m = {}\n",
-        floats(&to_rows(&rig.left_from_right.cast())),
-        floats(&to_rows(&motion::flange_to_camera_f64(s.camera.baseline_m))),
-        floats(&s.target.size_m),
-        floats(&s.target.face_hues_deg),
-        floats(t.as_slice()),
-        floats(&[q.x, q.y, q.z, q.w]),
-        floats(&to64(space.t_min())),
-        floats(&to64(space.t_max())),
-    )
+    manifest_text(&ManifestFields {
+        name,
+        comment: "",
+        base_link: PA10_BASE_LINK,
+        flange_link: PA10_FLANGE_LINK,
+        right_to_left: world.rig().left_from_right.cast(),
+        flange_to_right: motion::flange_to_camera_f64(s.camera.baseline_m),
+        size_m: s.target.size_m,
+        face_hues_deg: s.target.face_hues_deg,
+        initial_pose: Some(([t.x, t.y, t.z], [q.x, q.y, q.z, q.w])),
+        search: Some((to64(space.t_min()), to64(space.t_max()))),
+    })
 }

@@ -35,6 +35,22 @@ pub struct TestBag {
     pub joint_velocities: bool,
     /// Topics not to write.
     pub skip_topics: Vec<String>,
+    /// Joint samples only up to this sequence time (s).
+    pub joints_until_s: Option<f64>,
+    /// Which transforms `/tf_static` holds.
+    pub transforms: Transforms,
+}
+
+/// The transforms of a test bag.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Transforms {
+    /// flange → right camera and right → left camera.
+    #[default]
+    Good,
+    /// The same with the first rotation quaternion doubled (not a rotation).
+    NonRigid,
+    /// flange → right camera only.
+    NoLeft,
 }
 
 impl Default for TestBag {
@@ -47,15 +63,17 @@ impl Default for TestBag {
             right_delay_ns: 1_000_000,
             joint_velocities: false,
             skip_topics: Vec::new(),
+            joints_until_s: None,
+            transforms: Transforms::Good,
         }
     }
 }
 
-/// The rig file of a test bag of `seq`.
+/// The rig file of a test bag of `seq`, with its initial pose and search box when it has them.
 pub fn rig_toml(seq: &Sequence) -> String {
     let raw = &seq.manifest.raw;
     let f = |v: &[f64]| format!("{v:?}");
-    format!(
+    let mut text = format!(
         "format = \"evorec-rig/1\"\n\n[topics]\nleft_image = \"/stereo/left/image\"\nright_image = \"/stereo/right/image\"\n\
          left_info = \"/stereo/left/camera_info\"\nright_info = \"/stereo/right/camera_info\"\njoint_states = \"/joint_states\"\n\
          robot_description = \"/robot_description\"\ntf_static = \"/tf_static\"\n\n[frames]\nbase_link = {:?}\n\
@@ -65,7 +83,14 @@ pub fn rig_toml(seq: &Sequence) -> String {
         raw.robot.flange_link,
         f(&raw.target.size_m),
         f(&raw.target.face_hues_deg),
-    )
+    );
+    if let Some(p) = &raw.target.initial_pose {
+        text.push_str(&format!("initial_pose = {{ t_m = {}, q_xyzw = {} }}\n", f(&p.t_m), f(&p.q_xyzw)));
+    }
+    if let Some(s) = &raw.search {
+        text.push_str(&format!("search = {{ min_m = {}, max_m = {} }}\n", f(&s.min_m), f(&s.max_m)));
+    }
+    text
 }
 
 struct Out {
@@ -88,7 +113,13 @@ pub fn write(seq: &Sequence, path: &Path, opts: &TestBag) -> Result<()> {
     let mut out = Out { messages: Vec::new() };
     let urdf = std::fs::read_to_string(seq.dir.join(&seq.manifest.raw.robot.urdf))?;
     out.push(origin, "/robot_description", msgs::write_string(&urdf));
-    out.push(origin, "/tf_static", msgs::write_tf_message(&transforms(seq, origin)));
+    let mut tf = transforms(seq, origin);
+    match opts.transforms {
+        Transforms::Good => {}
+        Transforms::NonRigid => tf[0].rotation = tf[0].rotation.map(|v| 2.0 * v),
+        Transforms::NoLeft => tf.truncate(1),
+    }
+    out.push(origin, "/tf_static", msgs::write_tf_message(&tf));
     joint_messages(seq, opts, &stamp, &mut out);
     let raw = &seq.manifest.raw;
     let infos = [
@@ -132,6 +163,9 @@ fn joint_messages(seq: &Sequence, opts: &TestBag, stamp: &dyn Fn(f64) -> i64, ou
     let mut names: Vec<String> = seq.joints.names().iter().rev().cloned().collect();
     names.extend(["gripper_left".to_owned(), "gripper_right".to_owned()]);
     for (i, t) in seq.joints.times().iter().enumerate() {
+        if opts.joints_until_s.is_some_and(|end| *t > end) {
+            break;
+        }
         let (q, qd) = seq.joints.sample(i);
         let mut position: Vec<f64> = q.iter().rev().copied().collect();
         position.extend([0.01, 0.01]);
@@ -162,10 +196,11 @@ fn info(header: &Header, c: &camera_info::CameraInfo) -> CameraInfo {
     }
 }
 
-/// The message of one image in `encoding`.
+/// The message of one image in `encoding` (an encoding this writer does not know labels the
+/// RGB bytes).
 ///
 /// # Errors
-/// An encoding this writer does not know.
+/// PNG or JPEG encoding errors.
 pub fn image_message(header: &Header, encoding: &str, img: &RgbImage) -> Result<Vec<u8>> {
     if let Some(format) = match encoding {
         "png" => Some(image::ImageFormat::Png),
@@ -196,7 +231,8 @@ pub fn image_message(header: &Header, encoding: &str, img: &RgbImage) -> Result<
                 .collect();
             img.enumerate_pixels().map(|(x, y, p)| p.0[order[((y & 1) * 2 + (x & 1)) as usize]]).collect()
         }
-        other => return Err(anyhow!("test bags cannot write encoding {other}")),
+        // Any other name labels the RGB bytes (to test encodings a reader must refuse).
+        _ => img.as_raw().clone(),
     };
     let step = u32::try_from(data.len()).unwrap_or(0) / h.max(1);
     let m = msgs::Image {

@@ -84,7 +84,9 @@ pub fn write_png(path: &Path, img: &image::RgbImage) -> Result<()> {
 /// As [`write_png`].
 pub fn write_png_fast(path: &Path, img: &image::RgbImage) -> Result<()> {
     use image::codecs::png::{CompressionType, FilterType, PngEncoder};
-    write_atomic(path, |w| Ok(img.write_with_encoder(PngEncoder::new_with_quality(w, CompressionType::Fast, FilterType::Adaptive))?))
+    write_atomic(path, |w| {
+        Ok(img.write_with_encoder(PngEncoder::new_with_quality(w, CompressionType::Fast, FilterType::Adaptive))?)
+    })
 }
 
 /// Writes the file `rel` under `dir` (creating its parent directories), atomically.

@@ -376,7 +376,13 @@ fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<
 
 /// `evorec track BAG --rig RIG`: the bag read (first pass), tracked while its images stream
 /// (second pass); the outputs of a sequence plus `estimate.mcap`.
-fn track_bag(path: &Path, rig: &Path, out: &Path, opts: &track::TrackOptions, bag_opts: &bag::BagOptions) -> Result<()> {
+fn track_bag(
+    path: &Path,
+    rig: &Path,
+    out: &Path,
+    opts: &track::TrackOptions,
+    bag_opts: &bag::BagOptions,
+) -> Result<()> {
     let t0 = Instant::now();
     let rig = bag::Rig::load(rig)?;
     let b = bag::load(path, &rig, bag_opts, path)?;

@@ -40,8 +40,8 @@ fn write_bag(seq: &Sequence, dir: &Path, name: &str, opts: &TestBag) -> (PathBuf
 fn track_bag(path: &Path, rig: &Rig, out: &Path) -> bag::BagSequence {
     let b = bag::load(path, rig, &BagOptions::default(), path).unwrap_or_else(|e| panic!("{e:#}"));
     let opts = track::TrackOptions::default();
-    let output = track::run_with(&b.seq, Box::new(bag::source::BagFrames::new(&b)), &opts)
-        .unwrap_or_else(|e| panic!("{e:#}"));
+    let output =
+        track::run_with(&b.seq, Box::new(bag::source::BagFrames::new(&b)), &opts).unwrap_or_else(|e| panic!("{e:#}"));
     let ev = track::output::evaluate(&b.seq, &output);
     track::output::write_all(&b.seq, &output, &ev, out).unwrap_or_else(|e| panic!("{e:#}"));
     let results: Vec<_> = output
@@ -186,7 +186,8 @@ fn every_encoding_and_compression_imports() {
         ("bayer_gbrg8", "bayer_grbg8", None, 255),
     ];
     for (left, right, compression, tolerance) in cases {
-        let opts = TestBag { left_encoding: left.into(), right_encoding: right.into(), compression, ..TestBag::default() };
+        let opts =
+            TestBag { left_encoding: left.into(), right_encoding: right.into(), compression, ..TestBag::default() };
         let name = format!("{left}-{right}");
         let (path, rig) = write_bag(&seq, &dir, &name, &opts);
         let out = dir.join(format!("seq-{name}"));

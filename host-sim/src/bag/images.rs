@@ -23,8 +23,7 @@ fn is_mono(encoding: &str) -> bool {
 }
 
 /// The encodings [`to_rgb`] reads.
-pub const ENCODINGS: &str =
-    "rgb8, bgr8, rgba8, bgra8, bayer_rggb8, bayer_bggr8, bayer_gbrg8, bayer_grbg8";
+pub const ENCODINGS: &str = "rgb8, bgr8, rgba8, bgra8, bayer_rggb8, bayer_bggr8, bayer_gbrg8, bayer_grbg8";
 
 /// Checks that `encoding` is one [`to_rgb`] reads.
 ///
@@ -32,7 +31,9 @@ pub const ENCODINGS: &str =
 /// A mono or an unknown encoding.
 pub fn check_encoding(encoding: &str) -> Result<(), String> {
     if is_mono(encoding) {
-        return Err(format!("encoding \"{encoding}\" is mono: a mono image cannot give hue, and evorec tells the block's faces apart by hue"));
+        return Err(format!(
+            "encoding \"{encoding}\" is mono: a mono image cannot give hue, and evorec tells the block's faces apart by hue"
+        ));
     }
     if channels(encoding).is_none() && bayer_tile(encoding).is_none() {
         return Err(format!("unknown encoding \"{encoding}\" (evorec reads {ENCODINGS})"));
@@ -113,10 +114,8 @@ pub fn debayer(raw: &[u8], w: usize, h: usize, tile: [usize; 4]) -> Vec<u8> {
             for c in 0..3 {
                 px[c] = if c == own {
                     raw[y * w + x]
-                } else if n[c] > 0 {
-                    ((sum[c] + n[c] / 2) / n[c]) as u8
                 } else {
-                    0
+                    (sum[c] + n[c] / 2).checked_div(n[c]).map_or(0, |v| v as u8)
                 };
             }
         }
@@ -129,9 +128,8 @@ pub fn debayer(raw: &[u8], w: usize, h: usize, tile: [usize; 4]) -> Vec<u8> {
 /// # Errors
 /// A format other than PNG or JPEG, undecodable data, a mono image.
 pub fn compressed_to_rgb(img: &CompressedImage<'_>) -> Result<RgbImage, String> {
-    let format = image::guess_format(img.data).map_err(|_| {
-        format!("format \"{}\": the data is neither PNG nor JPEG (no known signature)", img.format)
-    })?;
+    let format = image::guess_format(img.data)
+        .map_err(|_| format!("format \"{}\": the data is neither PNG nor JPEG (no known signature)", img.format))?;
     if !matches!(format, ImageFormat::Png | ImageFormat::Jpeg) {
         return Err(format!("unknown encoding: compressed data is {format:?}, evorec reads PNG and JPEG"));
     }
@@ -184,7 +182,8 @@ mod tests {
     #[test]
     fn debayering_is_bilinear_on_a_ramp() {
         // Each channel a linear ramp in x: bilinear interpolation reproduces it inside.
-        let rgb = RgbImage::from_fn(10, 6, |x, _| image::Rgb([(10 * x) as u8, (20 + 10 * x) as u8, (40 + 10 * x) as u8]));
+        let rgb =
+            RgbImage::from_fn(10, 6, |x, _| image::Rgb([(10 * x) as u8, (20 + 10 * x) as u8, (40 + 10 * x) as u8]));
         let tile = bayer_tile("bayer_grbg8").unwrap();
         let out = debayer(&mosaic(&rgb, tile), 10, 6, tile);
         for y in 0..6 {

@@ -25,6 +25,9 @@ pub enum Velocities {
     Derived,
 }
 
+/// One message's chain values: stamp, message index, q, q̇ when recorded.
+type Sample = (i64, usize, Vec<f64>, Option<Vec<f64>>);
+
 /// The joint table of `messages` ((message index, message), any order) over the chain `names`;
 /// times are `(stamp − origin_ns) / 1e9` s. Returns the table, how velocities were obtained
 /// and the number of messages dropped for repeating an earlier stamp.
@@ -37,7 +40,7 @@ pub fn table(
     names: &[String],
     origin_ns: i64,
 ) -> Result<(JointTable, Velocities, usize), (Option<usize>, String)> {
-    let mut samples: Vec<(i64, usize, Vec<f64>, Option<Vec<f64>>)> = Vec::with_capacity(messages.len());
+    let mut samples: Vec<Sample> = Vec::with_capacity(messages.len());
     for (index, m) in messages {
         let (q, qd) = chain_values(m, names).map_err(|e| (Some(*index), e))?;
         samples.push((m.header.stamp_ns, *index, q, qd));
@@ -132,7 +135,12 @@ mod tests {
             let t = f as f64 / 30.0 + 0.0007;
             let s = table.at(t).unwrap();
             assert!((s.q[0] - a * (w * t).sin()).abs() < 1e-5, "q at {t}");
-            assert!((s.qd[0] - a * w * (w * t).cos()).abs() < 2e-5, "q̇1 at {t}: {} vs {}", s.qd[0], a * w * (w * t).cos());
+            assert!(
+                (s.qd[0] - a * w * (w * t).cos()).abs() < 2e-5,
+                "q̇1 at {t}: {} vs {}",
+                s.qd[0],
+                a * w * (w * t).cos()
+            );
             assert!((s.qd[1] - 0.2 * t).abs() < 1e-9, "q̇2 at {t}");
         }
     }

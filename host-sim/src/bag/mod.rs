@@ -243,14 +243,18 @@ impl BagReport {
             );
         }
         if self.duplicate_joint_stamps > 0 {
-            log::warn!("{}: {} joint messages repeat an earlier stamp and are ignored", self.bag, self.duplicate_joint_stamps);
+            log::warn!(
+                "{}: {} joint messages repeat an earlier stamp and are ignored",
+                self.bag,
+                self.duplicate_joint_stamps
+            );
         }
     }
 }
 
 fn tolerance_ns(ms: Option<f64>) -> Result<Option<i64>> {
     match ms {
-        Some(v) if !(v.is_finite() && v >= 0.0 && v <= 10_000.0) => {
+        Some(v) if !(0.0..=10_000.0).contains(&v) => {
             bail!("--pair-tolerance-ms {v}: must be in [0, 10000]")
         }
         Some(v) => Ok(Some((v * 1e6).round() as i64)),
@@ -267,9 +271,8 @@ fn urdf_label(rig: &Rig) -> String {
 
 fn urdf_text(scan: &Scan, rig: &Rig, name: &str) -> Result<String> {
     match rig.urdf_source() {
-        rig::UrdfSource::File(f) => {
-            std::fs::read_to_string(&f).map_err(|e| anyhow!("{}: cannot read (topics.urdf of the rig file): {e}", f.display()))
-        }
+        rig::UrdfSource::File(f) => std::fs::read_to_string(&f)
+            .map_err(|e| anyhow!("{}: cannot read (topics.urdf of the rig file): {e}", f.display())),
         rig::UrdfSource::Topic(t) => scan.urdf.clone().ok_or_else(|| anyhow!("{name}: no messages on topic {t}")),
     }
 }
@@ -337,11 +340,8 @@ fn check_image_sizes(pairs: &[(ImageRef, ImageRef)], scan: &Scan, rig: &Rig, nam
 
 /// The camera_info YAML of one camera, its values checked first (naming the topic).
 fn camera_yaml(scan: &Scan, rig: &Rig, left: bool, name: &str) -> Result<String> {
-    let (topic, info) = if left {
-        (&rig.topics.left_info, &scan.left_info)
-    } else {
-        (&rig.topics.right_info, &scan.right_info)
-    };
+    let (topic, info) =
+        if left { (&rig.topics.left_info, &scan.left_info) } else { (&rig.topics.right_info, &scan.right_info) };
     let info = info.as_ref().ok_or_else(|| anyhow!("{name}: no messages on topic {topic}"))?;
     let m = |rows, cols, data: Vec<f64>| YamlMatrix { rows, cols, data };
     let yaml = camera_info::CameraInfo {
@@ -365,10 +365,8 @@ fn manifest(scan: &Scan, rig: &Rig, seq_name: &str, name: &str, origin_ns: i64) 
     let flange_to_right = scan.tf.pose_of(&f.right_camera, &f.flange_link).map_err(tf_err)?;
     let right_to_left = scan.tf.pose_of(&f.right_camera, &f.left_camera).map_err(tf_err)?;
     let t = &rig.target;
-    let comment = format!(
-        "imported by evorec from the ROS 2 bag {name}\nt_s = header.stamp - {} s",
-        origin_ns / 1_000_000_000
-    );
+    let comment =
+        format!("imported by evorec from the ROS 2 bag {name}\nt_s = header.stamp - {} s", origin_ns / 1_000_000_000);
     Ok(manifest_text(&ManifestFields {
         name: seq_name,
         comment: &comment,

@@ -297,8 +297,7 @@ pub fn pose_stamped(bytes: &[u8]) -> Result<(Header, [f64; 3], [f64; 4])> {
     Ok((h, p, q))
 }
 
-const SEPARATOR: &str =
-    "================================================================================\n";
+const SEPARATOR: &str = "================================================================================\n";
 
 fn schema(top: &str, deps: &[(&str, &str)]) -> String {
     let mut s = top.to_owned();
@@ -339,30 +338,55 @@ pub const FLOAT32_SCHEMA: &str = "float32 data\n";
 /// The `ros2msg` schemas of the messages a test bag holds (name, text).
 pub fn input_schemas() -> Vec<(&'static str, String)> {
     vec![
-        ("sensor_msgs/msg/Image", schema(
-            "std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\nuint8 is_bigendian\nuint32 step\nuint8[] data\n",
-            &[HEADER, TIME],
-        )),
-        ("sensor_msgs/msg/CompressedImage", schema("std_msgs/Header header\nstring format\nuint8[] data\n", &[HEADER, TIME])),
-        ("sensor_msgs/msg/CameraInfo", schema(
-            "std_msgs/Header header\nuint32 height\nuint32 width\nstring distortion_model\nfloat64[] d\nfloat64[9] k\nfloat64[9] r\nfloat64[12] p\nuint32 binning_x\nuint32 binning_y\nRegionOfInterest roi\n",
-            &[HEADER, TIME, ("sensor_msgs/RegionOfInterest", "uint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\nbool do_rectify\n")],
-        )),
-        ("sensor_msgs/msg/JointState", schema(
-            "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n",
-            &[HEADER, TIME],
-        )),
-        ("tf2_msgs/msg/TFMessage", schema(
-            "geometry_msgs/TransformStamped[] transforms\n",
-            &[
-                ("geometry_msgs/TransformStamped", "std_msgs/Header header\nstring child_frame_id\nTransform transform\n"),
-                HEADER,
-                TIME,
-                ("geometry_msgs/Transform", "Vector3 translation\nQuaternion rotation\n"),
-                ("geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n"),
-                ("geometry_msgs/Quaternion", "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"),
-            ],
-        )),
+        (
+            "sensor_msgs/msg/Image",
+            schema(
+                "std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\nuint8 is_bigendian\nuint32 step\nuint8[] data\n",
+                &[HEADER, TIME],
+            ),
+        ),
+        (
+            "sensor_msgs/msg/CompressedImage",
+            schema("std_msgs/Header header\nstring format\nuint8[] data\n", &[HEADER, TIME]),
+        ),
+        (
+            "sensor_msgs/msg/CameraInfo",
+            schema(
+                "std_msgs/Header header\nuint32 height\nuint32 width\nstring distortion_model\nfloat64[] d\nfloat64[9] k\nfloat64[9] r\nfloat64[12] p\nuint32 binning_x\nuint32 binning_y\nRegionOfInterest roi\n",
+                &[
+                    HEADER,
+                    TIME,
+                    (
+                        "sensor_msgs/RegionOfInterest",
+                        "uint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\nbool do_rectify\n",
+                    ),
+                ],
+            ),
+        ),
+        (
+            "sensor_msgs/msg/JointState",
+            schema(
+                "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n",
+                &[HEADER, TIME],
+            ),
+        ),
+        (
+            "tf2_msgs/msg/TFMessage",
+            schema(
+                "geometry_msgs/TransformStamped[] transforms\n",
+                &[
+                    (
+                        "geometry_msgs/TransformStamped",
+                        "std_msgs/Header header\nstring child_frame_id\nTransform transform\n",
+                    ),
+                    HEADER,
+                    TIME,
+                    ("geometry_msgs/Transform", "Vector3 translation\nQuaternion rotation\n"),
+                    ("geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n"),
+                    ("geometry_msgs/Quaternion", "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"),
+                ],
+            ),
+        ),
         ("std_msgs/msg/String", STRING_SCHEMA.to_owned()),
     ]
 }

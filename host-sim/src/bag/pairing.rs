@@ -42,8 +42,9 @@ pub fn pair(left: &[i64], right: &[i64], tolerance_ns: Option<i64>) -> Result<Pa
         Some(t) => t,
         None if period_ns > 0 => period_ns / 4,
         None => {
-            return Err("fewer than two left images: cannot estimate the frame period; give --pair-tolerance-ms"
-                .to_owned());
+            return Err(
+                "fewer than two left images: cannot estimate the frame period; give --pair-tolerance-ms".to_owned()
+            );
         }
     };
     let order = |s: &[i64]| {

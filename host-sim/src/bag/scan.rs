@@ -39,7 +39,10 @@ pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<
         let corrupt = |n: usize, e: mcap::McapError| {
             anyhow!("{}: not a readable MCAP file (truncated or corrupt) after {n} messages: {e}", file.display())
         };
-        let stream = mcap::MessageStream::new(&bytes).map_err(|e| corrupt(0, e))?;
+        // Chunk CRCs are checked (when the writer stored them), so damage inside an
+        // uncompressed chunk is found too, not read as pixels.
+        let options = enumset::EnumSet::only(mcap::read::Options::ValidateChunkCrcs);
+        let stream = mcap::MessageStream::new_with_options(&bytes, options).map_err(|e| corrupt(0, e))?;
         for (n, m) in stream.enumerate() {
             let m = m.map_err(|e| corrupt(n, e))?;
             let count = counts.entry(m.channel.topic.clone()).or_insert(0);
@@ -131,7 +134,8 @@ impl Scan {
             UrdfSource::File(_) => None,
         };
         let wanted = [&t.left_image, &t.right_image, &t.left_info, &t.right_info, &t.joint_states, &t.tf_static];
-        let used = wanted.iter().any(|w| *w == m.topic) || m.topic == TF_TOPIC || description.as_deref() == Some(m.topic);
+        let used =
+            wanted.iter().any(|w| *w == m.topic) || m.topic == TF_TOPIC || description.as_deref() == Some(m.topic);
         if !used {
             return Ok(());
         }

@@ -39,7 +39,13 @@ impl TfTree {
     ///
     /// # Errors
     /// A non-finite value or a rotation that is not a unit quaternion, naming the frames.
-    pub fn add(&mut self, topic: &str, index: usize, transforms: &[TransformStamped], dynamic: bool) -> Result<(), String> {
+    pub fn add(
+        &mut self,
+        topic: &str,
+        index: usize,
+        transforms: &[TransformStamped],
+        dynamic: bool,
+    ) -> Result<(), String> {
         for t in transforms {
             let name = format!("transform {} → {}", t.header.frame_id, t.child_frame_id);
             let pose = rigid(t).map_err(|e| format!("{name}: {e}"))?;

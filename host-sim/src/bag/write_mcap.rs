@@ -64,7 +64,8 @@ pub fn estimate_mcap(results: &[FrameResult], frame_id: &str) -> Result<Vec<u8>>
             (fitness_ch, msgs::write_float32(r.fitness)),
         ];
         for (ch, data) in messages {
-            let header = mcap::records::MessageHeader { channel_id: ch, sequence: seq, log_time: time, publish_time: time };
+            let header =
+                mcap::records::MessageHeader { channel_id: ch, sequence: seq, log_time: time, publish_time: time };
             w.write_to_known_channel(&header, &data).map_err(err)?;
         }
     }

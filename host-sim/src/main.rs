@@ -387,22 +387,7 @@ fn track_bag(
     let rig = bag::Rig::load(rig)?;
     let b = bag::load(path, &rig, bag_opts, path)?;
     b.report.log();
-    let output = track::run_with(&b.seq, Box::new(bag::source::BagFrames::new(&b)), opts)?;
-    let mut ev = track::output::evaluate(&b.seq, &output);
-    ev.summary.bag = Some(b.report.clone());
-    let results: Vec<bag::write_mcap::FrameResult> = output
-        .tracked
-        .iter()
-        .map(|t| bag::write_mcap::FrameResult {
-            stamp_ns: b.stamps_ns[t.i],
-            pose: track::estimate_pose(t),
-            status: t.status.as_str(),
-            fitness: t.fitness,
-        })
-        .collect();
-    let mcap = bag::write_mcap::estimate_mcap(&results, &rig.frames.right_camera)?;
-    track::output::write_all(&b.seq, &output, &ev, out)?;
-    io::write_bytes(&out.join("estimate.mcap"), &mcap)?;
+    let ev = bag::track::track_and_write(&b, opts, out)?;
     println!("{}", b.report.describe());
     print_track(&ev.summary, t0, out);
     Ok(())

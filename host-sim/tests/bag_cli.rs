@@ -105,6 +105,9 @@ fn bad_bags_are_named_and_nothing_is_written() {
         &["/tf_static", "no transform between 'left_camera_optical' and 'right_camera_optical'"],
     );
 
+    let recalibrated = bag("recalibrated", TestBag { change_left_info_at: Some(7), ..TestBag::default() });
+    fails(&dir, &recalibrated, &rig, &["/stereo/left/camera_info message 7", "calibration changed mid-bag"]);
+
     let bad_rig = dir.join("bad-rig.toml");
     let text = testbag::rig_toml(&seq).replace("[target]\n", "[target]\ncolour = \"red\"\n");
     std::fs::write(&bad_rig, text).expect("rig");

@@ -39,23 +39,7 @@ fn write_bag(seq: &Sequence, dir: &Path, name: &str, opts: &TestBag) -> (PathBuf
 
 fn track_bag(path: &Path, rig: &Rig, out: &Path) -> bag::BagSequence {
     let b = bag::load(path, rig, &BagOptions::default(), path).unwrap_or_else(|e| panic!("{e:#}"));
-    let opts = track::TrackOptions::default();
-    let output =
-        track::run_with(&b.seq, Box::new(bag::source::BagFrames::new(&b)), &opts).unwrap_or_else(|e| panic!("{e:#}"));
-    let ev = track::output::evaluate(&b.seq, &output);
-    track::output::write_all(&b.seq, &output, &ev, out).unwrap_or_else(|e| panic!("{e:#}"));
-    let results: Vec<_> = output
-        .tracked
-        .iter()
-        .map(|t| bag::write_mcap::FrameResult {
-            stamp_ns: b.stamps_ns[t.i],
-            pose: track::estimate_pose(t),
-            status: t.status.as_str(),
-            fitness: t.fitness,
-        })
-        .collect();
-    let mcap = bag::write_mcap::estimate_mcap(&results, &rig.frames.right_camera).expect("estimate.mcap");
-    std::fs::write(out.join("estimate.mcap"), mcap).expect("write");
+    bag::track::track_and_write(&b, &track::TrackOptions::default(), out).unwrap_or_else(|e| panic!("{e:#}"));
     b
 }
 
@@ -203,5 +187,25 @@ fn every_encoding_and_compression_imports() {
             assert!(diff <= tolerance && mean < 6.0, "{name}: largest difference {diff}, mean {mean}");
         }
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Right images missing for every 5th frame: those left images are counted as unpaired (and
+/// logged), the others tracked; a tighter `--pair-tolerance-ms` than the 1 ms offset pairs
+/// nothing and says so.
+#[test]
+fn unpaired_images_are_counted() {
+    let dir = work_dir("unpaired");
+    let seq = exported(&dir);
+    let opts = TestBag { drop_right_every: Some(5), ..TestBag::default() };
+    let (path, rig) = write_bag(&seq, &dir, "gaps", &opts);
+    let b = track_bag(&path, &rig, &dir.join("tracked"));
+    let dropped = seq.frames.len().div_ceil(5);
+    assert_eq!((b.report.frames, b.report.unpaired_left, b.report.unpaired_right), (62 - dropped, dropped, 0));
+    let summary = std::fs::read_to_string(dir.join("tracked/summary.json")).expect("summary");
+    assert!(summary.contains(&format!("\"unpaired_left\": {dropped}")), "{summary}");
+    let tight = BagOptions { pair_tolerance_ms: Some(0.5) };
+    let err = format!("{:#}", bag::load(&path, &rig, &tight, &path).expect_err("no pair within 0.5 ms"));
+    assert!(err.contains("no stereo pair") && err.contains("0.500 ms"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

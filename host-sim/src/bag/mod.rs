@@ -35,6 +35,7 @@ pub mod scan;
 pub mod source;
 pub mod testbag;
 pub mod tf;
+pub mod track;
 pub mod write_mcap;
 
 use std::path::{Path, PathBuf};

@@ -445,6 +445,24 @@ mod tests {
         assert_eq!((hh, p, q), (h(-1, "r"), [1.0, 2.0, 3.0], [0.0, 0.0, 0.0, 1.0]));
     }
 
+    proptest::proptest! {
+        /// Any bytes: every decoder returns a value or an error, never panics.
+        #[test]
+        fn decoders_never_panic(mut bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..400), le in proptest::bool::ANY) {
+            if le && bytes.len() >= 2 {
+                bytes[0] = 0;
+                bytes[1] = 1;
+            }
+            let _ = image(&bytes);
+            let _ = compressed_image(&bytes);
+            let _ = camera_info(&bytes);
+            let _ = joint_state(&bytes);
+            let _ = tf_message(&bytes);
+            let _ = string(&bytes);
+            let _ = pose_stamped(&bytes);
+        }
+    }
+
     #[test]
     fn a_truncated_message_names_the_field() {
         let j = JointState { header: h(9, ""), name: vec!["a".into()], position: vec![0.5], velocity: vec![] };

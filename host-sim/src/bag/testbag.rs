@@ -39,6 +39,10 @@ pub struct TestBag {
     pub joints_until_s: Option<f64>,
     /// Which transforms `/tf_static` holds.
     pub transforms: Transforms,
+    /// Leave out the right image of every frame whose index is a multiple of this.
+    pub drop_right_every: Option<usize>,
+    /// The left camera_info's `K[0]` from this frame on (a calibration that changes).
+    pub change_left_info_at: Option<usize>,
 }
 
 /// The transforms of a test bag.
@@ -65,6 +69,8 @@ impl Default for TestBag {
             skip_topics: Vec::new(),
             joints_until_s: None,
             transforms: Transforms::Good,
+            drop_right_every: None,
+            change_left_info_at: None,
         }
     }
 }
@@ -132,8 +138,14 @@ pub fn write(seq: &Sequence, path: &Path, opts: &TestBag) -> Result<()> {
         let sides = [("left", LEFT_FRAME, &opts.left_encoding, &l), ("right", RIGHT_FRAME, &opts.right_encoding, &r)];
         for (k, (side, frame, encoding, img)) in sides.into_iter().enumerate() {
             let header = Header { stamp_ns: t[k], frame_id: frame.to_owned() };
-            out.push(t[k], &format!("/stereo/{side}/image"), image_message(&header, encoding, img)?);
-            out.push(t[k], &format!("/stereo/{side}/camera_info"), msgs::write_camera_info(&info(&header, &infos[k])));
+            if k == 0 || opts.drop_right_every.is_none_or(|n| n == 0 || i % n != 0) {
+                out.push(t[k], &format!("/stereo/{side}/image"), image_message(&header, encoding, img)?);
+            }
+            let mut ci = info(&header, &infos[k]);
+            if k == 0 && opts.change_left_info_at.is_some_and(|at| i >= at) {
+                ci.k[0] *= 1.01;
+            }
+            out.push(t[k], &format!("/stereo/{side}/camera_info"), msgs::write_camera_info(&ci));
         }
     }
     out.messages.retain(|(_, topic, _)| !opts.skip_topics.contains(topic));

@@ -194,7 +194,14 @@ pub fn load(bag: &Path, rig: &Rig, opts: &BagOptions, dir: &Path) -> Result<BagS
     check_frame_times(&frames, &pairs, &table, (rig, origin_ns, &name))?;
     check_image_sizes(&pairs, &scan, rig, &name)?;
     let (left_yaml, right_yaml) = (camera_yaml(&scan, rig, true, &name)?, camera_yaml(&scan, rig, false, &name)?);
-    let manifest = manifest(&scan, rig, &files.name, &name, origin_ns)?;
+    let paired = format!(
+        "{} stereo pairs within {:.3} ms; unpaired: {} left, {} right",
+        pairs.len(),
+        pairing.tolerance_ns as f64 / 1e6,
+        pairing.unpaired_left.len(),
+        pairing.unpaired_right.len()
+    );
+    let manifest = manifest(&scan, rig, (&files.name, &name, &paired), origin_ns)?;
     let texts = Texts { manifest: &manifest, left_yaml: &left_yaml, right_yaml: &right_yaml, urdf: &urdf };
     let report = BagReport {
         bag: name.clone(),
@@ -360,14 +367,16 @@ fn camera_yaml(scan: &Scan, rig: &Rig, left: bool, name: &str) -> Result<String>
 }
 
 /// The text of `sequence.toml`: transforms from tf, the block from the rig file.
-fn manifest(scan: &Scan, rig: &Rig, seq_name: &str, name: &str, origin_ns: i64) -> Result<String> {
+fn manifest(scan: &Scan, rig: &Rig, (seq_name, name, paired): (&str, &str, &str), origin_ns: i64) -> Result<String> {
     let f = &rig.frames;
     let tf_err = |e: String| anyhow!("{name}: {} (rig file frames): {e}", rig.topics.tf_static);
     let flange_to_right = scan.tf.pose_of(&f.right_camera, &f.flange_link).map_err(tf_err)?;
     let right_to_left = scan.tf.pose_of(&f.right_camera, &f.left_camera).map_err(tf_err)?;
     let t = &rig.target;
-    let comment =
-        format!("imported by evorec from the ROS 2 bag {name}\nt_s = header.stamp - {} s", origin_ns / 1_000_000_000);
+    let comment = format!(
+        "imported by evorec from the ROS 2 bag {name}\n{paired}\nt_s = header.stamp - {} s",
+        origin_ns / 1_000_000_000
+    );
     Ok(manifest_text(&ManifestFields {
         name: seq_name,
         comment: &comment,

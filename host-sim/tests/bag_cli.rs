@@ -112,6 +112,11 @@ fn bad_bags_are_named_and_nothing_is_written() {
     let text = testbag::rig_toml(&seq).replace("[target]\n", "[target]\ncolour = \"red\"\n");
     std::fs::write(&bad_rig, text).expect("rig");
     fails(&dir, &good, &bad_rig, &["bad-rig.toml:", "unknown field `colour`"]);
+    let pose = "initial_pose = { t_m = [0.0, 0.0, 0.7], q_xyzw = [0.0, 0.0, 0.0, 2.0] }\n";
+    let text =
+        testbag::rig_toml(&seq).lines().filter(|l| !l.starts_with("initial_pose")).collect::<Vec<_>>().join("\n");
+    std::fs::write(&bad_rig, format!("{text}\n{pose}")).expect("rig");
+    fails(&dir, &good, &bad_rig, &["bad-rig.toml: target.initial_pose: q_xyzw must be a unit quaternion"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -215,7 +215,7 @@ pub fn load(bag: &Path, rig: &Rig, opts: &BagOptions, dir: &Path) -> Result<BagS
         joint_velocities: velocities,
         stamp_origin_s: origin_ns / 1_000_000_000,
     };
-    let seq = Sequence::from_memory(dir, &texts, frames, table)?;
+    let seq = Sequence::from_memory(dir, &texts, frames, table).map_err(|e| rig_error(e, rig))?;
     Ok(BagSequence { seq, manifest, left_yaml, right_yaml, urdf, pairs, stamps_ns, files, rig: rig.clone(), report })
 }
 
@@ -257,6 +257,18 @@ impl BagReport {
                 self.duplicate_joint_stamps
             );
         }
+    }
+}
+
+/// An error in the generated `sequence.toml` is one in the rig file's `[target]` (the rest
+/// comes from the bag and was checked before): named as the rig file's key.
+fn rig_error(e: crate::sequence::SequenceError, rig: &Rig) -> anyhow::Error {
+    match &e.field {
+        Some(field) if e.file.ends_with("sequence.toml") => {
+            let key = if field == "search" { "target.search" } else { field.as_str() };
+            anyhow!("{}: {key}: {}", rig.path.display(), e.message)
+        }
+        _ => e.into(),
     }
 }
 

@@ -25,6 +25,9 @@ pub struct Rig {
     pub frames: Frames,
     /// `[target]`.
     pub target: Target,
+    /// The file it was read from (names it in errors).
+    #[serde(skip)]
+    pub path: PathBuf,
 }
 
 /// `[topics]`.
@@ -112,6 +115,7 @@ impl Rig {
         if rig.topics.urdf.is_some() && rig.topics.robot_description.is_some() {
             bail!("{}: topics: give either robot_description or urdf, not both", path.display());
         }
+        rig.path = path.to_path_buf();
         if let Some(u) = &mut rig.topics.urdf {
             *u = path.parent().unwrap_or(Path::new(".")).join(&*u);
         }

@@ -306,7 +306,7 @@ pub fn run(trials: usize, first_seed: u64, points: usize, out: &Path, show_progr
             )
         })
         .sum();
-    let bar = if show_progress { ProgressBar::new(frames) } else { ProgressBar::hidden() };
+    let bar = if show_progress { crate::logging::progress_bar(frames) } else { ProgressBar::hidden() };
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {percent:>3}% {pos}/{len} frames, eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),

@@ -17,13 +17,14 @@
 //! tracker the state of the nearest control step while `evorec track` interpolates to the
 //! capture time: the joint states then differ by at most `|q̇|·0.5 ms`.
 //!
-//! The sequence is written into `OUT.partial` and renamed to `OUT` when complete, so an
-//! interrupted export never leaves a directory that looks like a sequence.
+//! The sequence is written into `OUT.partial` and renamed to `OUT` when complete
+//! ([`crate::io::write_dir`]), so an interrupted export never leaves a directory that looks
+//! like a sequence.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use indicatif::ProgressBar;
 
 use crate::arm::CONTROL_PERIOD_S;
@@ -31,7 +32,7 @@ use crate::motion;
 use crate::render;
 use crate::robot::{ArmModel, PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF};
 use crate::scenario::Scenario;
-use crate::sequence::manifest::{FORMAT, to_rows};
+use crate::sequence::write::{ManifestFields, joints_header, joints_row, manifest_text};
 use crate::sequence::{camera_info, tum};
 use crate::sim::{self, World, search_space};
 
@@ -49,43 +50,22 @@ pub struct ExportStats {
 /// # Errors
 /// An existing non-empty `out`, I/O errors, an invalid scenario.
 pub fn export(s: &Scenario, name: &str, out: &Path, progress: Option<ProgressBar>) -> Result<ExportStats> {
-    if out.exists() && std::fs::read_dir(out).map(|mut d| d.next().is_some()).unwrap_or(true) {
-        bail!("{}: exists and is not empty; export writes a new sequence directory", out.display());
-    }
-    let partial = partial_path(out);
-    if partial.exists() {
-        std::fs::remove_dir_all(&partial).with_context(|| format!("removing {}", partial.display()))?;
-    }
-    let stats = write_sequence(s, name, &partial, progress)?;
-    if out.exists() {
-        std::fs::remove_dir(out).with_context(|| format!("replacing {}", out.display()))?;
-    }
-    std::fs::rename(&partial, out).with_context(|| format!("renaming {} to {}", partial.display(), out.display()))?;
-    Ok(stats)
+    crate::io::write_dir(out, |dir| write_sequence(s, name, dir, progress))
 }
 
-fn partial_path(out: &Path) -> PathBuf {
-    let mut name = out.file_name().map(std::ffi::OsStr::to_os_string).unwrap_or_default();
-    name.push(".partial");
-    out.with_file_name(name)
-}
-
-fn write_file(path: &Path, text: &str) -> Result<()> {
-    if let Some(parent) = path.parent() {
-        std::fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
-    }
-    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+fn write_file(dir: &Path, rel: &str, text: &str) -> Result<()> {
+    crate::io::write_file_in(dir, rel, text.as_bytes())
 }
 
 fn write_sequence(s: &Scenario, name: &str, dir: &Path, progress: Option<ProgressBar>) -> Result<ExportStats> {
     let mut world = World::new(s)?;
     let rig = *world.rig();
-    write_file(&dir.join("robot.urdf"), PA10_URDF)?;
+    write_file(dir, "robot.urdf", PA10_URDF)?;
     for (file, cam, cam_name) in [("calib/left.yaml", &rig.left, "left"), ("calib/right.yaml", &rig.right, "right")] {
         let yaml = camera_info::to_yaml(&camera_info::from_pinhole(cam, cam_name)).map_err(anyhow::Error::msg)?;
-        write_file(&dir.join(file), &yaml)?;
+        write_file(dir, file, &yaml)?;
     }
-    write_file(&dir.join("sequence.toml"), &manifest(s, name, &world))?;
+    write_file(dir, "sequence.toml", &manifest(s, name, &world))?;
     std::fs::create_dir_all(dir.join("left"))?;
     std::fs::create_dir_all(dir.join("right"))?;
 
@@ -96,11 +76,7 @@ fn write_sequence(s: &Scenario, name: &str, dir: &Path, progress: Option<Progres
     let mut samples = 0;
     let mut record = |world: &World, joints: &mut String| {
         let a = world.arm();
-        let _ = write!(joints, "{:.6}", a.time());
-        for v in a.q().iter().chain(a.qd().iter()) {
-            let _ = write!(joints, ",{v}");
-        }
-        joints.push('\n');
+        joints_row(joints, &format!("{:.6}", a.time()), a.q(), a.qd());
         samples += 1;
     };
     record(&world, &mut joints);
@@ -114,8 +90,8 @@ fn write_sequence(s: &Scenario, name: &str, dir: &Path, progress: Option<Progres
         }
         let images = world.render();
         let (l, r) = (format!("left/{n:06}.png"), format!("right/{n:06}.png"));
-        render::sensor_rgb(&images.left).save(dir.join(&l)).with_context(|| format!("writing {l}"))?;
-        render::sensor_rgb(&images.right).save(dir.join(&r)).with_context(|| format!("writing {r}"))?;
+        crate::io::write_png(&dir.join(&l), &render::sensor_rgb(&images.left))?;
+        crate::io::write_png(&dir.join(&r), &render::sensor_rgb(&images.right))?;
         let _ = writeln!(frames, "{n},{t:.6},{l},{r}");
         truth.push((t, world.target_in_camera()));
         if let Some(p) = &progress {
@@ -125,53 +101,31 @@ fn write_sequence(s: &Scenario, name: &str, dir: &Path, progress: Option<Progres
     // One more step, so the last frame's capture time lies within the joint samples.
     world.advance_to(world.time() + CONTROL_PERIOD_S);
     record(&world, &mut joints);
-    write_file(&dir.join("joints.csv"), &joints)?;
-    write_file(&dir.join("frames.csv"), &frames)?;
+    write_file(dir, "joints.csv", &joints)?;
+    write_file(dir, "frames.csv", &frames)?;
     let gt = tum::format(
         "t tx ty tz qx qy qz qw: true pose of the block in the right camera frame (^CR T_M), metres",
         &truth,
     );
-    write_file(&dir.join("groundtruth.tum"), &gt)?;
+    write_file(dir, "groundtruth.tum", &gt)?;
     Ok(ExportStats { frames: total as usize, joint_samples: samples })
 }
 
-fn joints_header(names: &[String]) -> String {
-    let mut h = String::from("t_s");
-    for prefix in ["pos_", "vel_"] {
-        for n in names {
-            h.push(',');
-            h.push_str(prefix);
-            h.push_str(n);
-        }
-    }
-    h.push('\n');
-    h
-}
-
-fn floats(v: &[f64]) -> String {
-    let cells: Vec<String> = v.iter().map(|x| format!("{x:?}")).collect();
-    format!("[{}]", cells.join(", "))
-}
-
 fn manifest(s: &Scenario, name: &str, world: &World) -> String {
-    let rig = world.rig();
     let pose = world.target_in_camera();
     let (t, q) = (pose.translation.vector, pose.rotation.coords);
     let space = search_space();
     let to64 = |a: [f32; 3]| a.map(f64::from);
-    format!(
-        "format = \"{FORMAT}\"\nname = {name:?}\n\n[robot]\nurdf = \"robot.urdf\"\nbase_link = \"{PA10_BASE_LINK}\"\n\
-         flange_link = \"{PA10_FLANGE_LINK}\"\n\n[cameras]\nleft = \"calib/left.yaml\"\nright = \"calib/right.yaml\"\n\
-         # ^CL T_CR (4x4, row-major, m)\nright_to_left = {}\n# ^H T_CR (4x4, row-major, m)\nflange_to_right = {}\n\n\
-         [target]\nsize_m = {}\nface_hues_deg = {}\ninitial_pose = {{ t_m = {}, q_xyzw = {} }}\n\n\
-         [search]\nmin_m = {}\nmax_m = {}\n",
-        floats(&to_rows(&rig.left_from_right.cast())),
-        floats(&to_rows(&motion::flange_to_camera_f64(s.camera.baseline_m))),
-        floats(&s.target.size_m),
-        floats(&s.target.face_hues_deg),
-        floats(t.as_slice()),
-        floats(&[q.x, q.y, q.z, q.w]),
-        floats(&to64(space.t_min())),
-        floats(&to64(space.t_max())),
-    )
+    manifest_text(&ManifestFields {
+        name,
+        comment: "",
+        base_link: PA10_BASE_LINK,
+        flange_link: PA10_FLANGE_LINK,
+        right_to_left: world.rig().left_from_right.cast(),
+        flange_to_right: motion::flange_to_camera_f64(s.camera.baseline_m),
+        size_m: s.target.size_m,
+        face_hues_deg: s.target.face_hues_deg,
+        initial_pose: Some(([t.x, t.y, t.z], [q.x, q.y, q.z, q.w])),
+        search: Some((to64(space.t_min()), to64(space.t_max()))),
+    })
 }

@@ -23,7 +23,11 @@ where
     C: Sync,
     R: Send,
 {
-    let bar = if show_progress { ProgressBar::new(cells.iter().map(frames).sum()) } else { ProgressBar::hidden() };
+    let bar = if show_progress {
+        crate::logging::progress_bar(cells.iter().map(frames).sum())
+    } else {
+        ProgressBar::hidden()
+    };
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {percent:>3}% {pos}/{len} frames, eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),

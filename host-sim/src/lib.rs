@@ -8,12 +8,14 @@
 //! ([`frame`]), the same runs with the tracker in the firmware on QEMU ([`hil`]), output
 //! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]); recorded stereo sequences
 //! (`evorec-seq/1`): the reader ([`sequence`]), tracking them ([`track`]) and writing a
-//! scenario as one ([`export`]); unknown starts and occlusions ([`occlusion`]) and the
+//! scenario as one ([`export`]), and ROS 2 bags read as one ([`bag`]); the host's logger
+//! ([`logging`]); unknown starts and occlusions ([`occlusion`]) and the
 //! acquisition statistics ([`acquire`]); the block's own paths beyond the paper
 //! ([`target_path`]) and their grid ([`target_grid`]); the parallel grid runner ([`grid`]).
 
 pub mod acquire;
 pub mod arm;
+pub mod bag;
 pub mod closed_loop;
 pub mod experiment;
 pub mod export;
@@ -21,6 +23,7 @@ pub mod frame;
 pub mod grid;
 pub mod hil;
 pub mod io;
+pub mod logging;
 pub mod motion;
 pub mod occlusion;
 pub mod paper;

@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use evorec_core::tracker::Feedforward;
 use evorec_sim::scenario::{Method, Scenario};
 use evorec_sim::sequence::Sequence;
-use evorec_sim::{closed_loop, experiment, export, frame, hil, io, paper, servo, target_grid, track};
+use evorec_sim::{bag, closed_loop, experiment, export, frame, hil, io, paper, servo, target_grid, track};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -17,6 +17,12 @@ use evorec_sim::{closed_loop, experiment, export, frame, hil, io, paper, servo, 
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// More log output (-v info, -vv debug, -vvv trace); `RUST_LOG` overrides.
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    verbose: u8,
+    /// Only errors in the log, and no progress bar.
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
 }
 
 /// `evorec track --method`.
@@ -87,9 +93,6 @@ enum Command {
         /// seed 1, 72 s); the target grid also takes its duration (the paper's is 72 s).
         #[arg(long)]
         base: Option<PathBuf>,
-        /// Hide the progress bar.
-        #[arg(long)]
-        quiet: bool,
         /// Which grid: the paper's, the one over the block's own motion, or both.
         #[arg(long, value_enum, default_value_t = Grid::Paper)]
         grid: Grid,
@@ -150,9 +153,6 @@ enum Command {
         /// filter's tuning in every cell (default: the core's defaults).
         #[arg(long, value_name = "FILE")]
         target_filter: Option<PathBuf>,
-        /// Hide the progress bar.
-        #[arg(long)]
-        quiet: bool,
     },
     /// Worst-case timing and memory per GA generation on the board: runs the timing firmware
     /// under QEMU with -icount and writes DIR/timing.json and DIR/timing.md. Builds nothing:
@@ -167,12 +167,21 @@ enum Command {
         #[arg(long, default_value = "m4", value_parser = ["m4", "m7"])]
         profile: String,
     },
-    /// Track a recorded stereo sequence (`evorec-seq/1` directory): writes DIR/trace.csv,
-    /// DIR/estimate.tum (TUM format), DIR/summary.json, plots and `DIR/overlay_<N>.png`. Nothing is
-    /// written unless the whole sequence was tracked.
+    /// Track a recorded stereo sequence (`evorec-seq/1` directory) or a ROS 2 bag (with
+    /// `--rig`): writes DIR/trace.csv, DIR/estimate.tum (TUM format), DIR/summary.json, plots
+    /// and `DIR/overlay_<N>.png`, and for a bag DIR/estimate.mcap (the poses as
+    /// geometry_msgs/PoseStamped, status and fitness). Nothing is written unless the whole
+    /// sequence was tracked.
     Track {
-        /// Sequence directory (holds sequence.toml).
+        /// Sequence directory (holds sequence.toml), or a ROS 2 bag (directory or .mcap file).
         seq: PathBuf,
+        /// The rig file (`evorec-rig/1`) of a bag: its topics, frames and block.
+        #[arg(long)]
+        rig: Option<PathBuf>,
+        /// Largest stamp difference of a bag's stereo pair in ms (default: a quarter of the
+        /// frame period).
+        #[arg(long, requires = "rig")]
+        pair_tolerance_ms: Option<f64>,
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
@@ -208,9 +217,23 @@ enum Command {
         /// target-velocity filter that `ff+target` feeds forward (default: the core's).
         #[arg(long, value_name = "FILE")]
         target_filter: Option<PathBuf>,
-        /// Hide the progress bar.
+    },
+    /// Write a ROS 2 bag (MCAP storage: a bag directory or one .mcap file) as a recorded sequence
+    /// (`evorec-seq/1`): images paired by stamp, joint states by name, transforms from tf, the URDF
+    /// from the bag or the rig file. Nothing is written at OUT unless the whole bag was read.
+    Import {
+        /// The bag.
+        bag: PathBuf,
+        /// The rig file (`evorec-rig/1`): topics, frames and the block.
         #[arg(long)]
-        quiet: bool,
+        rig: PathBuf,
+        /// Sequence directory to create (must not exist or be empty).
+        #[arg(long)]
+        out: PathBuf,
+        /// Largest stamp difference of a stereo pair in ms (default: a quarter of the frame
+        /// period).
+        #[arg(long)]
+        pair_tolerance_ms: Option<f64>,
     },
     /// Write a simulator scenario as a recorded sequence (`evorec-seq/1`): the PA-10's URDF,
     /// camera_info YAMLs, PNGs, joints at 1 kHz, ground truth, sequence.toml with the initial
@@ -221,9 +244,6 @@ enum Command {
         /// Sequence directory to create (must not exist or be empty).
         #[arg(long)]
         out: PathBuf,
-        /// Hide the progress bar.
-        #[arg(long)]
-        quiet: bool,
     },
     /// Acquisition statistics: N random block poses (seeds FIRST_SEED..), each from an unknown
     /// start and through a 1 s occlusion, static arm and motion A at 0.5 rad/s with FF, in
@@ -241,9 +261,6 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
-        /// Hide the progress bar.
-        #[arg(long)]
-        quiet: bool,
     },
     /// Render one frame of a scenario: left/right PNGs, the same with the projected search
     /// model at the true pose drawn over them, and frame.json with the geometry.
@@ -322,7 +339,9 @@ fn report(a: &experiment::Accuracy, t0: Instant) {
 /// [`error_line`]) to stderr and exits with status 1. No backtrace is printed: `anyhow`'s
 /// `Debug` output (which `fn main() -> Result` would use) is not involved.
 fn main() -> ExitCode {
-    match execute(Cli::parse()) {
+    let cli = Cli::parse();
+    evorec_sim::logging::init(evorec_sim::logging::level(cli.verbose, cli.quiet));
+    match execute(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", error_line(&e));
@@ -354,7 +373,51 @@ fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<
     let output = track::run(&seq, opts)?;
     let ev = track::output::evaluate(&seq, &output);
     track::output::write_all(&seq, &output, &ev, out)?;
-    let s = &ev.summary;
+    print_track(&ev.summary, t0, out);
+    Ok(())
+}
+
+/// `evorec track BAG --rig RIG`: the bag read (first pass), tracked while its images stream
+/// (second pass); the outputs of a sequence plus `estimate.mcap`.
+fn track_bag(
+    path: &Path,
+    rig: &Path,
+    out: &Path,
+    opts: &track::TrackOptions,
+    bag_opts: &bag::BagOptions,
+) -> Result<()> {
+    let t0 = Instant::now();
+    let rig = bag::Rig::load(rig)?;
+    let b = bag::load(path, &rig, bag_opts, path)?;
+    b.report.log();
+    let ev = bag::track::track_and_write(&b, opts, out)?;
+    println!("{}", b.report.describe());
+    print_track(&ev.summary, t0, out);
+    Ok(())
+}
+
+fn import_bag(path: &Path, rig: &Path, out: &Path, bag_opts: &bag::BagOptions, progress: bool) -> Result<()> {
+    let t0 = Instant::now();
+    let rig = bag::Rig::load(rig)?;
+    let b = bag::load(path, &rig, bag_opts, out)?;
+    b.report.log();
+    let bar = progress.then(|| evorec_sim::logging::progress_bar(b.pairs.len() as u64));
+    bag::import::import(&b, out, bar.as_ref())?;
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let secs = t0.elapsed().as_secs_f64();
+    println!("{}", b.report.describe());
+    println!(
+        "imported {} frame pairs in {secs:.1} s ({:.0} pairs/s); wrote {}",
+        b.pairs.len(),
+        b.pairs.len() as f64 / secs.max(1e-9),
+        out.display()
+    );
+    Ok(())
+}
+
+fn print_track(s: &track::output::TrackSummary, t0: Instant, out: &Path) {
     print!(
         "{} frames in {:.1} s ({:.0} frames/s): F_mean {:.4}",
         s.frames,
@@ -373,7 +436,6 @@ fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<
         }
     }
     println!("\nwrote {}", out.display());
-    Ok(())
 }
 
 fn report_servo(s: &closed_loop::ServoSummary) {
@@ -433,6 +495,7 @@ fn hil_servo(
 }
 
 fn execute(cli: Cli) -> Result<()> {
+    let quiet = cli.quiet;
     match cli.command {
         Command::Run { scenario, out, method, seed } => {
             let mut s = load_with(&scenario, method)?;
@@ -455,7 +518,7 @@ fn execute(cli: Cli) -> Result<()> {
             report_handover(output.summary.handover.as_ref());
             println!("wrote {}", out.display());
         }
-        Command::Paper { out, base, quiet, grid, method } => {
+        Command::Paper { out, base, grid, method } => {
             let base = match base {
                 Some(p) => load(&p)?,
                 None => Scenario::new(1, paper::DURATION_S, Method::Ff),
@@ -503,6 +566,8 @@ fn execute(cli: Cli) -> Result<()> {
         }
         Command::Track {
             seq,
+            rig,
+            pair_tolerance_ms,
             out,
             no_ff,
             method,
@@ -513,7 +578,6 @@ fn execute(cli: Cli) -> Result<()> {
             pixels,
             overlay,
             target_filter,
-            quiet,
         } => {
             let target_filter = match target_filter {
                 Some(path) => evorec_sim::scenario::TargetFilterSection::load(&path)?,
@@ -530,19 +594,29 @@ fn execute(cli: Cli) -> Result<()> {
                 pixels: pixels.into(),
                 target_filter: target_filter.0,
             };
-            track_sequence(&seq, &out, &opts)?;
+            let bag_opts = bag::BagOptions { pair_tolerance_ms };
+            match rig {
+                Some(rig) => track_bag(&seq, &rig, &out, &opts, &bag_opts)?,
+                None if bag::scan::is_bag(&seq) => {
+                    anyhow::bail!("{}: is a ROS 2 bag: give its rig file with --rig RIG.toml", seq.display())
+                }
+                None => track_sequence(&seq, &out, &opts)?,
+            }
         }
-        Command::Export { scenario, out, quiet } => {
+        Command::Import { bag: path, rig, out, pair_tolerance_ms } => {
+            import_bag(&path, &rig, &out, &bag::BagOptions { pair_tolerance_ms }, !quiet)?;
+        }
+        Command::Export { scenario, out } => {
             let s = load(&scenario)?;
             let name = scenario.file_stem().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-            let bar = (!quiet).then(|| indicatif::ProgressBar::new(u64::from(evorec_sim::sim::frame_total(&s))));
+            let bar = (!quiet).then(|| evorec_sim::logging::progress_bar(u64::from(evorec_sim::sim::frame_total(&s))));
             let stats = export::export(&s, &name, &out, bar.clone())?;
             if let Some(b) = bar {
                 b.finish_and_clear();
             }
             println!("wrote {} ({} frames, {} joint samples)", out.display(), stats.frames, stats.joint_samples);
         }
-        Command::Servo { out, duration, gains, delays, speeds, seed, target_filter, quiet } => {
+        Command::Servo { out, duration, gains, delays, speeds, seed, target_filter } => {
             anyhow::ensure!(duration > 0.0 && duration <= 3600.0, "--duration: must be in (0, 3600], got {duration}");
             anyhow::ensure!(gains.iter().all(|g| *g > 0.0 && *g <= 50.0), "--gains: each must be in (0, 50]");
             anyhow::ensure!(delays.iter().all(|d| *d <= 10), "--delays: each must be in 0..=10");
@@ -559,7 +633,7 @@ fn execute(cli: Cli) -> Result<()> {
             println!("{}", servo::markdown(&results).split("\n\n").next().unwrap_or_default());
             println!("{} runs in {:.1} s; wrote {}", results.len(), t0.elapsed().as_secs_f64(), out.display());
         }
-        Command::Acquire { trials, first_seed, points, out, quiet } => {
+        Command::Acquire { trials, first_seed, points, out } => {
             let t0 = Instant::now();
             let report = evorec_sim::acquire::run(trials, first_seed, points, &out, !quiet)?;
             println!("{}", evorec_sim::acquire::markdown(&report));

@@ -29,6 +29,7 @@ pub mod manifest;
 pub mod robot;
 pub mod tables;
 pub mod tum;
+pub mod write;
 
 #[cfg(test)]
 mod tests;
@@ -82,19 +83,7 @@ impl Sequence {
         let (left_path, right_path) = (dir.join(&raw.cameras.left), dir.join(&raw.cameras.right));
         let (_, left) = camera_info::load(&left_path)?;
         let (_, right) = camera_info::load(&right_path)?;
-        if (left.width(), left.height()) != (right.width(), right.height()) {
-            return Err(SequenceError::file(
-                &left_path,
-                format!(
-                    "left camera is {}x{} but the right one ({}) is {}x{}: both images of a pair must have one size",
-                    left.width(),
-                    left.height(),
-                    right_path.display(),
-                    right.width(),
-                    right.height()
-                ),
-            ));
-        }
+        check_sizes(&left, &right, &left_path, &right_path)?;
         let rig = StereoRig { right, left, left_from_right: manifest.right_to_left.cast() };
         let robot = Robot::load(&dir.join(&raw.robot.urdf), &raw.robot.base_link, &raw.robot.flange_link)?;
         let frames_path = dir.join("frames.csv");
@@ -108,6 +97,33 @@ impl Sequence {
             face_hues_deg: raw.target.face_hues_deg.map(|v| v as f32),
         };
         Ok(Self { dir: dir.to_path_buf(), manifest, rig, robot, block, frames, joints, groundtruth })
+    }
+
+    /// A sequence held in memory (what `evorec import` writes and `evorec track BAG` tracks):
+    /// the text of `sequence.toml`, of both camera_info YAMLs and of the URDF, parsed and
+    /// checked as [`Sequence::load`] does, with frames and joints already read. `dir` is where
+    /// the files would be (it only names them in errors and in the frames' image paths).
+    ///
+    /// # Errors
+    /// As [`Sequence::load`], naming the file the text would be.
+    pub fn from_memory(dir: &Path, files: &Texts<'_>, frames: Vec<FrameRow>, joints: JointTable) -> Result<Self> {
+        let manifest = manifest::parse(files.manifest, &dir.join("sequence.toml"))?;
+        let raw = &manifest.raw;
+        let (_, left) = camera_info::parse(files.left_yaml, &dir.join(&raw.cameras.left))?;
+        let (_, right) = camera_info::parse(files.right_yaml, &dir.join(&raw.cameras.right))?;
+        check_sizes(&left, &right, &dir.join(&raw.cameras.left), &dir.join(&raw.cameras.right))?;
+        let rig = StereoRig { right, left, left_from_right: manifest.right_to_left.cast() };
+        let urdf = dir.join(&raw.robot.urdf);
+        let robot = Robot::from_urdf_str(files.urdf, &raw.robot.base_link, &raw.robot.flange_link, &urdf)?;
+        if joints.names() != robot.joint_names.as_slice() {
+            return Err(SequenceError::file(dir.join("joints.csv"), "joints do not name the URDF chain's joints"));
+        }
+        check_times(&dir.join("frames.csv"), &frames, &joints)?;
+        let block = Block {
+            size_m: raw.target.size_m.map(|v| v as f32),
+            face_hues_deg: raw.target.face_hues_deg.map(|v| v as f32),
+        };
+        Ok(Self { dir: dir.to_path_buf(), manifest, rig, robot, block, frames, joints, groundtruth: None })
     }
 
     /// The sequence's name (`name` in `sequence.toml`, else the directory's name).
@@ -145,13 +161,61 @@ impl Sequence {
 /// # Errors
 /// As [`images::decode`].
 pub fn decode_pair(frame: &FrameRow, left: &Pinhole, right: &Pinhole) -> Result<(RgbImage, RgbImage)> {
-    let l = images::decode(&frame.left, u32::from(left.width()), u32::from(left.height()))?;
-    let r = images::decode(&frame.right, u32::from(right.width()), u32::from(right.height()))?;
-    Ok((l, r))
+    let (l, r) = rayon::join(
+        || images::decode(&frame.left, u32::from(left.width()), u32::from(left.height())),
+        || images::decode(&frame.right, u32::from(right.width()), u32::from(right.height())),
+    );
+    Ok((l?, r?))
+}
+
+/// The text of a sequence's files, for [`Sequence::from_memory`].
+#[derive(Debug, Clone, Copy)]
+pub struct Texts<'a> {
+    /// `sequence.toml`.
+    pub manifest: &'a str,
+    /// The left camera_info YAML.
+    pub left_yaml: &'a str,
+    /// The right camera_info YAML.
+    pub right_yaml: &'a str,
+    /// The URDF.
+    pub urdf: &'a str,
+}
+
+fn check_sizes(left: &Pinhole, right: &Pinhole, left_path: &Path, right_path: &Path) -> Result<()> {
+    if (left.width(), left.height()) != (right.width(), right.height()) {
+        return Err(SequenceError::file(
+            left_path,
+            format!(
+                "left camera is {}x{} but the right one ({}) is {}x{}: both images of a pair must have one size",
+                left.width(),
+                left.height(),
+                right_path.display(),
+                right.width(),
+                right.height()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Every frame's images exist and its capture time lies within the joint samples.
 fn check_frames(path: &Path, frames: &[FrameRow], joints: &JointTable) -> Result<()> {
+    check_times(path, frames, joints)?;
+    for f in frames {
+        for (side, img) in [("left", &f.left), ("right", &f.right)] {
+            if !img.is_file() {
+                return Err(SequenceError::file(
+                    img,
+                    format!("missing: the {side} image of frame {} (frames.csv line {})", f.index, f.line),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every frame's capture time lies within the joint samples.
+fn check_times(path: &Path, frames: &[FrameRow], joints: &JointTable) -> Result<()> {
     let (first, last) = joints.span();
     for f in frames {
         if !(f.t_s >= first && f.t_s <= last) {
@@ -164,14 +228,6 @@ fn check_frames(path: &Path, frames: &[FrameRow], joints: &JointTable) -> Result
             )
             .at_line(f.line)
             .in_field("t_s"));
-        }
-        for (side, img) in [("left", &f.left), ("right", &f.right)] {
-            if !img.is_file() {
-                return Err(SequenceError::file(
-                    img,
-                    format!("missing: the {side} image of frame {} (frames.csv line {})", f.index, f.line),
-                ));
-            }
         }
     }
     Ok(())

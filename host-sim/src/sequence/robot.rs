@@ -31,6 +31,20 @@ impl Robot {
         Ok(Self { joint_names: model.joint_names.clone(), model })
     }
 
+    /// Parses URDF `text` (`path` names it in errors) and extracts the chain.
+    ///
+    /// # Errors
+    /// As [`Robot::load`].
+    pub fn from_urdf_str(text: &str, base: &str, flange: &str, path: &Path) -> Result<Self> {
+        let name = path.display().to_string();
+        let model = ArmModel::from_urdf_str(text, base, flange, &name).map_err(|e| {
+            let text = e.to_string();
+            let prefix = format!("{name}: ");
+            SequenceError::file(path, text.strip_prefix(&prefix).unwrap_or(&text))
+        })?;
+        Ok(Self { joint_names: model.joint_names.clone(), model })
+    }
+
     /// Number of movable joints.
     pub fn dof(&self) -> usize {
         self.joint_names.len()

@@ -229,7 +229,8 @@ impl JointTable {
         (self.times[0], self.times[self.times.len() - 1])
     }
 
-    fn sample(&self, i: usize) -> (&[f64], &[f64]) {
+    /// Sample `i`'s q and q̇ (`i` < the number of samples).
+    pub fn sample(&self, i: usize) -> (&[f64], &[f64]) {
         let n = self.dof();
         let row = &self.values[2 * n * i..2 * n * (i + 1)];
         row.split_at(n)

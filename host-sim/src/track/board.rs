@@ -58,44 +58,63 @@ pub struct Decoded {
     pub rgb: Option<(RgbImage, RgbImage)>,
 }
 
-/// Decodes frame `i` (both PNGs in parallel) into images of format `F`.
-///
-/// # Errors
-/// As [`sequence::decode_pair`].
-pub fn decode<F: SensorPixels>(
-    frames: &[FrameRow],
-    i: usize,
-    cams: (&Pinhole, &Pinhole),
-    keep_rgb: bool,
-) -> Result<Decoded, SequenceError> {
-    let f = &frames[i];
-    let (w, h) = (|c: &Pinhole| u32::from(c.width()), |c: &Pinhole| u32::from(c.height()));
-    let (l, r) = rayon::join(
-        || sequence::images::decode(&f.left, w(cams.0), h(cams.0)),
-        || sequence::images::decode(&f.right, w(cams.1), h(cams.1)),
-    );
-    let (l, r) = (l?, r?);
-    let (left, right) = (F::pixels(&l), F::pixels(&r));
-    Ok(Decoded { i, left, right, rgb: keep_rgb.then_some((l, r)) })
+/// Where the tracker's frames come from: RGB image pairs, in frame order (the PNGs of a
+/// sequence directory, [`SequenceFiles`], or the images of a ROS 2 bag,
+/// [`crate::bag::source::BagFrames`]).
+pub trait FrameSource: Send {
+    /// Hands frames `0..end` (positions in `frames.csv`) to `emit` in order, until `emit`
+    /// returns `false`.
+    ///
+    /// # Errors
+    /// The first frame that cannot be read, naming its file (and topic and message).
+    fn stream(
+        self: Box<Self>,
+        end: usize,
+        emit: &mut dyn FnMut(usize, RgbImage, RgbImage) -> bool,
+    ) -> Result<(), SequenceError>;
 }
 
-/// Starts the reader thread for frames `from..to`; `keep_rgb(i)` says which frames keep their
-/// RGB images. The thread stops at the first error (sent as the last item) or when the
-/// receiver is dropped.
+/// The PNGs of a sequence directory, each pair decoded in parallel.
+pub struct SequenceFiles {
+    /// `frames.csv`.
+    pub frames: Arc<Vec<FrameRow>>,
+    /// The left and right cameras (for the image sizes).
+    pub cams: (Pinhole, Pinhole),
+}
+
+impl FrameSource for SequenceFiles {
+    fn stream(
+        self: Box<Self>,
+        end: usize,
+        emit: &mut dyn FnMut(usize, RgbImage, RgbImage) -> bool,
+    ) -> Result<(), SequenceError> {
+        for (i, f) in self.frames.iter().enumerate().take(end) {
+            let (l, r) = sequence::decode_pair(f, &self.cams.0, &self.cams.1)?;
+            if !emit(i, l, r) {
+                break;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Starts the reader thread for frames `0..end` of `source`; `keep_rgb(i)` says which frames
+/// keep their RGB images. The pixels are converted to `F` on this thread. The thread stops at
+/// the first error (sent as the last item) or when the receiver is dropped.
 pub fn spawn_reader<F: SensorPixels>(
-    frames: Arc<Vec<FrameRow>>,
-    cams: (Pinhole, Pinhole),
-    range: std::ops::Range<usize>,
+    source: Box<dyn FrameSource>,
+    end: usize,
     keep_rgb: Arc<dyn Fn(usize) -> bool + Send + Sync>,
 ) -> (Receiver<Result<Decoded, SequenceError>>, JoinHandle<()>) {
     let (tx, rx): (SyncSender<_>, _) = sync_channel(READ_AHEAD);
     let handle = std::thread::spawn(move || {
-        for i in range {
-            let item = decode::<F>(&frames, i, (&cams.0, &cams.1), keep_rgb(i));
-            let failed = item.is_err();
-            if tx.send(item).is_err() || failed {
-                break;
-            }
+        let mut emit = |i: usize, l: RgbImage, r: RgbImage| {
+            let (left, right) = rayon::join(|| F::pixels(&l), || F::pixels(&r));
+            let rgb = keep_rgb(i).then_some((l, r));
+            tx.send(Ok(Decoded { i, left, right, rgb })).is_ok()
+        };
+        if let Err(e) = source.stream(end, &mut emit) {
+            let _ = tx.send(Err(e));
         }
     });
     (rx, handle)

@@ -38,6 +38,7 @@ use nalgebra::Isometry3;
 use crate::experiment::INITIAL_SPREAD;
 use crate::sequence::Sequence;
 use crate::sim::search_space;
+pub use board::FrameSource;
 use board::{SensorPixels, SequenceBoard, TrackedFrame};
 use evorec_core::image::{Rgb565, Rgb888};
 
@@ -165,10 +166,19 @@ pub fn search_of(seq: &Sequence) -> Result<SearchSpace> {
 /// # Errors
 /// Unsupported options or arm, a bad first frame, a bad PNG found later (naming the file).
 pub fn run(seq: &Sequence, opts: &TrackOptions) -> Result<TrackOutput> {
+    let files = board::SequenceFiles { frames: Arc::new(seq.frames.clone()), cams: (seq.rig.left, seq.rig.right) };
+    run_with(seq, Box::new(files), opts)
+}
+
+/// Tracks `seq` with its images from `source` (its frames in order).
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with(seq: &Sequence, source: Box<dyn FrameSource>, opts: &TrackOptions) -> Result<TrackOutput> {
     check_sizes(opts)?;
     match seq.robot.dof() {
-        6 => run_dof::<6>(seq, opts, seq.robot.chain::<6>()?),
-        7 => run_dof::<7>(seq, opts, seq.robot.chain::<7>()?),
+        6 => run_dof::<6>(seq, source, opts, seq.robot.chain::<6>()?),
+        7 => run_dof::<7>(seq, source, opts, seq.robot.chain::<7>()?),
         n => bail!(
             "{}: the chain from {} to {} has {n} movable joints; evorec tracks arms of 6 or 7",
             seq.dir.join(&seq.manifest.raw.robot.urdf).display(),
@@ -199,14 +209,19 @@ pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, opts: &TrackOpt
 }
 
 /// The tracker over `seq` with `DOF` joints: dispatches on the pixel format and the row size.
-fn run_dof<const DOF: usize>(seq: &Sequence, opts: &TrackOptions, arm: Chain<DOF>) -> Result<TrackOutput> {
+fn run_dof<const DOF: usize>(
+    seq: &Sequence,
+    source: Box<dyn FrameSource>,
+    opts: &TrackOptions,
+    arm: Chain<DOF>,
+) -> Result<TrackOutput> {
     let rows = opts.points_per_row.unwrap_or(DEFAULT_GRID);
     match opts.pixels {
         Pixels::Rgb888 => {
-            crate::with_rows!("--points-per-row", rows, G => run_format::<DOF, Rgb888, G>(seq, opts, arm))
+            crate::with_rows!("--points-per-row", rows, G => run_format::<DOF, Rgb888, G>(seq, source, opts, arm))
         }
         Pixels::Rgb565 => {
-            crate::with_rows!("--points-per-row", rows, G => run_format::<DOF, Rgb565, G>(seq, opts, arm))
+            crate::with_rows!("--points-per-row", rows, G => run_format::<DOF, Rgb565, G>(seq, source, opts, arm))
         }
     }
 }
@@ -215,6 +230,7 @@ fn run_dof<const DOF: usize>(seq: &Sequence, opts: &TrackOptions, arm: Chain<DOF
 /// pixel format `F`.
 fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
     seq: &Sequence,
+    source: Box<dyn FrameSource>,
     opts: &TrackOptions,
     arm: Chain<DOF>,
 ) -> Result<TrackOutput> {
@@ -237,10 +253,13 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
     let overlay: BTreeSet<usize> =
         seq.frames.iter().enumerate().filter(|(_, f)| opts.overlay.contains(&f.index)).map(|(i, _)| i).collect();
     let keep: Arc<dyn Fn(usize) -> bool + Send + Sync> = Arc::new(move |i| overlay.contains(&i));
-    let cams = (seq.rig.left, seq.rig.right);
-    // Frame 0 is decoded here, so a bad first image fails before anything runs.
-    let first = board::decode::<F>(&seq.frames, 0, (&cams.0, &cams.1), keep(0))?;
-    let (rx, reader) = board::spawn_reader::<F>(Arc::new(seq.frames.clone()), cams, 1..end, keep);
+    let (rx, reader) = board::spawn_reader::<F>(source, end, keep);
+    // Frame 0 is received here, so a bad first image fails before anything runs.
+    let first = match rx.recv() {
+        Ok(Ok(first)) => first,
+        Ok(Err(e)) => return Err(e.into()),
+        Err(_) => bail!("the image reader stopped before the first frame"),
+    };
     let progress = opts.progress.then(|| progress_bar(end as u64));
     let mut b = SequenceBoard::<F>::new(seq, first, rx, end, progress.clone());
     let n = F::BYTES_PER_PIXEL * usize::from(seq.rig.right.width()) * usize::from(seq.rig.right.height());
@@ -258,7 +277,7 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
 }
 
 fn progress_bar(len: u64) -> ProgressBar {
-    let bar = ProgressBar::new(len);
+    let bar = crate::logging::progress_bar(len);
     if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} {eta}") {
         bar.set_style(style);
     }

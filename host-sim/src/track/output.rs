@@ -59,6 +59,9 @@ pub struct TrackSummary {
     pub frames_per_s: f64,
     /// Version of evorec.
     pub evorec_version: &'static str,
+    /// What was found in the ROS 2 bag tracked (absent for a sequence directory).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bag: Option<crate::bag::BagReport>,
 }
 
 /// One `trace.csv` row's truth (aligned modulo symmetry) and the errors, per frame.
@@ -108,6 +111,7 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
         symmetries: syms.iter().map(|(n, _)| *n).collect(),
         frames_per_s: out.tracked.len() as f64 / out.seconds.max(1e-9),
         evorec_version: env!("CARGO_PKG_VERSION"),
+        bag: None,
     };
     Evaluation { truth, errors, summary }
 }
@@ -130,7 +134,11 @@ pub fn trace_header(dof: usize) -> Vec<String> {
 }
 
 fn write_trace(path: &Path, seq: &Sequence, out: &TrackOutput, ev: &Evaluation) -> Result<()> {
-    let mut w = csv::Writer::from_path(path).with_context(|| format!("creating {}", path.display()))?;
+    crate::io::write_atomic(path, |file| write_trace_to(file, seq, out, ev))
+}
+
+fn write_trace_to(file: &mut dyn std::io::Write, seq: &Sequence, out: &TrackOutput, ev: &Evaluation) -> Result<()> {
+    let mut w = csv::Writer::from_writer(file);
     w.write_record(trace_header(seq.joints.dof()))?;
     let psi_cells = |p: &[f64; 6]| -> Vec<String> {
         let mut v: Vec<String> = p[..3].iter().map(|x| format!("{:.4}", x * 1e3)).collect();
@@ -204,13 +212,13 @@ pub fn write_all(seq: &Sequence, out: &TrackOutput, ev: &Evaluation, dir: &Path)
         "t tx ty tz qx qy qz qw: evorec's estimate of the block in the right camera frame (^CR T_M), metres",
         &poses,
     );
-    std::fs::write(&tum_path, text).with_context(|| format!("writing {}", tum_path.display()))?;
+    crate::io::write_bytes(&tum_path, text.as_bytes())?;
     written.push(tum_path);
     for (i, l, r) in &out.kept {
         if let Some(t) = out.tracked.iter().find(|t| t.i == *i) {
             let img = overlay(seq, l, r, &super::estimate_pose(t).cast())?;
             let path = dir.join(format!("overlay_{}.png", seq.frames[*i].index));
-            img.save(&path).with_context(|| format!("writing {}", path.display()))?;
+            crate::io::write_png(&path, &img)?;
             written.push(path);
         }
     }

@@ -1,0 +1,150 @@
+//! `evorec import` and `evorec track BAG` on bad bags: one `error: …` line naming the topic,
+//! message or key, exit status 1, and nothing at `--out`. The bags are written by the test
+//! from an exported simulator scenario (`evorec_sim::bag::testbag`), then spoiled.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use evorec_sim::bag::testbag::{self, TestBag, Transforms};
+use evorec_sim::export;
+use evorec_sim::scenario::Scenario;
+use evorec_sim::sequence::Sequence;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("evorec-bag-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("creating {}: {e}", dir.display()));
+    dir
+}
+
+fn evorec(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_evorec"))
+        .args(args)
+        .env("RUST_BACKTRACE", "1")
+        .env_remove("RUST_LOG")
+        .output()
+        .unwrap_or_else(|e| panic!("running evorec: {e}"))
+}
+
+/// A short exported scenario (1 s of 160x120 frames).
+fn sequence(dir: &Path) -> Sequence {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
+    let mut s = Scenario::from_toml_str(&std::fs::read_to_string(path).expect("scenario")).expect("valid");
+    s.duration_s = 1.0;
+    export::export(&s, "short", &dir.join("seq"), None).unwrap_or_else(|e| panic!("{e:#}"));
+    Sequence::load(&dir.join("seq")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn path_str(p: &Path) -> &str {
+    p.to_str().unwrap_or_else(|| panic!("non-UTF-8 path {}", p.display()))
+}
+
+/// Runs `evorec import` and `evorec track` on `bag`; both must fail with one line holding
+/// every one of `needles`, and leave nothing at their `--out`.
+fn fails(dir: &Path, bag: &Path, rig: &Path, needles: &[&str]) {
+    for cmd in ["import", "track"] {
+        let out = dir.join(format!("out-{cmd}"));
+        let o = evorec(&[cmd, path_str(bag), "--rig", path_str(rig), "--out", path_str(&out)]);
+        assert_eq!(o.status.code(), Some(1), "{cmd}: {o:?}");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        let lines: Vec<&str> = stderr.lines().collect();
+        assert_eq!(lines.len(), 1, "{cmd}: expected one line on stderr, got:\n{stderr}");
+        assert!(lines[0].starts_with("error: "), "{}", lines[0]);
+        for n in needles {
+            assert!(lines[0].contains(n), "{cmd}: '{n}' not in: {}", lines[0]);
+        }
+        assert!(!out.exists(), "{cmd} wrote {}", out.display());
+        assert!(!dir.join(format!("out-{cmd}.partial")).exists(), "{cmd} left a partial directory");
+    }
+}
+
+#[test]
+fn bad_bags_are_named_and_nothing_is_written() {
+    let dir = scratch("bad");
+    let seq = sequence(&dir);
+    let rig = dir.join("rig.toml");
+    std::fs::write(&rig, testbag::rig_toml(&seq)).expect("rig");
+    let bag = |name: &str, opts: TestBag| {
+        let p = dir.join(format!("{name}.mcap"));
+        testbag::write(&seq, &p, &opts).unwrap_or_else(|e| panic!("{e:#}"));
+        p
+    };
+
+    let no_joints = bag("no-joints", TestBag { skip_topics: vec!["/joint_states".into()], ..TestBag::default() });
+    fails(&dir, &no_joints, &rig, &["no topic /joint_states", "the bag's topics: ", "/stereo/left/image ("]);
+
+    let good = bag("good", TestBag::default());
+    let bytes = std::fs::read(&good).expect("bag");
+    let truncated = dir.join("truncated.mcap");
+    std::fs::write(&truncated, &bytes[..bytes.len() * 3 / 5]).expect("write");
+    fails(&dir, &truncated, &rig, &["truncated.mcap", "not a readable MCAP file (truncated or corrupt)"]);
+    for (name, compression) in [("corrupt-zstd", Some(mcap::Compression::Zstd)), ("corrupt-plain", None)] {
+        let mut bytes = std::fs::read(bag(name, TestBag { compression, ..TestBag::default() })).expect("bag");
+        let mid = bytes.len() / 2;
+        bytes[mid..mid + 64].fill(0xA5);
+        let corrupt = dir.join(format!("{name}.mcap"));
+        std::fs::write(&corrupt, &bytes).expect("write");
+        fails(&dir, &corrupt, &rig, &[&format!("{name}.mcap")]);
+    }
+
+    let yuv = bag("yuv", TestBag { left_encoding: "yuv422".into(), ..TestBag::default() });
+    fails(&dir, &yuv, &rig, &["/stereo/left/image message 0", "unknown encoding \"yuv422\""]);
+    let mono = bag("mono", TestBag { right_encoding: "mono8".into(), ..TestBag::default() });
+    fails(&dir, &mono, &rig, &["/stereo/right/image message 0", "mono image cannot give hue"]);
+
+    let short = bag("short-joints", TestBag { joints_until_s: Some(0.5), ..TestBag::default() });
+    fails(&dir, &short, &rig, &["/stereo/left/image message 16", "outside the joint samples of /joint_states"]);
+
+    let skew = bag("non-rigid", TestBag { transforms: Transforms::NonRigid, ..TestBag::default() });
+    fails(&dir, &skew, &rig, &["/tf_static message 0", "right_camera_optical", "not rigid"]);
+    let no_left = bag("no-left", TestBag { transforms: Transforms::NoLeft, ..TestBag::default() });
+    fails(
+        &dir,
+        &no_left,
+        &rig,
+        &["/tf_static", "no transform between 'left_camera_optical' and 'right_camera_optical'"],
+    );
+
+    let recalibrated = bag("recalibrated", TestBag { change_left_info_at: Some(7), ..TestBag::default() });
+    fails(&dir, &recalibrated, &rig, &["/stereo/left/camera_info message 7", "calibration changed mid-bag"]);
+
+    let bad_rig = dir.join("bad-rig.toml");
+    let text = testbag::rig_toml(&seq).replace("[target]\n", "[target]\ncolour = \"red\"\n");
+    std::fs::write(&bad_rig, text).expect("rig");
+    fails(&dir, &good, &bad_rig, &["bad-rig.toml:", "unknown field `colour`"]);
+    let pose = "initial_pose = { t_m = [0.0, 0.0, 0.7], q_xyzw = [0.0, 0.0, 0.0, 2.0] }\n";
+    let text =
+        testbag::rig_toml(&seq).lines().filter(|l| !l.starts_with("initial_pose")).collect::<Vec<_>>().join("\n");
+    std::fs::write(&bad_rig, format!("{text}\n{pose}")).expect("rig");
+    fails(&dir, &good, &bad_rig, &["bad-rig.toml: target.initial_pose: q_xyzw must be a unit quaternion"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_good_bag_imports_and_tracks_from_the_command_line() {
+    let dir = scratch("good");
+    let seq = sequence(&dir);
+    let rig = dir.join("rig.toml");
+    std::fs::write(&rig, testbag::rig_toml(&seq)).expect("rig");
+    // A bag directory as `ros2 bag record` writes it.
+    std::fs::create_dir_all(dir.join("bag")).expect("bag dir");
+    testbag::write(&seq, &dir.join("bag/bag_0.mcap"), &TestBag::default()).unwrap_or_else(|e| panic!("{e:#}"));
+    std::fs::write(dir.join("bag/metadata.yaml"), "rosbag2_bagfile_information: {}\n").expect("metadata");
+    let (bag, out) = (dir.join("bag"), dir.join("tracked"));
+    let o = evorec(&["track", path_str(&bag), "--rig", path_str(&rig), "--out", path_str(&out), "-v"]);
+    assert!(o.status.success(), "{o:?}");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("[INFO ]") && stderr.contains("unpaired: 0 left, 0 right"), "{stderr}");
+    for f in ["estimate.tum", "estimate.mcap", "summary.json", "trace.csv"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let summary = std::fs::read_to_string(out.join("summary.json")).expect("summary");
+    assert!(summary.contains("\"unpaired_left\": 0") && summary.contains("\"joint_velocities\": \"derived\""));
+    // Without --rig a bag is recognised and the rig file asked for.
+    let o = evorec(&["track", path_str(&bag), "--out", path_str(&dir.join("x")), "-q"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("give its rig file with --rig"), "{o:?}");
+    let o = evorec(&["import", path_str(&bag), "--rig", path_str(&rig), "--out", path_str(&dir.join("seq2")), "-q"]);
+    assert!(o.status.success() && o.stderr.is_empty(), "{o:?}");
+    assert!(Sequence::load(&dir.join("seq2")).is_ok());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -17,7 +17,7 @@ use crate::track::{self, TrackOptions, output};
 pub fn track_and_write(bag: &BagSequence, opts: &TrackOptions, out: &Path) -> Result<output::Evaluation> {
     let result = track::run_with(&bag.seq, Box::new(BagFrames::new(bag)), opts)?;
     let mut ev = output::evaluate(&bag.seq, &result);
-    ev.summary.bag = Some(bag.report.clone());
+    ev.summary.bag = Some(serde_json::to_value(&bag.report)?);
     let frames: Vec<FrameResult> = result
         .tracked
         .iter()

@@ -59,8 +59,7 @@ pub struct Decoded {
 }
 
 /// Where the tracker's frames come from: RGB image pairs, in frame order (the PNGs of a
-/// sequence directory, [`SequenceFiles`], or the images of a ROS 2 bag,
-/// [`crate::bag::source::BagFrames`]).
+/// sequence directory, [`SequenceFiles`], or the images of a ROS 2 bag, `bag::source::BagFrames`).
 pub trait FrameSource: Send {
     /// Hands frames `0..end` (positions in `frames.csv`) to `emit` in order, until `emit`
     /// returns `false`.

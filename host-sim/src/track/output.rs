@@ -59,9 +59,10 @@ pub struct TrackSummary {
     pub frames_per_s: f64,
     /// Version of evorec.
     pub evorec_version: &'static str,
-    /// What was found in the ROS 2 bag tracked (absent for a sequence directory).
+    /// What was found in the ROS 2 bag tracked (absent for a sequence directory): the bag
+    /// reader's report, as JSON, so that tracking does not depend on the bag reader.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub bag: Option<crate::bag::BagReport>,
+    pub bag: Option<serde_json::Value>,
 }
 
 /// One `trace.csv` row's truth (aligned modulo symmetry) and the errors, per frame.

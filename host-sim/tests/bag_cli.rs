@@ -3,30 +3,20 @@
 //! from an exported simulator scenario (`evorec_sim::bag::testbag`), then spoiled.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use evorec_sim::bag::testbag::{self, TestBag, Transforms};
 use evorec_sim::export;
 use evorec_sim::scenario::Scenario;
 use evorec_sim::sequence::Sequence;
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("evorec-bag-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("creating {}: {e}", dir.display()));
-    dir
-}
-
-fn evorec(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_evorec"))
-        .args(args)
-        .env("RUST_BACKTRACE", "1")
-        .env_remove("RUST_LOG")
-        .output()
-        .unwrap_or_else(|e| panic!("running evorec: {e}"))
-}
-
 /// A short exported scenario (1 s of 160x120 frames).
+mod common;
+use common::evorec;
+
+fn scratch(name: &str) -> PathBuf {
+    common::scratch("bag-cli", name)
+}
+
 fn sequence(dir: &Path) -> Sequence {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
     let mut s = Scenario::from_toml_str(&std::fs::read_to_string(path).expect("scenario")).expect("valid");

@@ -2,27 +2,16 @@
 //! no backtrace even with `RUST_BACKTRACE=1`, and a non-zero exit status.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-/// A fresh scratch directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("evorec-cli-errors-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("creating {}: {e}", dir.display()));
-    dir
-}
-
-/// Runs `evorec ARGS` with backtraces requested, so a printed backtrace would show.
-fn evorec(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_evorec"))
-        .args(args)
-        .env("RUST_BACKTRACE", "1")
-        .env("RUST_LIB_BACKTRACE", "1")
-        .output()
-        .unwrap_or_else(|e| panic!("running evorec: {e}"))
-}
+use std::process::Output;
 
 /// Checks the failure and returns its single stderr line.
+mod common;
+use common::evorec;
+
+fn scratch(name: &str) -> PathBuf {
+    common::scratch("cli-errors", name)
+}
+
 fn single_error_line(out: &Output) -> String {
     assert!(!out.status.success(), "evorec succeeded: {out:?}");
     assert_eq!(out.status.code(), Some(1), "exit status: {out:?}");

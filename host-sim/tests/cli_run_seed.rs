@@ -2,17 +2,12 @@
 //! (for seed sweeps such as `scripts/target_seeds.sh`).
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
+
+mod common;
+use common::evorec;
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("evorec-cli-run-seed-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("creating {}: {e}", dir.display()));
-    dir
-}
-
-fn evorec(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_evorec")).args(args).output().unwrap_or_else(|e| panic!("running evorec: {e}"))
+    common::scratch("cli-run-seed", name)
 }
 
 fn path_str(p: &std::path::Path) -> &str {

@@ -22,19 +22,11 @@ pub(super) struct CvFilter {
     c: Matrix3<f32>,
 }
 
-/// The innovation of a measurement and its covariance's inverse, computed once for the gate
-/// and the update.
+/// The innovation of a measurement and its covariance's inverse.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Innovation {
     pub(super) y: Vector3<f32>,
     s_inv: Matrix3<f32>,
-}
-
-impl Innovation {
-    /// The squared Mahalanobis length `yᵀ S⁻¹ y`.
-    pub(super) fn distance2(&self) -> f32 {
-        self.y.dot(&(self.s_inv * self.y))
-    }
 }
 
 impl CvFilter {

@@ -29,11 +29,13 @@
 //! noisy velocity fed forward to every individual drags the estimate along its own noise where
 //! the fitness is flat (depth above all), and the filter reads that back as motion.
 //!
-//! **Outliers and restarts.** An estimate whose innovation lies outside the 99.9 % ellipsoid
-//! of its predicted covariance ([`GATE_CHI2`], position and orientation each) is rejected;
-//! [`MAX_OUTLIERS`] rejections in a row restart the filter at the newest estimate, as do a time
-//! step backwards or longer than [`TargetFilterParams::max_gap_s`]. An estimate the tracker does
-//! not report as [`Status::Tracking`] resets the filter.
+//! **Restarts.** A time step backwards or longer than [`TargetFilterParams::max_gap_s`] restarts
+//! the filter at the newest estimate; an estimate the tracker does not report as
+//! [`Status::Tracking`] resets it. No estimate is gated out as an outlier: a GA estimate's errors
+//! are not Gaussian (it keeps its elite for frames, then jumps to a better individual), and a
+//! gate sized for the camera model's noise rejects those jumps, restarts the filter and loses a
+//! block in the middle of a reversal; a block that is really gone is the tracker's status to
+//! say.
 //!
 //! Work per update is a fixed handful of 3 × 3 products (no loops over data), storage a few
 //! dozen floats, and all transcendental functions go through [`crate::math`], so the filter is
@@ -58,13 +60,6 @@ mod predict;
 use kalman::CvFilter;
 pub use params::{Field, FilterParamsError, TargetFilterParams};
 pub use predict::{PredictError, Prediction};
-
-/// The gate on an innovation's squared Mahalanobis length: the 99.9 % quantile of χ² with three
-/// degrees of freedom.
-pub const GATE_CHI2: f32 = 16.27;
-
-/// Consecutive rejected estimates after which the filter restarts at the newest.
-pub const MAX_OUTLIERS: u16 = 3;
 
 /// The target's velocity screw in the world frame `Σ_W` (`^W ψ̇_M` with the angular part as
 /// an angular velocity, see [`crate::feedforward::jn`]).
@@ -120,13 +115,10 @@ impl Optics {
 /// What one [`TargetFilter::update`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum UpdateOutcome {
-    /// The filter (re)started at this measurement (first one, after a reset, a time gap, or
-    /// too many outliers).
+    /// The filter (re)started at this measurement (first one, after a reset or a time gap).
     Started,
     /// The measurement was accepted.
     Accepted,
-    /// The measurement was rejected as an outlier (the prediction was kept).
-    Rejected,
     /// The target was lost: the filter was reset and holds no track.
     Lost,
 }
@@ -141,7 +133,6 @@ struct Track {
     time_us: u64,
     /// Accepted estimates since the (re)start, the starting one included.
     updates: u16,
-    outliers: u16,
 }
 
 /// Constant-velocity Kalman filter of the target's world pose (see the module docs).
@@ -279,8 +270,7 @@ impl TargetFilter {
         self.last_outcome
     }
 
-    /// Innovation of the last update that got as far as the gate: position (m, world) and
-    /// rotation vector (rad, world).
+    /// Innovation of the last update: position (m, world) and rotation vector (rad, world).
     pub fn last_innovation(&self) -> [f32; 6] {
         self.last_innovation
     }
@@ -340,21 +330,11 @@ impl TargetFilter {
             return UpdateOutcome::Started;
         };
         self.last_innovation = [pos_inn.y.x, pos_inn.y.y, pos_inn.y.z, rot_inn.y.x, rot_inn.y.y, rot_inn.y.z];
-        if !(pos_inn.distance2() <= GATE_CHI2 && rot_inn.distance2() <= GATE_CHI2) {
-            next.outliers = next.outliers.saturating_add(1);
-            if next.outliers >= MAX_OUTLIERS {
-                self.start(measured, &r_pos, &r_rot, time_us);
-                return UpdateOutcome::Started;
-            }
-            *track = next;
-            return UpdateOutcome::Rejected;
-        }
         next.pos.update(&pos_inn);
         let correction = next.rot.update(&rot_inn);
         next.orientation = exp_rotation(&correction) * next.orientation;
         next.rot.set_position(Vector3::zeros());
         next.updates = next.updates.saturating_add(1);
-        next.outliers = 0;
         *track = next;
         UpdateOutcome::Accepted
     }
@@ -367,7 +347,6 @@ impl TargetFilter {
             orientation: measured.rotation,
             time_us,
             updates: 1,
-            outliers: 0,
         });
     }
 

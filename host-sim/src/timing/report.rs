@@ -61,9 +61,9 @@ fn target_section(s: &mut String, r: &Results) {
     let _ = writeln!(
         s,
         "## Feedforward of the target's motion (`ff+target`, the `target` run)\n\n\
-         The same {} frames, population and rows, with `Feedforward::OnWithTarget`: the target filter is updated in \
-         every generation, and once it trusts a significant velocity (the conveyor frames: {} m/s along world y) \
-         every individual is shifted by the target's twist too. **{} of {} generations fed a non-zero target \
+         The same {} frames, population and rows, with `Feedforward::OnWithTarget`: the target motion model is \
+         updated in every generation, and once it has observed a velocity (the conveyor frames: {} m/s along world \
+         y) every individual but the elite is shifted by the target's twist too. **{} of {} generations fed a non-zero target \
          velocity forward** (`tshift=1` in the `GEN` lines).\n\n\
          | quantity (instructions) | ff: max | ff+target: max | ff+target: mean |\n|---|---:|---:|---:|",
         t.generations,

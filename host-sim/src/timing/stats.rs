@@ -75,9 +75,9 @@ pub struct RunStats {
     pub by_kind: Vec<(CaseKind, usize, Range)>,
     /// Whole call per status the generations started in.
     pub by_status: Vec<(Status, usize, Range)>,
-    /// Generations that shifted every individual by a non-zero target velocity too (`tshift=1`:
+    /// Generations that shifted the individuals by a non-zero target velocity too (`tshift=1`:
     /// the `ff+target` path with `Tracker::target_feedforward_velocity` not zero, i.e. the
-    /// target filter trusted and its velocity, seen along the line of sight, significant).
+    /// target motion model has observed a velocity).
     pub target_shifts: usize,
     /// Whole call of those generations (`None` if there were none).
     pub target_shift_call: Option<Range>,

@@ -454,17 +454,7 @@ pub fn frame_time(s: &Scenario, frame: u32) -> Result<f64> {
 /// Parameters that [`TargetFilter::new`] refuses (a parsed scenario's never are).
 pub fn target_filter(s: &Scenario) -> Result<TargetFilter> {
     let filter = TargetFilter::new(s.target_filter.0).map_err(|e| anyhow::anyhow!("[target_filter]: {e}"))?;
-    Ok(filter.with_optics(optics(s)))
-}
-
-/// The camera model of a scenario's rig and block, as [`Optics::of`] makes it for the tracker.
-pub fn optics(s: &Scenario) -> Optics {
-    let sizes = s.target.size_m.map(|v| v as f32);
-    Optics {
-        focal_px: 0.5 * (s.camera.fx as f32 + s.camera.fy as f32),
-        baseline_m: s.camera.baseline_m as f32,
-        radius_m: (sizes[0] + sizes[1] + sizes[2]) / 6.0,
-    }
+    Ok(filter.with_optics(Optics::of(&rig(s)?, &block(s))))
 }
 
 /// The flange-to-camera transform of a scenario (f32, for the tracker).

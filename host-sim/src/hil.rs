@@ -138,10 +138,9 @@ pub fn run_with_options(
     options: &HilOptions,
     on_frame: impl FnMut(),
 ) -> Result<(RunOutput, LinkReport)> {
-    let world = World::new(s)?;
-    let truth0 = world.truth();
-    let mut session = start_session(s, &truth0, experiment::feedforward(s.method), firmware, workdir, options)?;
-    let mut board = SimBoard::new(world)?;
+    let mut board = SimBoard::new(World::new(s)?)?;
+    let mut session =
+        start_session(s, &board.start_pose(), experiment::feedforward(s.method), firmware, workdir, options)?;
     let rejected = drive(&mut session, &mut board, on_frame)?;
     let link = finish(session)?;
     let rows = board.into_rows();
@@ -165,7 +164,7 @@ pub fn run_closed_loop(
     options: &HilOptions,
     on_frame: impl FnMut(),
 ) -> Result<(ClosedLoopOutput, LinkReport)> {
-    let mut board = ServoBoard::new(s, opts)?;
+    let mut board = ServoBoard::closed_loop(s, opts)?;
     let mut session = start_session(s, &board.start_pose(), board.feedforward(), firmware, workdir, options)?;
     let rejected = drive(&mut session, &mut board, on_frame)?;
     let link = finish(session)?;

@@ -7,9 +7,15 @@
 //! with the joint sample `q, q̇` of that instant; the tracker computes the hue of the pixels it
 //! samples, as the board does (`evorec run` and `evorec hil` see the same bytes). Each published estimate is stored with the ground truth of its frame.
 //!
+//! One board, [`SimBoard`], serves every run; what moves the arm between frames and consumes
+//! the estimates is its pluggable [`ArmController`]: the scenario's scripted flange motion
+//! ([`Scripted`], `evorec run`) or the visual servo ([`crate::closed_loop::ServoLoop`], a
+//! `[servo]` scenario). A host tracker for a board is set up by
+//! [`crate::experiment::setup_tracker`].
+//!
 //! ## Hand-over
-//! The board also plays the consumer of the estimates (a visual-servo loop): the estimate of
-//! the frame captured at `t` is output at `t + delay_s` (`[tracker] delay_s`). The board feeds
+//! [`Scripted`] also plays the consumer of the estimates (a visual-servo loop): the estimate of
+//! the frame captured at `t` is output at `t + delay_s` (`[tracker] delay_s`). It feeds
 //! every published estimate to its own copy of the core's [`TargetFilter`] with the tracker's
 //! own call, [`TargetFilter::update_from_estimate`], on the measurement the estimate carries
 //! ([`Estimate::target_measurement`]): the same code on the same inputs as the tracker's
@@ -291,29 +297,121 @@ impl BoardError for SimError {
     }
 }
 
-/// The simulated board.
-pub struct SimBoard {
-    world: World,
-    frames: u32,
-    next: u32,
-    current: Option<(f64, Psi, JointSample<DOF>, bool, TargetVelocity)>,
-    rows: Vec<TraceRow>,
+/// What the board keeps of the frame it delivered last, until its estimate is published.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Capture {
+    /// Capture time (s).
+    pub t: f64,
+    /// True pose `^CR ψ_M` at capture.
+    pub truth: Psi,
+    /// The joint sample delivered with the frame.
+    pub joints: JointSample<DOF>,
+    /// Whether the block was hidden in this frame (as the arm controller says).
+    pub hidden: bool,
+}
+
+/// What moves the simulated arm between frames and consumes the published estimates: the one
+/// part of a [`SimBoard`] that differs between an open-loop run (the scenario's scripted flange
+/// motion, [`Scripted`]) and a closed loop (the visual servo,
+/// [`crate::closed_loop::ServoLoop`]).
+pub trait ArmController {
+    /// Runs the arm (the 1 kHz joint loop) up to `t`, the capture time of the next frame, and
+    /// sets the world up for that frame; returns whether the block is hidden in it.
+    fn advance(&mut self, world: &mut World, t: f64) -> bool;
+
+    /// Takes the estimate of the frame `capture` (the world still at its capture time); returns
+    /// the hand-over the frame's [`TraceRow`] records (`None` where not simulated).
+    fn publish(&mut self, world: &World, capture: &Capture, estimate: &Estimate) -> Option<Handover>;
+}
+
+/// The scenario's scripted flange motion ([`World::advance_to`]), and a consumer of the
+/// estimates that hands each over `[tracker] delay_s` after capture with its own copy of the
+/// target filter (see the module documentation).
+pub struct Scripted {
     filter: TargetFilter,
     flange_to_camera: Isometry3<f32>,
 }
 
-impl SimBoard {
-    /// A board delivering [`frame_total`] frames of `world`'s scenario; its copy of the target
-    /// filter is tuned by the scenario's `[target_filter]`, as the tracker's is.
+impl Scripted {
+    /// The controller of `s`; its copy of the target filter is tuned by the scenario's
+    /// `[target_filter]`, as the tracker's is.
     ///
     /// # Errors
     /// Invalid `[target_filter]` parameters (a scenario read from a file has them checked).
+    pub fn new(s: &Scenario) -> Result<Self> {
+        Ok(Self { filter: target_filter(s)?, flange_to_camera: flange_to_camera(s) })
+    }
+}
+
+impl ArmController for Scripted {
+    fn advance(&mut self, world: &mut World, t: f64) -> bool {
+        world.advance_to(t);
+        world.occlusion().is_some()
+    }
+
+    /// Updates the target filter with `estimate` and predicts the pose at the output time
+    /// `t + delay_s`.
+    fn publish(&mut self, world: &World, capture: &Capture, estimate: &Estimate) -> Option<Handover> {
+        let tw = world.target_twist();
+        let true_velocity = TargetVelocity { v: tw.v.cast(), w: tw.w.cast() };
+        let feedforward = self.filter.feedforward_velocity();
+        self.filter.update_from_estimate(
+            &PA10,
+            &self.flange_to_camera,
+            &capture.joints,
+            &estimate.target_measurement,
+            estimate.status,
+        );
+        let t_out = capture.t + world.scenario().tracker.delay_s;
+        let (truth_out, joints_out) = world.look_ahead(t_out);
+        let t_out_us = (t_out * 1e6).round() as u64;
+        let (predicted, trusted, velocity) =
+            match self.filter.predict(&PA10, &self.flange_to_camera, &joints_out, t_out_us) {
+                Ok(p) => (p.psi, p.trusted, p.velocity),
+                Err(_) => (estimate.psi, false, TargetVelocity::ZERO),
+            };
+        Some(Handover { t_out, truth_out, predicted, trusted, velocity, feedforward, true_velocity })
+    }
+}
+
+/// The simulated board: delivers [`frame_total`] frames of its world's scenario, frame `n`
+/// captured at `t = n · frame_period_s` after the arm controller `A` ran the arm up to then,
+/// rendered as the cameras' RGB565 pixels with the joint sample of that instant; records a
+/// [`TraceRow`] per published estimate, after handing the estimate to the controller.
+pub struct SimBoard<A = Scripted> {
+    world: World,
+    arm: A,
+    start: Psi,
+    frames: u32,
+    next: u32,
+    current: Option<Capture>,
+    rows: Vec<TraceRow>,
+}
+
+impl SimBoard<Scripted> {
+    /// The open-loop board of `world`'s scenario ([`Scripted`]).
+    ///
+    /// # Errors
+    /// As [`Scripted::new`].
     pub fn new(world: World) -> Result<Self> {
+        let arm = Scripted::new(world.scenario())?;
+        Ok(Self::with_arm(world, arm))
+    }
+}
+
+impl<A: ArmController> SimBoard<A> {
+    /// A board of `world` (at `t = 0`) whose arm `arm` moves.
+    pub fn with_arm(world: World, arm: A) -> Self {
         let frames = frame_total(world.scenario());
-        let flange_to_camera = flange_to_camera(world.scenario());
-        let filter = target_filter(world.scenario())?;
+        let start = world.truth();
         let rows = Vec::with_capacity(frames as usize);
-        Ok(Self { world, frames, next: 0, current: None, rows, filter, flange_to_camera })
+        Self { world, arm, start, frames, next: 0, current: None, rows }
+    }
+
+    /// The true pose when the board was built (`t = 0`), around which a tracker's population
+    /// starts when the pose is known.
+    pub fn start_pose(&self) -> Psi {
+        self.start
     }
 
     /// Frames this board delivers in all.
@@ -326,6 +424,17 @@ impl SimBoard {
         &self.world
     }
 
+    /// The world, to change before the first frame (e.g. a target path the scenario does not
+    /// describe).
+    pub fn world_mut(&mut self) -> &mut World {
+        &mut self.world
+    }
+
+    /// The arm controller.
+    pub fn arm(&self) -> &A {
+        &self.arm
+    }
+
     /// The rows recorded so far.
     pub fn rows(&self) -> &[TraceRow] {
         &self.rows
@@ -335,13 +444,18 @@ impl SimBoard {
     pub fn into_rows(self) -> Vec<TraceRow> {
         self.rows
     }
+
+    /// Takes the recorded rows and the arm controller.
+    pub fn into_parts(self) -> (Vec<TraceRow>, A) {
+        (self.rows, self.arm)
+    }
 }
 
-impl ErrorType for SimBoard {
+impl<A> ErrorType for SimBoard<A> {
     type Error = SimError;
 }
 
-impl CameraController<DOF> for SimBoard {
+impl<A: ArmController> CameraController<DOF> for SimBoard<A> {
     type Format = evorec_core::image::Rgb565;
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SimError> {
         if self.next >= self.frames {
@@ -353,14 +467,12 @@ impl CameraController<DOF> for SimBoard {
             return Err(SimError::BufferTooSmall);
         }
         let t = f64::from(self.next) * self.world.scenario().frame_period_s;
-        self.world.advance_to(t);
+        let hidden = self.arm.advance(&mut self.world, t);
         let images = self.world.render();
         render::rgb565_into(&images.left, left);
         render::rgb565_into(&images.right, right);
         let joints = self.world.arm().joint_sample();
-        let tw = self.world.target_twist();
-        let velocity = TargetVelocity { v: tw.v.cast(), w: tw.w.cast() };
-        self.current = Some((t, self.world.truth(), joints, self.world.occlusion().is_some(), velocity));
+        self.current = Some(Capture { t, truth: self.world.truth(), joints, hidden });
         let info = FrameInfo {
             sequence: self.next,
             capture_time_us: (t * 1e6).round() as u64,
@@ -376,51 +488,21 @@ impl CameraController<DOF> for SimBoard {
     }
 
     fn publish(&mut self, _frame: &FrameInfo, estimate: &Estimate) -> Result<(), SimError> {
-        if let Some((t, truth, joints, hidden, true_velocity)) = self.current.take() {
-            let handover = Some(self.hand_over(t, &joints, estimate, true_velocity));
-            self.rows.push(TraceRow {
-                t,
-                q: joints.q,
-                qd: joints.qd,
-                truth,
-                estimate: estimate.psi,
-                fitness: estimate.fitness,
-                status: estimate.status,
-                hidden,
-                handover,
-            });
-        }
+        let Some(capture) = self.current.take() else { return Ok(()) };
+        let handover = self.arm.publish(&self.world, &capture, estimate);
+        let Capture { t, truth, joints, hidden } = capture;
+        self.rows.push(TraceRow {
+            t,
+            q: joints.q,
+            qd: joints.qd,
+            truth,
+            estimate: estimate.psi,
+            fitness: estimate.fitness,
+            status: estimate.status,
+            hidden,
+            handover,
+        });
         Ok(())
-    }
-}
-
-impl SimBoard {
-    /// Updates the board's target filter with `estimate` (captured at `t` with `joints`) and
-    /// predicts the pose at the output time `t + delay_s`.
-    fn hand_over(
-        &mut self,
-        t: f64,
-        joints: &JointSample<DOF>,
-        estimate: &Estimate,
-        true_velocity: TargetVelocity,
-    ) -> Handover {
-        let feedforward = self.filter.feedforward_velocity();
-        self.filter.update_from_estimate(
-            &PA10,
-            &self.flange_to_camera,
-            joints,
-            &estimate.target_measurement,
-            estimate.status,
-        );
-        let t_out = t + self.world.scenario().tracker.delay_s;
-        let (truth_out, joints_out) = self.world.look_ahead(t_out);
-        let t_out_us = (t_out * 1e6).round() as u64;
-        let (predicted, trusted, velocity) =
-            match self.filter.predict(&PA10, &self.flange_to_camera, &joints_out, t_out_us) {
-                Ok(p) => (p.psi, p.trusted, p.velocity),
-                Err(_) => (estimate.psi, false, TargetVelocity::ZERO),
-            };
-        Handover { t_out, truth_out, predicted, trusted, velocity, feedforward, true_velocity }
     }
 }
 
@@ -616,7 +698,7 @@ mod tests {
         s.target_filter.0.max_gap_s = 0.3;
         let board = SimBoard::new(World::new(&s).unwrap_or_else(|e| unreachable!("{e}")))
             .unwrap_or_else(|e| unreachable!("{e}"));
-        assert_eq!(board.filter.params(), &s.target_filter.0);
+        assert_eq!(board.arm.filter.params(), &s.target_filter.0);
         // Parameters the core refuses are refused here too, naming the section and the field.
         s.target_filter.0.image_noise_px = 0.0;
         let e = SimBoard::new(World::new(&s).unwrap_or_else(|e| unreachable!("{e}"))).err().map(|e| e.to_string());

@@ -35,7 +35,7 @@ use image::RgbImage;
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::Isometry3;
 
-use crate::experiment::INITIAL_SPREAD;
+use crate::experiment::{Population, SetupError, setup_tracker};
 use crate::sequence::Sequence;
 use crate::sim::search_space;
 pub use board::FrameSource;
@@ -234,18 +234,18 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
     opts: &TrackOptions,
     arm: Chain<DOF>,
 ) -> Result<TrackOutput> {
+    // Without an initial pose the tracker starts searching: uniform population, and the
+    // colour-blob acquisition (evorec_core::acquire) seeds it until it tracks.
+    let population = match &seq.manifest.initial_pose {
+        Some(pose) => Population::Around(Psi::from_isometry(&pose.cast::<f32>())),
+        None => Population::Redrawn,
+    };
     let mut tracker: Tracker<DOF, HOST_POPULATION_CAPACITY, G> =
-        Tracker::new(config(seq, arm, opts)?).map_err(|e| anyhow!("tracker: {e}"))?;
-    tracker.set_target_filter_params(opts.target_filter).map_err(|e| anyhow!("--target-filter: {e}"))?;
-    match &seq.manifest.initial_pose {
-        Some(pose) => {
-            let psi = Psi::from_isometry(&pose.cast::<f32>());
-            tracker.reset_around(&psi, &INITIAL_SPREAD).map_err(|e| anyhow!("target.initial_pose: {e}"))?;
-        }
-        // Without an initial pose the tracker starts searching: uniform population, and the
-        // colour-blob acquisition (evorec_core::acquire) seeds it until it tracks.
-        None => tracker.reset_uniform(),
-    }
+        setup_tracker(config(seq, arm, opts)?, opts.target_filter, population).map_err(|e| match e {
+            SetupError::TargetFilter(e) => anyhow!("--target-filter: {e}"),
+            SetupError::InitialPose(e) => anyhow!("target.initial_pose: {e}"),
+            e => anyhow!("{e}"),
+        })?;
     let end = opts.frames.map_or(seq.frames.len(), |n| n.min(seq.frames.len()));
     if end == 0 {
         bail!("--frames 0: nothing to track");

@@ -474,7 +474,7 @@ impl ServoBoard {
             world,
             ctl,
             filter: crate::sim::target_filter(s)?,
-            feedforward: opts.feedforward.unwrap_or_else(|| experiment::feedforward(s.method)),
+            feedforward: opts.feedforward.unwrap_or_else(|| s.method.into()),
             opts: *opts,
             desired,
             start,

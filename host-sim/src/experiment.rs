@@ -10,11 +10,11 @@ use evorec_core::config::{DEFAULT_GRID, PA10_DOF};
 use evorec_core::ga::GaParams;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
-use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
+use evorec_core::tracker::{Tracker, TrackerConfig};
 use serde::Serialize;
 
 use crate::occlusion::Initial;
-use crate::scenario::{HOST_POPULATION_CAPACITY, Method, Scenario};
+use crate::scenario::{HOST_POPULATION_CAPACITY, Scenario};
 use crate::sim::{self, Handover, SimBoard, TraceRow, World};
 
 /// The tracker the simulator runs: PA-10, the default population capacity (the size in use is
@@ -33,15 +33,6 @@ pub fn tracker_config(s: &Scenario) -> Result<TrackerConfig<PA10_DOF>> {
     Ok(TrackerConfig::pa10(sim::rig(s)?, sim::block(s), sim::flange_to_camera(s), sim::search_space())
         .with_seed(s.seed)
         .with_ga(GaParams::DEFAULT.with_population(s.ga.population)))
-}
-
-/// The feedforward switch of a method.
-pub fn feedforward(m: Method) -> Feedforward {
-    match m {
-        Method::Ga => Feedforward::Off,
-        Method::Ff => Feedforward::On,
-        Method::FfTarget => Feedforward::OnWithTarget,
-    }
 }
 
 /// Accuracy of a run (paper eq. 40–41): mean fitness and RMS errors over all frames.
@@ -303,7 +294,7 @@ pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -
     let mut board = ProgressBoard { inner: SimBoard::new(world)?, on_frame: &mut on_frame };
     let n = sim::image_bytes(s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
-    let stats = board::run(&mut board, &mut tracker, feedforward(s.method), &mut left, &mut right, u32::MAX)
+    let stats = board::run(&mut board, &mut tracker, s.method.into(), &mut left, &mut right, u32::MAX)
         .map_err(|e| anyhow::anyhow!("simulated board: {e:?}"))?;
     let rows = board.inner.into_rows();
     let summary = Summary::of(&rows, stats.rejected, s);

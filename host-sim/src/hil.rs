@@ -140,7 +140,7 @@ pub fn run_with_options(
 ) -> Result<(RunOutput, LinkReport)> {
     let world = World::new(s)?;
     let truth0 = world.truth();
-    let mut session = start_session(s, &truth0, experiment::feedforward(s.method), firmware, workdir, options)?;
+    let mut session = start_session(s, &truth0, s.method.into(), firmware, workdir, options)?;
     let mut board = SimBoard::new(world)?;
     let rejected = drive(&mut session, &mut board, on_frame)?;
     let link = finish(session)?;

@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
-use evorec_core::tracker::Feedforward;
 use evorec_sim::scenario::{Method, Scenario};
 use evorec_sim::sequence::Sequence;
 use evorec_sim::{bag, closed_loop, experiment, export, frame, hil, io, paper, servo, target_grid, track};
@@ -23,28 +22,6 @@ struct Cli {
     /// Only errors in the log, and no progress bar.
     #[arg(short, long, global = true, conflicts_with = "verbose")]
     quiet: bool,
-}
-
-/// `evorec track --method`.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-enum TrackMethod {
-    /// Plain 1-step GA.
-    Ga,
-    /// GA + the arm's motion fed forward.
-    Ff,
-    /// GA + the arm's and the target's motion fed forward.
-    #[value(name = "ff+target")]
-    FfTarget,
-}
-
-impl TrackMethod {
-    fn feedforward(self) -> Feedforward {
-        match self {
-            Self::Ga => Feedforward::Off,
-            Self::Ff => Feedforward::On,
-            Self::FfTarget => Feedforward::OnWithTarget,
-        }
-    }
 }
 
 /// `evorec track --pixels`.
@@ -191,8 +168,8 @@ enum Command {
         /// `ga` (plain 1-step GA), `ff` (+ the arm's motion fed forward) or `ff+target` (+ the
         /// target's own motion, estimated from past estimates, fed forward too; the default: a
         /// recorded target may move, and on a still one nothing significant is fed forward).
-        #[arg(long, value_enum, default_value_t = TrackMethod::FfTarget)]
-        method: TrackMethod,
+        #[arg(long, value_enum, default_value_t = Method::FfTarget)]
+        method: Method,
         /// Seed of the GA.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -584,7 +561,7 @@ fn execute(cli: Cli) -> Result<()> {
                 None => evorec_sim::scenario::TargetFilterSection::default(),
             };
             let opts = track::TrackOptions {
-                feedforward: if no_ff { Feedforward::Off } else { method.feedforward() },
+                feedforward: if no_ff { Method::Ga } else { method }.into(),
                 seed,
                 population,
                 points_per_row,

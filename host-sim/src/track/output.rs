@@ -96,7 +96,7 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
     let summary = TrackSummary {
         sequence: seq.name(),
         feedforward: out.options.feedforward != Feedforward::Off,
-        method: super::method_name(out.options.feedforward),
+        method: crate::scenario::Method::from(out.options.feedforward).as_str(),
         population: super::ga_params(&out.options).map_or(0, |g| g.population),
         pixels: out.options.pixels.as_str(),
         seed: out.options.seed,

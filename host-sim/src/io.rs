@@ -9,6 +9,9 @@
 //! graph; it deletes the temporary file when the write fails and renames with
 //! [`NamedTempFile::persist`](tempfile::NamedTempFile::persist)); the `atomic-write-file` crate
 //! does the same with fewer users and would be one more dependency.
+//!
+//! Not output files, and not written here: QEMU's log (`timing/qemu.rs` hands QEMU the open
+//! file, which QEMU fills as it runs) and the link's FIFOs of `evorec hil`.
 
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -230,23 +233,24 @@ pub fn trace_record(r: &TraceRow) -> Vec<String> {
 }
 
 /// Writes `trace.csv` of a closed-loop run: the columns of [`trace_header`] followed by
-/// `extra_header`, one row of `rows` with its `extra` fields per frame.
+/// `extra_header`, one row of `rows` with its `extra` fields per frame, atomically.
 ///
 /// # Errors
 /// I/O errors, or `extra` shorter than `rows`.
 pub fn write_trace_with(path: &Path, rows: &[TraceRow], extra_header: &[&str], extra: &[Vec<String>]) -> Result<()> {
     anyhow::ensure!(extra.len() >= rows.len(), "{} extra rows for {} trace rows", extra.len(), rows.len());
-    let mut w = csv::Writer::from_path(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut header = trace_header();
-    header.extend(extra_header.iter().map(|h| (*h).to_owned()));
-    w.write_record(header)?;
-    for (r, x) in rows.iter().zip(extra) {
-        let mut rec = trace_record(r);
-        rec.extend(x.iter().cloned());
-        w.write_record(rec)?;
-    }
-    w.flush()?;
-    Ok(())
+    write_atomic(path, |out| {
+        let mut w = csv::Writer::from_writer(out);
+        let mut header = trace_header();
+        header.extend(extra_header.iter().map(|h| (*h).to_owned()));
+        w.write_record(header)?;
+        for (r, x) in rows.iter().zip(extra) {
+            let mut rec = trace_record(r);
+            rec.extend(x.iter().cloned());
+            w.write_record(rec)?;
+        }
+        Ok(w.flush()?)
+    })
 }
 
 /// Writes `value` as pretty JSON, atomically.

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use evorec_firmware::faults::FaultConfig;
 use evorec_sim::experiment::{self, RunOutput};
 use evorec_sim::scenario::{Method, Scenario};
@@ -138,8 +138,7 @@ fn write_closed_loop(output: &closed_loop::ClosedLoopOutput, out: &Path, title: 
 fn report_link(link: &hil::LinkReport, out: &Path, faults: bool) -> Result<()> {
     if faults {
         println!("{}", link.describe());
-        std::fs::write(out.join("link.json"), link.to_json())
-            .with_context(|| format!("write {}", out.join("link.json").display()))?;
+        io::write_bytes(&out.join("link.json"), link.to_json().as_bytes())?;
     }
     Ok(())
 }

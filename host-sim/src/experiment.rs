@@ -16,6 +16,7 @@ use serde::Serialize;
 use crate::occlusion::Initial;
 use crate::scenario::{HOST_POPULATION_CAPACITY, Scenario};
 use crate::sim::{self, Handover, SimBoard, TraceRow, World};
+use crate::track::eval::RotationError;
 
 /// The tracker the simulator runs: PA-10, the default population capacity (the size in use is
 /// the scenario's `[ga] population`) and sample rows.
@@ -232,6 +233,10 @@ pub struct Summary {
     /// The accuracy figures, flattened into the top level.
     #[serde(flatten)]
     pub accuracy: Accuracy,
+    /// The rotation error (as `evorec track`'s), flattened into the top level (absent for no
+    /// frames).
+    #[serde(flatten)]
+    pub rotation: Option<RotationError>,
     /// Frames per tracker status.
     pub status: StatusCounts,
     /// Frames refused by the tracker (should be 0).
@@ -250,6 +255,7 @@ impl Summary {
     pub fn of(rows: &[TraceRow], rejected: u32, scenario: &Scenario) -> Self {
         Self {
             accuracy: Accuracy::of(rows),
+            rotation: RotationError::of_run(rows),
             status: StatusCounts::of(rows),
             rejected,
             handover: HandoverSummary::of(rows, scenario.tracker.delay_s),
@@ -330,7 +336,7 @@ impl<B: board::CameraController<PA10_DOF>, F: FnMut()> board::CameraController<P
     }
 }
 
-/// Writes `trace.csv`, `summary.json` and the plots of a run into `dir`.
+/// Writes `trace.csv`, `estimate.tum`, `summary.json` and the plots of a run into `dir`.
 ///
 /// # Errors
 /// I/O errors.
@@ -338,7 +344,18 @@ pub fn write_outputs(out: &RunOutput, dir: &Path, title: &str) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let trace = dir.join("trace.csv");
     crate::io::write_trace(&trace, &out.rows)?;
+    write_estimate(out, dir)?;
     crate::io::write_json(&dir.join("summary.json"), &out.summary)?;
     crate::plot::plot_trace(&trace, dir, title)?;
+    Ok(())
+}
+
+/// Writes the run's estimates as `estimate.tum` into `dir` (capture time, `^CR T_M`).
+///
+/// # Errors
+/// I/O errors.
+pub fn write_estimate(out: &RunOutput, dir: &Path) -> Result<()> {
+    let poses: Vec<_> = out.rows.iter().map(|r| (r.t, crate::track::eval::isometry_of(&r.estimate))).collect();
+    crate::io::write_estimate_tum(dir, &poses)?;
     Ok(())
 }

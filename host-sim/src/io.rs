@@ -14,9 +14,10 @@
 //! file, which QEMU fills as it runs) and the link's FIFOs of `evorec hil`.
 
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow};
+use nalgebra::Isometry3;
 use serde::Serialize;
 
 use crate::sim::TraceRow;
@@ -151,6 +152,21 @@ pub fn write_table(out: &Path, stem: &str, columns: &[&str], records: &[Vec<Stri
         Ok(w.flush()?)
     })?;
     write_bytes(&out.join(format!("{stem}.md")), markdown.as_bytes())
+}
+
+/// Writes `estimate.tum` into `dir` (the TUM format: one `t tx ty tz qx qy qz qw` line per
+/// estimate), atomically; returns its path. `evorec track`, `run` and `hil` write it.
+///
+/// # Errors
+/// As [`write_atomic`].
+pub fn write_estimate_tum(dir: &Path, poses: &[(f64, Isometry3<f64>)]) -> Result<PathBuf> {
+    let path = dir.join("estimate.tum");
+    let text = crate::sequence::tum::format(
+        "t tx ty tz qx qy qz qw: evorec's estimate of the block in the right camera frame (^CR T_M), metres",
+        poses,
+    );
+    write_bytes(&path, text.as_bytes())?;
+    Ok(path)
 }
 
 /// Header of `trace.csv`.

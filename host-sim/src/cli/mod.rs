@@ -29,7 +29,8 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Run one scenario: writes DIR/trace.csv, DIR/summary.json and plots.
+    /// Run one scenario: writes DIR/trace.csv, DIR/estimate.tum (TUM format), DIR/summary.json
+    /// (with the rotation error) and plots.
     Run(run::RunArgs),
     /// The paper's experiment: motions A and B × ω ∈ {0, 0.125, 0.25, 0.5, 1.0} × (GA, GA + FF,
     /// GA + FF + target), 72 s each, in parallel; writes DIR/paper_table.csv, DIR/paper_table.md
@@ -107,7 +108,7 @@ impl OutArgs {
     }
 }
 
-/// `--method` and `--seed` of the subcommands that run one scenario file.
+/// `--method` and `--seed` of the subcommands that run one scenario file (`run`, `hil`).
 #[derive(clap::Args, Debug, Clone, Copy)]
 pub struct Overrides {
     /// Override the scenario's method: ga, ff or ff+target.

@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::Result;
 use evorec_firmware::faults::FaultConfig;
 use evorec_sim::experiment::{self, RunOutput};
-use evorec_sim::scenario::{Method, Scenario};
+use evorec_sim::scenario::Scenario;
 use evorec_sim::{closed_loop, hil, io};
 
 use super::{OutArgs, Overrides};
@@ -50,9 +50,8 @@ pub struct HilArgs {
     /// target/thumbv7em-none-eabihf/release/evorec-firmware).
     #[arg(long)]
     firmware: Option<PathBuf>,
-    /// Override the scenario's method: ga, ff or ff+target.
-    #[arg(long, value_parser = Method::parse)]
-    method: Option<Method>,
+    #[command(flatten)]
+    overrides: Overrides,
     /// Link fault injection: the fraction of messages (both directions) that are bit-flipped,
     /// dropped, duplicated, truncated or delayed, e.g. 0.01 for 1 %. Writes `link.json`.
     #[arg(long)]
@@ -64,7 +63,7 @@ pub struct HilArgs {
 
 impl HilArgs {
     pub fn run(self) -> Result<()> {
-        let s = Overrides { method: self.method, seed: None }.load(&self.scenario)?;
+        let s = self.overrides.load(&self.scenario)?;
         let out = self.out.create()?;
         let firmware = self.firmware.clone().unwrap_or_else(evorec_firmware::host::default_firmware_path);
         let t0 = Instant::now();
@@ -129,6 +128,7 @@ fn write_open_loop(output: &RunOutput, out: &Path, title: &str, t0: Instant) -> 
 /// Writes a closed-loop run's files and prints its accuracy and servo summary.
 fn write_closed_loop(output: &closed_loop::ClosedLoopOutput, out: &Path, title: &str, t0: Instant) -> Result<()> {
     closed_loop::write_outputs(output, out, title)?;
+    experiment::write_estimate(&output.run, out)?;
     report(&output.run.summary.accuracy, t0);
     report_servo(&output.servo_summary);
     Ok(())

@@ -122,11 +122,37 @@ pub struct Rms {
     pub frames: usize,
 }
 
+/// The rotation error of a run: RMS and largest angle (degrees) between estimate and truth,
+/// in `evorec track`'s, `run`'s and `hil`'s `summary.json`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RotationError {
+    /// RMS rotation error (degrees).
+    pub rms_rot_deg: f64,
+    /// Largest rotation error (degrees).
+    pub max_rot_deg: f64,
+}
+
+impl RotationError {
+    /// Of the per-frame rotation errors `degrees` (`None` when empty).
+    pub fn of(degrees: impl IntoIterator<Item = f64> + Clone) -> Option<Self> {
+        let [rms] = crate::experiment::rms_columns(degrees.clone().into_iter().map(|d| [d]))?;
+        Some(Self { rms_rot_deg: rms, max_rot_deg: degrees.into_iter().fold(0.0, f64::max) })
+    }
+
+    /// Of a simulated run: each frame's estimate against its true pose (no symmetry: as the
+    /// run's other errors).
+    pub fn of_run(rows: &[crate::sim::TraceRow]) -> Option<Self> {
+        let identity = [("I", UnitQuaternion::identity())];
+        Self::of(rows.iter().map(|r| frame_error(&r.estimate, &isometry_of(&r.truth), &identity).0.rot_deg))
+    }
+}
+
 impl Rms {
     /// The RMS of `errors` (`None` when empty).
     pub fn of(errors: &[FrameError]) -> Option<Self> {
-        let columns = errors.iter().map(|e| [e.d[0], e.d[1], e.d[2], e.d[3], e.d[4], e.d[5], e.rot_deg]);
-        let [x, y, z, e1, e2, e3, rot] = crate::experiment::rms_columns::<7>(columns)?;
+        let columns = errors.iter().map(|e| [e.d[0], e.d[1], e.d[2], e.d[3], e.d[4], e.d[5]]);
+        let [x, y, z, e1, e2, e3] = crate::experiment::rms_columns::<6>(columns)?;
+        let rot = RotationError::of(errors.iter().map(|e| e.rot_deg))?;
         Some(Self {
             rms_x_mm: x * 1e3,
             rms_y_mm: y * 1e3,
@@ -134,8 +160,8 @@ impl Rms {
             rms_e1: e1,
             rms_e2: e2,
             rms_e3: e3,
-            rms_rot_deg: rot,
-            max_rot_deg: errors.iter().map(|e| e.rot_deg).fold(0.0, f64::max),
+            rms_rot_deg: rot.rms_rot_deg,
+            max_rot_deg: rot.max_rot_deg,
             frames: errors.len(),
         })
     }

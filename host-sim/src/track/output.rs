@@ -16,7 +16,7 @@ use serde::Serialize;
 use super::TrackOutput;
 use super::eval::{self, FrameError, Rms};
 use crate::render;
-use crate::sequence::{Sequence, tum};
+use crate::sequence::Sequence;
 
 /// `summary.json` of a tracked sequence.
 #[derive(Debug, Clone, Serialize)]
@@ -208,13 +208,7 @@ pub fn write_all(seq: &Sequence, out: &TrackOutput, ev: &Evaluation, dir: &Path)
     written.push(trace.clone());
     let poses: Vec<(f64, Isometry3<f64>)> =
         out.tracked.iter().map(|t| (seq.frames[t.i].t_s, super::estimate_pose(t))).collect();
-    let tum_path = dir.join("estimate.tum");
-    let text = tum::format(
-        "t tx ty tz qx qy qz qw: evorec's estimate of the block in the right camera frame (^CR T_M), metres",
-        &poses,
-    );
-    crate::io::write_bytes(&tum_path, text.as_bytes())?;
-    written.push(tum_path);
+    written.push(crate::io::write_estimate_tum(dir, &poses)?);
     for (i, l, r) in &out.kept {
         if let Some(t) = out.tracked.iter().find(|t| t.i == *i) {
             let img = overlay(seq, l, r, &super::estimate_pose(t).cast())?;

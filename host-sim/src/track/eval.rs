@@ -12,6 +12,8 @@ use evorec_core::pose::Psi;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
+pub use crate::experiment::{RotationError, isometry_of};
+
 /// A frame's estimate stays "within" the truth when its position error is at most this (m)…
 pub const WITHIN_POSITION_M: f64 = 0.010;
 /// …and its rotation error at most this (degrees).
@@ -32,15 +34,6 @@ pub fn colour_symmetries(face_hues_deg: &[f32; 6]) -> Vec<(&'static str, UnitQua
         }
     }
     out
-}
-
-/// The pose of an estimate (f64).
-pub fn isometry_of(psi: &Psi) -> Isometry3<f64> {
-    let t = psi.translation().cast::<f64>();
-    let e = psi.eps().cast::<f64>();
-    let w = (1.0 - e.norm_squared()).max(0.0).sqrt();
-    let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, e.x, e.y, e.z));
-    Isometry3::from_parts(t.into(), q)
 }
 
 /// `ψ` (f64) of a pose, with `η ≥ 0`.
@@ -120,31 +113,6 @@ pub struct Rms {
     pub max_rot_deg: f64,
     /// Frames.
     pub frames: usize,
-}
-
-/// The rotation error of a run: RMS and largest angle (degrees) between estimate and truth,
-/// in `evorec track`'s, `run`'s and `hil`'s `summary.json`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct RotationError {
-    /// RMS rotation error (degrees).
-    pub rms_rot_deg: f64,
-    /// Largest rotation error (degrees).
-    pub max_rot_deg: f64,
-}
-
-impl RotationError {
-    /// Of the per-frame rotation errors `degrees` (`None` when empty).
-    pub fn of(degrees: impl IntoIterator<Item = f64> + Clone) -> Option<Self> {
-        let [rms] = crate::experiment::rms_columns(degrees.clone().into_iter().map(|d| [d]))?;
-        Some(Self { rms_rot_deg: rms, max_rot_deg: degrees.into_iter().fold(0.0, f64::max) })
-    }
-
-    /// Of a simulated run: each frame's estimate against its true pose (no symmetry: as the
-    /// run's other errors).
-    pub fn of_run(rows: &[crate::sim::TraceRow]) -> Option<Self> {
-        let identity = [("I", UnitQuaternion::identity())];
-        Self::of(rows.iter().map(|r| frame_error(&r.estimate, &isometry_of(&r.truth), &identity).0.rot_deg))
-    }
 }
 
 impl Rms {

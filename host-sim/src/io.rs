@@ -143,15 +143,23 @@ pub fn write_dir<T>(out: &Path, fill: impl FnOnce(&Path) -> Result<T>) -> Result
 /// I/O and CSV errors.
 pub fn write_table(out: &Path, stem: &str, columns: &[&str], records: &[Vec<String>], markdown: &str) -> Result<()> {
     std::fs::create_dir_all(out)?;
-    write_atomic(&out.join(format!("{stem}.csv")), |file| {
+    write_csv(&out.join(format!("{stem}.csv")), columns, records)?;
+    write_bytes(&out.join(format!("{stem}.md")), markdown.as_bytes())
+}
+
+/// Writes a CSV file (header `columns`, then `records`), atomically ([`write_atomic`]).
+///
+/// # Errors
+/// I/O and CSV errors.
+pub fn write_csv(path: &Path, columns: &[&str], records: &[Vec<String>]) -> Result<()> {
+    write_atomic(path, |file| {
         let mut w = csv::Writer::from_writer(file);
         w.write_record(columns)?;
         for rec in records {
             w.write_record(rec)?;
         }
         Ok(w.flush()?)
-    })?;
-    write_bytes(&out.join(format!("{stem}.md")), markdown.as_bytes())
+    })
 }
 
 /// Writes `estimate.tum` into `dir` (the TUM format: one `t tx ty tz qx qy qz qw` line per

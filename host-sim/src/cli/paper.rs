@@ -1,12 +1,14 @@
 //! `evorec paper`: the paper's grid, the grid over the block's own motion, or both.
 
+use std::ops::RangeInclusive;
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Result;
 use clap::ValueEnum;
+use evorec_sim::motion::MotionKind;
 use evorec_sim::scenario::{Method, Scenario};
-use evorec_sim::{paper, target_grid};
+use evorec_sim::{paper, paper_seeds, target_grid};
 
 use super::{OutArgs, load};
 
@@ -25,6 +27,15 @@ pub struct PaperArgs {
     /// ff+target).
     #[arg(long, value_parser = Method::parse)]
     method: Option<Method>,
+    /// Seed sweep instead of one grid: the sweep's cells (motion A at every ω, motion B at
+    /// ω > 0, of `--method`, default ff) run once per GA seed FIRST..LAST (both included), the
+    /// base's seed replaced; writes DIR/cells_FIRST_LAST.csv (columns motion, omega, seed, F,
+    /// x_mm, y_mm, z_mm, e1, e2, e3: one row per seed and cell) and the runs in DIR/runs/.
+    #[arg(long, value_name = "FIRST..LAST", value_parser = paper_seeds::parse_seeds, conflicts_with = "grid")]
+    seeds: Option<RangeInclusive<u64>>,
+    /// With --seeds: only these cells, MOTION:OMEGA, comma-separated (e.g. A:0,A:0.25,B:1).
+    #[arg(long, value_delimiter = ',', requires = "seeds", value_parser = paper_seeds::parse_cell)]
+    cells: Vec<(MotionKind, f64)>,
 }
 
 /// The grids of `evorec paper`.
@@ -43,6 +54,11 @@ impl PaperArgs {
         let base = self.base()?;
         let out = self.out.create()?;
         let t0 = Instant::now();
+        if let Some(seeds) = self.seeds.clone() {
+            let (runs, path) = paper_seeds::run(&self.sweep_cells(), seeds, &base, out, progress)?;
+            println!("{} runs in {:.1} s; wrote {}", runs.len(), t0.elapsed().as_secs_f64(), path.display());
+            return Ok(());
+        }
         let wanted = |m: Method| self.method.is_none_or(|w| w == m);
         let mut runs = 0;
         if self.grid != Grid::Target {
@@ -59,6 +75,15 @@ impl PaperArgs {
         }
         println!("{runs} runs in {:.1} s; wrote {}", t0.elapsed().as_secs_f64(), out.display());
         Ok(())
+    }
+
+    /// The cells of `--seeds`: `--cells` in their order, else all of the sweep's.
+    fn sweep_cells(&self) -> Vec<paper::Cell> {
+        let all = paper_seeds::cells(self.method.unwrap_or(Method::Ff));
+        if self.cells.is_empty() {
+            return all;
+        }
+        self.cells.iter().filter_map(|(m, w)| all.iter().find(|c| c.motion == *m && c.omega == *w).copied()).collect()
     }
 
     /// `--base`, or the built-in defaults.

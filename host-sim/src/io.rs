@@ -177,11 +177,13 @@ pub fn write_estimate_tum(dir: &Path, poses: &[(f64, Isometry3<f64>)]) -> Result
     Ok(path)
 }
 
-/// Header of `trace.csv`.
-pub fn trace_header() -> Vec<String> {
+/// The columns of `trace.csv` that every trace has, for an arm of `dof` joints: time, joints,
+/// truth, estimate, fitness, status and whether the block was hidden (`evorec track` writes
+/// only these; a recording does not say when the block was hidden, so the column stays empty).
+pub fn trace_columns(dof: usize) -> Vec<String> {
     let mut h = vec!["t".to_owned()];
-    h.extend((1..=7).map(|i| format!("q{i}")));
-    h.extend((1..=7).map(|i| format!("qd{i}")));
+    h.extend((1..=dof).map(|i| format!("q{i}")));
+    h.extend((1..=dof).map(|i| format!("qd{i}")));
     for prefix in ["", "est_"] {
         for c in ["x_mm", "y_mm", "z_mm", "e1", "e2", "e3"] {
             h.push(format!("{prefix}{c}"));
@@ -190,6 +192,13 @@ pub fn trace_header() -> Vec<String> {
     h.push("F".to_owned());
     h.push("status".to_owned());
     h.push("hidden".to_owned());
+    h
+}
+
+/// Header of `trace.csv` of a simulated run: [`trace_columns`] of the PA-10's 7 joints, then the
+/// hand-over's.
+pub fn trace_header() -> Vec<String> {
+    let mut h = trace_columns(7);
     // The hand-over at the output time (`sim::Handover`); empty where not simulated.
     h.push("t_out".to_owned());
     for prefix in ["out_", "pred_"] {

@@ -117,30 +117,13 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
     Evaluation { truth, errors, summary }
 }
 
-/// Header of `trace.csv` for `dof` joints (for 7 joints, exactly `evorec run`'s).
-pub fn trace_header(dof: usize) -> Vec<String> {
-    let mut h = vec!["t".to_owned()];
-    h.extend((1..=dof).map(|i| format!("q{i}")));
-    h.extend((1..=dof).map(|i| format!("qd{i}")));
-    for prefix in ["", "est_"] {
-        for c in ["x_mm", "y_mm", "z_mm", "e1", "e2", "e3"] {
-            h.push(format!("{prefix}{c}"));
-        }
-    }
-    h.push("F".to_owned());
-    h.push("status".to_owned());
-    // A recording does not say when the block was hidden: the column stays empty.
-    h.push("hidden".to_owned());
-    h
-}
-
 fn write_trace(path: &Path, seq: &Sequence, out: &TrackOutput, ev: &Evaluation) -> Result<()> {
     crate::io::write_atomic(path, |file| write_trace_to(file, seq, out, ev))
 }
 
 fn write_trace_to(file: &mut dyn std::io::Write, seq: &Sequence, out: &TrackOutput, ev: &Evaluation) -> Result<()> {
     let mut w = csv::Writer::from_writer(file);
-    w.write_record(trace_header(seq.joints.dof()))?;
+    w.write_record(crate::io::trace_columns(seq.joints.dof()))?;
     let psi_cells = |p: &[f64; 6]| -> Vec<String> {
         let mut v: Vec<String> = p[..3].iter().map(|x| format!("{:.4}", x * 1e3)).collect();
         v.extend(p[3..].iter().map(|x| format!("{x:.6}")));

@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
-"""Compares two scripts/paper_seeds.py tables cell by cell: the median over the seeds of each
-RMS entry in NEW against OLD, their ratio, and the entries whose ratio exceeds LIMIT (e.g.
-1.10 for a tree against an older one, 1.05 for FF + target against FF). Prints markdown.
+"""Compares two `evorec paper --seeds` tables (cells_FIRST_LAST.csv) cell by cell: the median
+over the seeds of each RMS entry in NEW against OLD, their ratio, and the entries whose ratio
+exceeds LIMIT (e.g. 1.10 for a tree against an older one, 1.05 for FF + target against FF).
+Prints markdown.
 
 NEW and OLD may each be several tables joined with commas (e.g. seeds 1-20 and 21-40 run
 separately); a cell's seeds are then pooled, and a seed that appears twice in one side is an
-error. NEW may hold a subset of OLD's cells (a screen with paper_seeds.py --cells); every cell
+error. NEW may hold a subset of OLD's cells (a screen with --cells); every cell
 of NEW must be in OLD.
 
 --ci adds, per entry, a 95 % bootstrap interval of the ratio of medians: the seeds present in
@@ -13,6 +14,8 @@ both sides are resampled together (the two methods of one seed share the scene's
 resamples from a fixed seed, so the same tables give the same interval.
 
 usage: scripts/compare_seeds.py NEW.csv[,NEW2.csv] OLD.csv[,OLD2.csv] [LIMIT] [--ci]
+
+Requires: Python >= 3.8, standard library only.
 """
 import csv, random, statistics, sys
 

@@ -7,6 +7,8 @@ Per run, over the frames after 3 s with the filter trusted: the RMS error of `ff
 against `true_target_v*` per world axis, and for the belt's axis (y) a least-squares fit of the
 error on the true acceleration (np.gradient of the true velocity): the lag (s) and the RMS of
 what the fit leaves. Prints each run and the medians over the runs.
+
+Requires: Python >= 3.8 and NumPy.
 """
 import csv
 import statistics

@@ -5,6 +5,8 @@ Q_est ⊗ Q_true⁻¹, which is expressed in the camera frame). Prints the media
 each directory.
 
 usage: scripts/rotation_error.py DIR [DIR ...]   (each DIR holds run directories with trace.csv)
+
+Requires: Python >= 3.8, standard library only.
 """
 import csv, math, os, statistics, sys
 

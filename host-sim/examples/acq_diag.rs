@@ -3,7 +3,7 @@ use evorec_core::acquire;
 use evorec_core::image::HueImage;
 use evorec_core::tracker::StereoFrame;
 use evorec_sim::acquire::{Case, pose_error, scenario};
-use evorec_sim::experiment::{SimTracker, feedforward, tracker_config};
+use evorec_sim::experiment::{SimTracker, tracker_config};
 use evorec_sim::render;
 use evorec_sim::sim::World;
 
@@ -59,14 +59,14 @@ fn main() -> anyhow::Result<()> {
                     let mut c = tracker.clone();
                     c.set_status(status);
                     let t0 = std::time::Instant::now();
-                    let _ = std::hint::black_box(c.step(&frame, &joints, 0.033, feedforward(s.method)));
+                    let _ = std::hint::black_box(c.step(&frame, &joints, 0.033, s.method.into()));
                     best = best.min(t0.elapsed().as_secs_f64());
                 }
                 println!("frame {k}: {:9} {:.1} us per generation (min of 200)", status.as_str(), best * 1e6);
             }
         }
         let dt = if k == 0 { 0.0 } else { s.frame_period_s as f32 };
-        let est = tracker.step(&frame, &joints, dt, feedforward(s.method)).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let est = tracker.step(&frame, &joints, dt, s.method.into()).map_err(|e| anyhow::anyhow!("{e}"))?;
         let (mm, deg) = pose_error(&est.psi, &truth);
         println!(
             "{k:3} F {:.3} (truth {:.3}) {:9} err {:6.1} mm {:6.1} deg | raw {:?} seed faces {:?} err {:?} | hits L {:?} R {:?}",

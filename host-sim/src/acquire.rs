@@ -328,8 +328,7 @@ pub fn run(trials: usize, first_seed: u64, points: usize, out: &Path, show_progr
         evorec_version: env!("CARGO_PKG_VERSION"),
     };
     crate::io::write_json(&out.join("acquire.json"), &report)?;
-    std::fs::write(out.join("acquire.md"), markdown(&report))
-        .with_context(|| format!("writing {}/acquire.md", out.display()))?;
+    crate::io::write_bytes(&out.join("acquire.md"), markdown(&report).as_bytes())?;
     plot_cdf(&report, &out.join("acquire_cdf.png"))?;
     Ok(report)
 }
@@ -381,11 +380,8 @@ pub fn markdown(r: &Report) -> String {
 pub fn plot_cdf(r: &Report, path: &Path) -> Result<()> {
     crate::plot::ensure_font()?;
     let max_x = 92.0;
-    let mut buf = vec![255u8; 1000 * 500 * 3];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (1000, 500)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let mut chart = ChartBuilder::on(&root)
+    crate::plot::render_png(path, (1000, 500), |root| {
+        let mut chart = ChartBuilder::on(root)
             .caption("Frames until acquired (CDF over random block poses)", (crate::plot::FONT, 22))
             .margin(10)
             .x_label_area_size(40)
@@ -440,10 +436,8 @@ pub fn plot_cdf(r: &Report, path: &Path) -> Result<()> {
             .border_style(BLACK)
             .draw()
             .map_err(|e| anyhow::anyhow!("{e}"))?;
-        root.present().map_err(|e| anyhow::anyhow!("{e}"))?;
-    }
-    let img = image::RgbImage::from_raw(1000, 500, buf).ok_or_else(|| anyhow::anyhow!("bad plot buffer"))?;
-    img.save_with_format(path, image::ImageFormat::Png).with_context(|| format!("writing {}", path.display()))
+        Ok(())
+    })
 }
 
 #[cfg(test)]

@@ -451,7 +451,7 @@ impl ServoLoop {
         Ok(Self {
             ctl,
             filter: crate::sim::target_filter(s)?,
-            feedforward: opts.feedforward.unwrap_or_else(|| experiment::feedforward(s.method)),
+            feedforward: opts.feedforward.unwrap_or_else(|| s.method.into()),
             opts: *opts,
             desired,
             delay_s: f64::from(sec.delay_frames) * s.frame_period_s,

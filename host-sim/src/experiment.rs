@@ -11,11 +11,12 @@ use evorec_core::ga::GaParams;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 use evorec_core::target_motion::{FilterParamsError, TargetFilterParams};
-use evorec_core::tracker::{ConfigError, Feedforward, StepError, Tracker, TrackerConfig};
+use evorec_core::tracker::{ConfigError, StepError, Tracker, TrackerConfig};
+use nalgebra::{Isometry3, UnitQuaternion};
 use serde::Serialize;
 
 use crate::occlusion::Initial;
-use crate::scenario::{HOST_POPULATION_CAPACITY, Method, Scenario};
+use crate::scenario::{HOST_POPULATION_CAPACITY, Scenario};
 use crate::sim::{self, Handover, SimBoard, TraceRow, World};
 
 /// The tracker the simulator runs: PA-10, the default population capacity (the size in use is
@@ -105,15 +106,6 @@ pub fn scenario_tracker<const G: usize>(
     population: Population,
 ) -> Result<Tracker<PA10_DOF, HOST_POPULATION_CAPACITY, G>> {
     Ok(setup_tracker(tracker_config(s)?, s.target_filter.0, population)?)
-}
-
-/// The feedforward switch of a method.
-pub fn feedforward(m: Method) -> Feedforward {
-    match m {
-        Method::Ga => Feedforward::Off,
-        Method::Ff => Feedforward::On,
-        Method::FfTarget => Feedforward::OnWithTarget,
-    }
 }
 
 /// Accuracy of a run (paper eq. 40–41): mean fitness and RMS errors over all frames.
@@ -207,6 +199,40 @@ pub fn rms_columns<const N: usize>(rows: impl IntoIterator<Item = [f64; N]>) -> 
         n += 1;
     }
     (n > 0).then(|| sq.map(|s| (s / n as f64).sqrt()))
+}
+
+/// The rotation error of a run: RMS and largest angle (degrees) between estimate and truth,
+/// in `evorec track`'s, `run`'s and `hil`'s `summary.json`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RotationError {
+    /// RMS rotation error (degrees).
+    pub rms_rot_deg: f64,
+    /// Largest rotation error (degrees).
+    pub max_rot_deg: f64,
+}
+
+impl RotationError {
+    /// Of the per-frame rotation errors `degrees` (`None` when empty).
+    pub fn of(degrees: impl IntoIterator<Item = f64> + Clone) -> Option<Self> {
+        let [rms] = rms_columns(degrees.clone().into_iter().map(|d| [d]))?;
+        Some(Self { rms_rot_deg: rms, max_rot_deg: degrees.into_iter().fold(0.0, f64::max) })
+    }
+
+    /// Of a simulated run: each frame's estimate against its true pose (no symmetry: as the
+    /// run's other errors).
+    pub fn of_run(rows: &[TraceRow]) -> Option<Self> {
+        let angle = |r: &TraceRow| isometry_of(&r.estimate).rotation.angle_to(&isometry_of(&r.truth).rotation);
+        Self::of(rows.iter().map(|r| angle(r).to_degrees()))
+    }
+}
+
+/// The pose of an estimate (f64).
+pub fn isometry_of(psi: &Psi) -> Isometry3<f64> {
+    let t = psi.translation().cast::<f64>();
+    let e = psi.eps().cast::<f64>();
+    let w = (1.0 - e.norm_squared()).max(0.0).sqrt();
+    let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, e.x, e.y, e.z));
+    Isometry3::from_parts(t.into(), q)
 }
 
 /// RMS errors of one pose series against a truth series.
@@ -313,6 +339,10 @@ pub struct Summary {
     /// The accuracy figures, flattened into the top level.
     #[serde(flatten)]
     pub accuracy: Accuracy,
+    /// The rotation error (as `evorec track`'s), flattened into the top level (absent for no
+    /// frames).
+    #[serde(flatten)]
+    pub rotation: Option<RotationError>,
     /// Frames per tracker status.
     pub status: StatusCounts,
     /// Frames refused by the tracker (should be 0).
@@ -331,6 +361,7 @@ impl Summary {
     pub fn of(rows: &[TraceRow], rejected: u32, scenario: &Scenario) -> Self {
         Self {
             accuracy: Accuracy::of(rows),
+            rotation: RotationError::of_run(rows),
             status: StatusCounts::of(rows),
             rejected,
             handover: HandoverSummary::of(rows, scenario.tracker.delay_s),
@@ -373,7 +404,7 @@ pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -
     let mut board = ProgressBoard { inner: board, on_frame: &mut on_frame };
     let n = sim::image_bytes(s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
-    let stats = board::run(&mut board, &mut tracker, feedforward(s.method), &mut left, &mut right, u32::MAX)
+    let stats = board::run(&mut board, &mut tracker, s.method.into(), &mut left, &mut right, u32::MAX)
         .map_err(|e| anyhow::anyhow!("simulated board: {e:?}"))?;
     let rows = board.inner.into_rows();
     let summary = Summary::of(&rows, stats.rejected, s);
@@ -409,7 +440,7 @@ impl<B: board::CameraController<PA10_DOF>, F: FnMut()> board::CameraController<P
     }
 }
 
-/// Writes `trace.csv`, `summary.json` and the plots of a run into `dir`.
+/// Writes `trace.csv`, `estimate.tum`, `summary.json` and the plots of a run into `dir`.
 ///
 /// # Errors
 /// I/O errors.
@@ -417,7 +448,18 @@ pub fn write_outputs(out: &RunOutput, dir: &Path, title: &str) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let trace = dir.join("trace.csv");
     crate::io::write_trace(&trace, &out.rows)?;
+    write_estimate(out, dir)?;
     crate::io::write_json(&dir.join("summary.json"), &out.summary)?;
     crate::plot::plot_trace(&trace, dir, title)?;
+    Ok(())
+}
+
+/// Writes the run's estimates as `estimate.tum` into `dir` (capture time, `^CR T_M`).
+///
+/// # Errors
+/// I/O errors.
+pub fn write_estimate(out: &RunOutput, dir: &Path) -> Result<()> {
+    let poses: Vec<_> = out.rows.iter().map(|r| (r.t, isometry_of(&r.estimate))).collect();
+    crate::io::write_estimate_tum(dir, &poses)?;
     Ok(())
 }

@@ -139,8 +139,7 @@ pub fn run_with_options(
     on_frame: impl FnMut(),
 ) -> Result<(RunOutput, LinkReport)> {
     let mut board = SimBoard::new(World::new(s)?)?;
-    let mut session =
-        start_session(s, &board.start_pose(), experiment::feedforward(s.method), firmware, workdir, options)?;
+    let mut session = start_session(s, &board.start_pose(), s.method.into(), firmware, workdir, options)?;
     let rejected = drive(&mut session, &mut board, on_frame)?;
     let link = finish(session)?;
     let rows = board.into_rows();

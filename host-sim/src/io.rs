@@ -9,11 +9,15 @@
 //! graph; it deletes the temporary file when the write fails and renames with
 //! [`NamedTempFile::persist`](tempfile::NamedTempFile::persist)); the `atomic-write-file` crate
 //! does the same with fewer users and would be one more dependency.
+//!
+//! Not output files, and not written here: QEMU's log (`timing/qemu.rs` hands QEMU the open
+//! file, which QEMU fills as it runs) and the link's FIFOs of `evorec hil`.
 
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow};
+use nalgebra::Isometry3;
 use serde::Serialize;
 
 use crate::sim::TraceRow;
@@ -139,22 +143,47 @@ pub fn write_dir<T>(out: &Path, fill: impl FnOnce(&Path) -> Result<T>) -> Result
 /// I/O and CSV errors.
 pub fn write_table(out: &Path, stem: &str, columns: &[&str], records: &[Vec<String>], markdown: &str) -> Result<()> {
     std::fs::create_dir_all(out)?;
-    write_atomic(&out.join(format!("{stem}.csv")), |file| {
+    write_csv(&out.join(format!("{stem}.csv")), columns, records)?;
+    write_bytes(&out.join(format!("{stem}.md")), markdown.as_bytes())
+}
+
+/// Writes a CSV file (header `columns`, then `records`), atomically ([`write_atomic`]).
+///
+/// # Errors
+/// I/O and CSV errors.
+pub fn write_csv(path: &Path, columns: &[&str], records: &[Vec<String>]) -> Result<()> {
+    write_atomic(path, |file| {
         let mut w = csv::Writer::from_writer(file);
         w.write_record(columns)?;
         for rec in records {
             w.write_record(rec)?;
         }
         Ok(w.flush()?)
-    })?;
-    write_bytes(&out.join(format!("{stem}.md")), markdown.as_bytes())
+    })
 }
 
-/// Header of `trace.csv`.
-pub fn trace_header() -> Vec<String> {
+/// Writes `estimate.tum` into `dir` (the TUM format: one `t tx ty tz qx qy qz qw` line per
+/// estimate), atomically; returns its path. `evorec track`, `run` and `hil` write it.
+///
+/// # Errors
+/// As [`write_atomic`].
+pub fn write_estimate_tum(dir: &Path, poses: &[(f64, Isometry3<f64>)]) -> Result<PathBuf> {
+    let path = dir.join("estimate.tum");
+    let text = crate::sequence::tum::format(
+        "t tx ty tz qx qy qz qw: evorec's estimate of the block in the right camera frame (^CR T_M), metres",
+        poses,
+    );
+    write_bytes(&path, text.as_bytes())?;
+    Ok(path)
+}
+
+/// The columns of `trace.csv` that every trace has, for an arm of `dof` joints: time, joints,
+/// truth, estimate, fitness, status and whether the block was hidden (`evorec track` writes
+/// only these; a recording does not say when the block was hidden, so the column stays empty).
+pub fn trace_columns(dof: usize) -> Vec<String> {
     let mut h = vec!["t".to_owned()];
-    h.extend((1..=7).map(|i| format!("q{i}")));
-    h.extend((1..=7).map(|i| format!("qd{i}")));
+    h.extend((1..=dof).map(|i| format!("q{i}")));
+    h.extend((1..=dof).map(|i| format!("qd{i}")));
     for prefix in ["", "est_"] {
         for c in ["x_mm", "y_mm", "z_mm", "e1", "e2", "e3"] {
             h.push(format!("{prefix}{c}"));
@@ -163,6 +192,13 @@ pub fn trace_header() -> Vec<String> {
     h.push("F".to_owned());
     h.push("status".to_owned());
     h.push("hidden".to_owned());
+    h
+}
+
+/// Header of `trace.csv` of a simulated run: [`trace_columns`] of the PA-10's 7 joints, then the
+/// hand-over's.
+pub fn trace_header() -> Vec<String> {
+    let mut h = trace_columns(7);
     // The hand-over at the output time (`sim::Handover`); empty where not simulated.
     h.push("t_out".to_owned());
     for prefix in ["out_", "pred_"] {
@@ -230,23 +266,24 @@ pub fn trace_record(r: &TraceRow) -> Vec<String> {
 }
 
 /// Writes `trace.csv` of a closed-loop run: the columns of [`trace_header`] followed by
-/// `extra_header`, one row of `rows` with its `extra` fields per frame.
+/// `extra_header`, one row of `rows` with its `extra` fields per frame, atomically.
 ///
 /// # Errors
 /// I/O errors, or `extra` shorter than `rows`.
 pub fn write_trace_with(path: &Path, rows: &[TraceRow], extra_header: &[&str], extra: &[Vec<String>]) -> Result<()> {
     anyhow::ensure!(extra.len() >= rows.len(), "{} extra rows for {} trace rows", extra.len(), rows.len());
-    let mut w = csv::Writer::from_path(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut header = trace_header();
-    header.extend(extra_header.iter().map(|h| (*h).to_owned()));
-    w.write_record(header)?;
-    for (r, x) in rows.iter().zip(extra) {
-        let mut rec = trace_record(r);
-        rec.extend(x.iter().cloned());
-        w.write_record(rec)?;
-    }
-    w.flush()?;
-    Ok(())
+    write_atomic(path, |out| {
+        let mut w = csv::Writer::from_writer(out);
+        let mut header = trace_header();
+        header.extend(extra_header.iter().map(|h| (*h).to_owned()));
+        w.write_record(header)?;
+        for (r, x) in rows.iter().zip(extra) {
+            let mut rec = trace_record(r);
+            rec.extend(x.iter().cloned());
+            w.write_record(rec)?;
+        }
+        Ok(w.flush()?)
+    })
 }
 
 /// Writes `value` as pretty JSON, atomically.

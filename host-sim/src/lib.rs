@@ -4,7 +4,8 @@
 //! [`motion`]), a renderer of the coloured block ([`render`]), scenario files ([`scenario`]),
 //! the simulated camera-controller board ([`sim`]) through which the core's tracker sees the
 //! world — the same trait and loop as on the firmware —, runs and their summaries
-//! ([`experiment`]), the paper's experiment grid ([`paper`]), single-frame rendering
+//! ([`experiment`]), the paper's experiment grid ([`paper`]) and its seed sweeps
+//! ([`paper_seeds`]), single-frame rendering
 //! ([`frame`]), the same runs with the tracker in the firmware on QEMU ([`hil`]), output
 //! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]); recorded stereo sequences
 //! (`evorec-seq/1`): the reader ([`sequence`]), tracking them ([`track`]) and writing a
@@ -27,6 +28,7 @@ pub mod logging;
 pub mod motion;
 pub mod occlusion;
 pub mod paper;
+pub mod paper_seeds;
 pub mod plot;
 pub mod render;
 pub mod robot;

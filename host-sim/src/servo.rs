@@ -155,7 +155,7 @@ pub fn scenario_of(g: &GridSettings, cell: &Cell) -> (Scenario, LoopOptions) {
     let mut opts = LoopOptions {
         occlusion: None,
         conveyor: None,
-        feedforward: Some(crate::experiment::feedforward(cell.method)),
+        feedforward: Some(cell.method.into()),
         target_velocity: cell.method == Method::FfTarget,
     };
     match cell.target {

@@ -73,6 +73,7 @@
 
 use std::path::{Path, PathBuf};
 
+use evorec_core::tracker::Feedforward;
 use serde::Serialize;
 use toml::Table;
 
@@ -138,18 +139,19 @@ fn invalid(field: impl Into<String>, message: impl Into<String>) -> ScenarioErro
     ScenarioError::Invalid { field: field.into(), message: message.into() }
 }
 
-/// How the pose is recognised.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// How the pose is recognised: the one method type of the simulator, its scenario files and
+/// its command line (`--method`); the core's [`Feedforward`] switch is [`From`] it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
 pub enum Method {
-    /// The plain 1-step GA (`Feedforward::Off`).
+    /// Plain 1-step GA.
     #[serde(rename = "ga")]
     Ga,
-    /// The 1-step GA with quaternion motion feedforward (`Feedforward::On`).
+    /// GA + the arm's motion fed forward.
     #[serde(rename = "ff")]
     Ff,
-    /// The 1-step GA with feedforward of the arm's and the target's own motion
-    /// (`Feedforward::OnWithTarget`).
+    /// GA + the arm's and the target's motion fed forward.
     #[serde(rename = "ff+target")]
+    #[value(name = "ff+target")]
     FfTarget,
 }
 
@@ -175,6 +177,28 @@ impl Method {
             .into_iter()
             .find(|m| m.as_str() == text)
             .ok_or_else(|| format!("expected \"ga\", \"ff\" or \"ff+target\", got \"{text}\""))
+    }
+}
+
+/// The tracker's feedforward switch of a method.
+impl From<Method> for Feedforward {
+    fn from(m: Method) -> Self {
+        match m {
+            Method::Ga => Feedforward::Off,
+            Method::Ff => Feedforward::On,
+            Method::FfTarget => Feedforward::OnWithTarget,
+        }
+    }
+}
+
+/// The method a feedforward switch belongs to.
+impl From<Feedforward> for Method {
+    fn from(f: Feedforward) -> Self {
+        match f {
+            Feedforward::Off => Method::Ga,
+            Feedforward::On => Method::Ff,
+            Feedforward::OnWithTarget => Method::FfTarget,
+        }
     }
 }
 

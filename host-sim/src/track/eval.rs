@@ -12,6 +12,8 @@ use evorec_core::pose::Psi;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
+pub use crate::experiment::{RotationError, isometry_of};
+
 /// A frame's estimate stays "within" the truth when its position error is at most this (m)…
 pub const WITHIN_POSITION_M: f64 = 0.010;
 /// …and its rotation error at most this (degrees).
@@ -32,15 +34,6 @@ pub fn colour_symmetries(face_hues_deg: &[f32; 6]) -> Vec<(&'static str, UnitQua
         }
     }
     out
-}
-
-/// The pose of an estimate (f64).
-pub fn isometry_of(psi: &Psi) -> Isometry3<f64> {
-    let t = psi.translation().cast::<f64>();
-    let e = psi.eps().cast::<f64>();
-    let w = (1.0 - e.norm_squared()).max(0.0).sqrt();
-    let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, e.x, e.y, e.z));
-    Isometry3::from_parts(t.into(), q)
 }
 
 /// `ψ` (f64) of a pose, with `η ≥ 0`.
@@ -125,8 +118,9 @@ pub struct Rms {
 impl Rms {
     /// The RMS of `errors` (`None` when empty).
     pub fn of(errors: &[FrameError]) -> Option<Self> {
-        let columns = errors.iter().map(|e| [e.d[0], e.d[1], e.d[2], e.d[3], e.d[4], e.d[5], e.rot_deg]);
-        let [x, y, z, e1, e2, e3, rot] = crate::experiment::rms_columns::<7>(columns)?;
+        let columns = errors.iter().map(|e| [e.d[0], e.d[1], e.d[2], e.d[3], e.d[4], e.d[5]]);
+        let [x, y, z, e1, e2, e3] = crate::experiment::rms_columns::<6>(columns)?;
+        let rot = RotationError::of(errors.iter().map(|e| e.rot_deg))?;
         Some(Self {
             rms_x_mm: x * 1e3,
             rms_y_mm: y * 1e3,
@@ -134,8 +128,8 @@ impl Rms {
             rms_e1: e1,
             rms_e2: e2,
             rms_e3: e3,
-            rms_rot_deg: rot,
-            max_rot_deg: errors.iter().map(|e| e.rot_deg).fold(0.0, f64::max),
+            rms_rot_deg: rot.rms_rot_deg,
+            max_rot_deg: rot.max_rot_deg,
             frames: errors.len(),
         })
     }

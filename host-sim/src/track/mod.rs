@@ -118,15 +118,6 @@ pub struct TrackOutput {
     pub options: TrackOptions,
 }
 
-/// The name of a feedforward mode as `evorec track --method` spells it.
-pub fn method_name(f: Feedforward) -> &'static str {
-    match f {
-        Feedforward::Off => "ga",
-        Feedforward::On => "ff",
-        Feedforward::OnWithTarget => "ff+target",
-    }
-}
-
 /// The GA settings of the options: `--population` (checked against the compiled capacity).
 ///
 /// # Errors

@@ -16,7 +16,7 @@ use serde::Serialize;
 use super::TrackOutput;
 use super::eval::{self, FrameError, Rms};
 use crate::render;
-use crate::sequence::{Sequence, tum};
+use crate::sequence::Sequence;
 
 /// `summary.json` of a tracked sequence.
 #[derive(Debug, Clone, Serialize)]
@@ -96,7 +96,7 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
     let summary = TrackSummary {
         sequence: seq.name(),
         feedforward: out.options.feedforward != Feedforward::Off,
-        method: super::method_name(out.options.feedforward),
+        method: crate::scenario::Method::from(out.options.feedforward).as_str(),
         population: super::ga_params(&out.options).map_or(0, |g| g.population),
         pixels: out.options.pixels.as_str(),
         seed: out.options.seed,
@@ -117,30 +117,13 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
     Evaluation { truth, errors, summary }
 }
 
-/// Header of `trace.csv` for `dof` joints (for 7 joints, exactly `evorec run`'s).
-pub fn trace_header(dof: usize) -> Vec<String> {
-    let mut h = vec!["t".to_owned()];
-    h.extend((1..=dof).map(|i| format!("q{i}")));
-    h.extend((1..=dof).map(|i| format!("qd{i}")));
-    for prefix in ["", "est_"] {
-        for c in ["x_mm", "y_mm", "z_mm", "e1", "e2", "e3"] {
-            h.push(format!("{prefix}{c}"));
-        }
-    }
-    h.push("F".to_owned());
-    h.push("status".to_owned());
-    // A recording does not say when the block was hidden: the column stays empty.
-    h.push("hidden".to_owned());
-    h
-}
-
 fn write_trace(path: &Path, seq: &Sequence, out: &TrackOutput, ev: &Evaluation) -> Result<()> {
     crate::io::write_atomic(path, |file| write_trace_to(file, seq, out, ev))
 }
 
 fn write_trace_to(file: &mut dyn std::io::Write, seq: &Sequence, out: &TrackOutput, ev: &Evaluation) -> Result<()> {
     let mut w = csv::Writer::from_writer(file);
-    w.write_record(trace_header(seq.joints.dof()))?;
+    w.write_record(crate::io::trace_columns(seq.joints.dof()))?;
     let psi_cells = |p: &[f64; 6]| -> Vec<String> {
         let mut v: Vec<String> = p[..3].iter().map(|x| format!("{:.4}", x * 1e3)).collect();
         v.extend(p[3..].iter().map(|x| format!("{x:.6}")));
@@ -208,13 +191,7 @@ pub fn write_all(seq: &Sequence, out: &TrackOutput, ev: &Evaluation, dir: &Path)
     written.push(trace.clone());
     let poses: Vec<(f64, Isometry3<f64>)> =
         out.tracked.iter().map(|t| (seq.frames[t.i].t_s, super::estimate_pose(t))).collect();
-    let tum_path = dir.join("estimate.tum");
-    let text = tum::format(
-        "t tx ty tz qx qy qz qw: evorec's estimate of the block in the right camera frame (^CR T_M), metres",
-        &poses,
-    );
-    crate::io::write_bytes(&tum_path, text.as_bytes())?;
-    written.push(tum_path);
+    written.push(crate::io::write_estimate_tum(dir, &poses)?);
     for (i, l, r) in &out.kept {
         if let Some(t) = out.tracked.iter().find(|t| t.i == *i) {
             let img = overlay(seq, l, r, &super::estimate_pose(t).cast())?;

@@ -1,0 +1,201 @@
+//! `evorec track` (a recorded sequence or a ROS 2 bag) and `evorec import` (a bag as a
+//! sequence).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::ValueEnum;
+use evorec_sim::scenario::{Method, TargetFilterSection};
+use evorec_sim::sequence::Sequence;
+use evorec_sim::{bag, track};
+
+use super::OutArgs;
+
+#[derive(clap::Args, Debug)]
+pub struct TrackArgs {
+    /// Sequence directory (holds sequence.toml), or a ROS 2 bag (directory or .mcap file).
+    seq: PathBuf,
+    /// The rig file (`evorec-rig/1`) of a bag: its topics, frames and block.
+    #[arg(long)]
+    rig: Option<PathBuf>,
+    /// Largest stamp difference of a bag's stereo pair in ms (default: a quarter of the
+    /// frame period).
+    #[arg(long, requires = "rig")]
+    pair_tolerance_ms: Option<f64>,
+    #[command(flatten)]
+    out: OutArgs,
+    /// Plain 1-step GA (no motion feedforward; the same as `--method ga`).
+    #[arg(long, conflicts_with = "method")]
+    no_ff: bool,
+    /// `ga` (plain 1-step GA), `ff` (+ the arm's motion fed forward) or `ff+target` (+ the
+    /// target's own motion, estimated from past estimates, fed forward too; the default: a
+    /// recorded target may move, and on a still one nothing significant is fed forward).
+    #[arg(long, value_enum, default_value_t = Method::FfTarget)]
+    method: Method,
+    /// Seed of the GA.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// GA population size (16 up to the compiled capacity, 64: room for the acquisition's seeded and idle individuals).
+    #[arg(long)]
+    population: Option<usize>,
+    /// Sample points per row of the surface-strips model (5, 6, 7 or 8; default the core's
+    /// `DEFAULT_GRID`).
+    #[arg(long)]
+    points_per_row: Option<usize>,
+    /// Track only the first N frames.
+    #[arg(long)]
+    frames: Option<usize>,
+    /// Pixels the tracker reads: `rgb888` (the PNG's own colour) or `rgb565` (truncated
+    /// first, as a board's camera sensor delivers them: what the firmware would see).
+    #[arg(long, value_enum, default_value_t = TrackPixels::Rgb888)]
+    pixels: TrackPixels,
+    /// Frame indices (frames.csv `index`) to draw the model at its estimate over, e.g. 0,90.
+    #[arg(long, value_delimiter = ',')]
+    overlay: Vec<u64>,
+    /// A TOML file holding a `[target_filter]` table (as in a scenario): the tuning of the
+    /// target-velocity filter that `ff+target` feeds forward (default: the core's).
+    #[arg(long, value_name = "FILE")]
+    target_filter: Option<PathBuf>,
+}
+
+/// `evorec track --pixels`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum TrackPixels {
+    /// The PNG's own 8-bit RGB.
+    Rgb888,
+    /// Truncated to RGB565 first (the board's sensor format).
+    Rgb565,
+}
+
+impl From<TrackPixels> for track::Pixels {
+    fn from(p: TrackPixels) -> Self {
+        match p {
+            TrackPixels::Rgb888 => Self::Rgb888,
+            TrackPixels::Rgb565 => Self::Rgb565,
+        }
+    }
+}
+
+impl TrackArgs {
+    pub fn run(self, progress: bool) -> Result<()> {
+        let opts = self.options(progress)?;
+        let out = &self.out.out;
+        let bag_opts = bag::BagOptions { pair_tolerance_ms: self.pair_tolerance_ms };
+        match &self.rig {
+            Some(rig) => track_bag(&self.seq, rig, out, &opts, &bag_opts),
+            None if bag::scan::is_bag(&self.seq) => {
+                anyhow::bail!("{}: is a ROS 2 bag: give its rig file with --rig RIG.toml", self.seq.display())
+            }
+            None => track_sequence(&self.seq, out, &opts),
+        }
+    }
+
+    fn options(&self, progress: bool) -> Result<track::TrackOptions> {
+        let target_filter = match &self.target_filter {
+            Some(path) => TargetFilterSection::load(path)?,
+            None => TargetFilterSection::default(),
+        };
+        Ok(track::TrackOptions {
+            feedforward: if self.no_ff { Method::Ga } else { self.method }.into(),
+            seed: self.seed,
+            population: self.population,
+            points_per_row: self.points_per_row,
+            frames: self.frames,
+            overlay: self.overlay.iter().copied().collect(),
+            progress,
+            pixels: self.pixels.into(),
+            target_filter: target_filter.0,
+        })
+    }
+}
+
+fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<()> {
+    let seq = Sequence::load(dir)?;
+    let t0 = Instant::now();
+    let output = track::run(&seq, opts)?;
+    let ev = track::output::evaluate(&seq, &output);
+    track::output::write_all(&seq, &output, &ev, out)?;
+    print_track(&ev.summary, t0, out);
+    Ok(())
+}
+
+/// `evorec track BAG --rig RIG`: the bag read (first pass), tracked while its images stream
+/// (second pass); the outputs of a sequence plus `estimate.mcap`.
+fn track_bag(
+    path: &Path,
+    rig: &Path,
+    out: &Path,
+    opts: &track::TrackOptions,
+    bag_opts: &bag::BagOptions,
+) -> Result<()> {
+    let t0 = Instant::now();
+    let rig = bag::Rig::load(rig)?;
+    let b = bag::load(path, &rig, bag_opts, path)?;
+    b.report.log();
+    let ev = bag::track::track_and_write(&b, opts, out)?;
+    println!("{}", b.report.describe());
+    print_track(&ev.summary, t0, out);
+    Ok(())
+}
+
+fn print_track(s: &track::output::TrackSummary, t0: Instant, out: &Path) {
+    print!(
+        "{} frames in {:.1} s ({:.0} frames/s): F_mean {:.4}",
+        s.frames,
+        t0.elapsed().as_secs_f64(),
+        s.frames_per_s,
+        s.f_mean
+    );
+    if let Some(a) = &s.all {
+        print!(
+            ", RMS x/y/z {:.2}/{:.2}/{:.2} mm, RMS rotation {:.2} deg (max {:.2})",
+            a.rms_x_mm, a.rms_y_mm, a.rms_z_mm, a.rms_rot_deg, a.max_rot_deg
+        );
+        match s.within_from_frame {
+            Some(f) => print!(", within 10 mm/5 deg from frame {f}"),
+            None => print!(", never stays within 10 mm/5 deg"),
+        }
+    }
+    println!("\nwrote {}", out.display());
+}
+
+#[derive(clap::Args, Debug)]
+pub struct ImportArgs {
+    /// The bag.
+    bag: PathBuf,
+    /// The rig file (`evorec-rig/1`): topics, frames and the block.
+    #[arg(long)]
+    rig: PathBuf,
+    /// Sequence directory to create (must not exist or be empty).
+    #[arg(long)]
+    out: PathBuf,
+    /// Largest stamp difference of a stereo pair in ms (default: a quarter of the frame
+    /// period).
+    #[arg(long)]
+    pair_tolerance_ms: Option<f64>,
+}
+
+impl ImportArgs {
+    pub fn run(self, progress: bool) -> Result<()> {
+        let t0 = Instant::now();
+        let rig = bag::Rig::load(&self.rig)?;
+        let bag_opts = bag::BagOptions { pair_tolerance_ms: self.pair_tolerance_ms };
+        let b = bag::load(&self.bag, &rig, &bag_opts, &self.out)?;
+        b.report.log();
+        let bar = progress.then(|| evorec_sim::logging::progress_bar(b.pairs.len() as u64));
+        bag::import::import(&b, &self.out, bar.as_ref())?;
+        if let Some(bar) = bar {
+            bar.finish_and_clear();
+        }
+        let secs = t0.elapsed().as_secs_f64();
+        println!("{}", b.report.describe());
+        println!(
+            "imported {} frame pairs in {secs:.1} s ({:.0} pairs/s); wrote {}",
+            b.pairs.len(),
+            b.pairs.len() as f64 / secs.max(1e-9),
+            self.out.display()
+        );
+        Ok(())
+    }
+}

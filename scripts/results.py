@@ -1,0 +1,183 @@
+#!/usr/bin/env python3
+"""Writes docs/results.md, and the results table of README.md, from run outputs.
+
+Requires: Python >= 3.8, standard library only; git on PATH (for the commit stamp); the release
+binary of evorec (`cargo build --release -p evorec-sim`), and for the timing section the firmware
+(`cd hil-stubs && cargo build --release`) and qemu-system-arm.
+
+    scripts/results.py [--work DIR] [--sequences DIR] [--trials N] [--reuse]
+
+Runs, into WORK (default target/results):
+  evorec paper --out WORK/paper                     the paper's experiment (30 runs)
+  evorec track SEQ --out WORK/track/NAME            every sequence directory under SEQUENCES
+                                                    (default ../shared/data/sequences), if any
+  evorec acquire --trials N --out WORK/acquire      acquisition statistics (N = 100)
+  evorec timing --out WORK/timing                   M4 instructions per generation
+then writes docs/results.md from those outputs, stamped with the commit they ran on, and replaces
+the lines between the README's `<!-- results:paper:begin -->` and `<!-- results:paper:end -->`
+markers with the paper table's published cells. `--reuse` skips every step whose output exists
+(a partial rerun). A step that fails stops the script, naming the step, and nothing is written.
+EVOREC=path overrides the binary.
+"""
+import argparse
+import datetime
+import json
+import os
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BEGIN, END = '<!-- results:paper:begin -->', '<!-- results:paper:end -->'
+README_METHODS = {'1-step GA': 'GA', '1-step GA + FF': 'GA+FF'}
+
+
+def die(msg):
+    print(f'results.py: {msg}', file=sys.stderr)
+    sys.exit(1)
+
+
+def run_step(name, args, out, reuse):
+    """Runs one evorec command unless --reuse and its output directory exists."""
+    if reuse and os.path.isdir(out):
+        print(f'== {name}: reusing {out}')
+        return
+    print(f'== {name}: {" ".join(args)}', flush=True)
+    if subprocess.call(args) != 0:
+        die(f'step "{name}" failed ({" ".join(args)}); nothing written')
+
+
+def commit_stamp():
+    def git(*a):
+        return subprocess.run(['git', '-C', ROOT, *a], capture_output=True, text=True).stdout.strip()
+    head = git('rev-parse', '--short=8', 'HEAD') or 'unknown'
+    dirty = git('status', '--porcelain', '--untracked-files=no')
+    return head + (' with uncommitted changes' if dirty else '')
+
+
+def paper_sections(paper_dir):
+    md = open(os.path.join(paper_dir, 'paper_table.md'), encoding='utf-8').read().strip()
+    rows = [l for l in md.splitlines() if l.startswith('| ') and not l.startswith('| motion')]
+    published = []
+    for l in rows:
+        cells = [c.strip() for c in l.strip('|').split('|')]
+        method = README_METHODS.get(cells[1])
+        if method is None or cells[3].endswith('(—)'):
+            continue
+        cells[1] = method
+        published.append('| ' + ' | '.join(c.replace('**', '') for c in cells) + ' |')
+    head = ['| motion | method | ω rad/s | F̄ | RMS x mm | RMS y mm | RMS z mm | RMS ε₁ | RMS ε₂ | RMS ε₃ |',
+            '|---|---|---|---|---|---|---|---|---|---|']
+    return md, '\n'.join(head + published)
+
+
+def track_section(track_dir):
+    if not os.path.isdir(track_dir):
+        return 'No sequences were tracked (none found).'
+    lines = ['| sequence | frames | frames | RMS x mm | RMS y mm | RMS z mm | RMS rotation ° | max rotation ° |',
+             '|---|---|---|---|---|---|---|---|']
+    for name in sorted(os.listdir(track_dir)):
+        s = json.load(open(os.path.join(track_dir, name, 'summary.json'), encoding='utf-8'))
+        for key, label in (('all', 'all'), ('after_within', 'after acquisition')):
+            r = s.get(key)
+            if not r:
+                continue
+            lines.append(f"| `{name}` | {label} | {r['frames']} | {r['rms_x_mm']:.2f} | {r['rms_y_mm']:.2f} | "
+                         f"{r['rms_z_mm']:.2f} | {r['rms_rot_deg']:.2f} | {r['max_rot_deg']:.2f} |")
+    return '\n'.join(lines)
+
+
+def acquire_section(acq_dir):
+    return open(os.path.join(acq_dir, 'acquire.md'), encoding='utf-8').read().strip()
+
+
+def timing_section(timing_dir):
+    t = json.load(open(os.path.join(timing_dir, 'timing.json'), encoding='utf-8'))
+    ipg = t['instructions_per_generation']
+    ff_t = t.get('ff_target', {}).get('deadline', {}).get('worst_instructions')
+    rows = [('worst generation, `ff` (instructions)', f"{ipg['max']:,.0f}"),
+            ('worst generation, `ff+target` (instructions)', f'{ff_t:,.0f}' if ff_t else '—'),
+            ('budget (instructions)', f"{ipg['budget']:,.0f}"),
+            ('flash (B)', f"{t['flash_bytes']:,}"),
+            ('static RAM (B)', f"{t['static_ram_bytes']:,}"),
+            ('stack, one generation (B)', f"{t['stack_bytes']:,}")]
+    return '\n'.join(['| quantity | value |', '|---|---|'] + [f'| {a} | {b} |' for a, b in rows])
+
+
+def replace_readme_block(table, stamp):
+    path = os.path.join(ROOT, 'README.md')
+    text = open(path, encoding='utf-8').read()
+    if BEGIN not in text or END not in text:
+        die(f'README.md has no {BEGIN} … {END} block; nothing written')
+    pre, rest = text.split(BEGIN, 1)
+    _, post = rest.split(END, 1)
+    body = f'{BEGIN}\n<!-- generated by scripts/results.py from the runs of commit {stamp}; do not edit -->\n{table}\n{END}'
+    return path, pre + body + post
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument('--work', default=os.path.join(ROOT, 'target', 'results'))
+    ap.add_argument('--sequences', default=os.path.join(ROOT, '..', 'shared', 'data', 'sequences'))
+    ap.add_argument('--trials', type=int, default=100)
+    ap.add_argument('--reuse', action='store_true')
+    a = ap.parse_args()
+    evorec = os.environ.get('EVOREC', os.path.join(ROOT, 'target', 'release', 'evorec'))
+    if not os.access(evorec, os.X_OK):
+        die(f'no evorec binary at {evorec} (cargo build --release -p evorec-sim)')
+    w = a.work
+    run_step('paper', [evorec, '-q', 'paper', '--out', f'{w}/paper'], f'{w}/paper', a.reuse)
+    if os.path.isdir(a.sequences):
+        for name in sorted(os.listdir(a.sequences)):
+            seq = os.path.join(a.sequences, name)
+            if os.path.isfile(os.path.join(seq, 'sequence.toml')):
+                run_step(f'track {name}', [evorec, '-q', 'track', seq, '--out', f'{w}/track/{name}'],
+                         f'{w}/track/{name}', a.reuse)
+    run_step('acquire', [evorec, '-q', 'acquire', '--trials', str(a.trials), '--out', f'{w}/acquire'],
+             f'{w}/acquire', a.reuse)
+    run_step('timing', [evorec, '-q', 'timing', '--out', f'{w}/timing'], f'{w}/timing', a.reuse)
+
+    stamp = commit_stamp()
+    paper_md, readme_table = paper_sections(f'{w}/paper')
+    date = datetime.date.today().isoformat()
+    doc = f"""# Results
+
+Generated by `scripts/results.py` on {date} from the runs of commit {stamp}; every number below is
+read from those runs' output files. Do not edit by hand: rerun the script.
+
+## The paper's experiment
+
+`evorec paper --out DIR` (GA seed 1, 72 s per run; DIR/paper_table.md):
+
+{paper_md}
+
+## Recorded sequences
+
+`evorec track SEQ --out DIR` with default options (DIR/summary.json; "after acquisition" counts
+from the first frame within 10 mm and 5° of the truth):
+
+{track_section(f'{w}/track')}
+
+## Acquisition
+
+`evorec acquire --trials {a.trials} --out DIR` (DIR/acquire.md):
+
+{acquire_section(f'{w}/acquire')}
+
+## Board timing (Cortex-M4, QEMU instruction counts)
+
+`evorec timing --out DIR` (DIR/timing.json; method in [timing.md](timing.md)):
+
+{timing_section(f'{w}/timing')}
+"""
+    readme_path, readme = replace_readme_block(readme_table, stamp)
+    out = os.path.join(ROOT, 'docs', 'results.md')
+    for path, text in ((out, doc), (readme_path, readme)):
+        tmp = path + '.tmp'
+        with open(tmp, 'w', encoding='utf-8') as f:
+            f.write(text)
+        os.replace(tmp, path)
+    print(f'wrote {out} and the results table of {readme_path}')
+
+
+if __name__ == '__main__':
+    main()

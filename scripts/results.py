@@ -125,6 +125,7 @@ def main():
     if not os.access(evorec, os.X_OK):
         die(f'no evorec binary at {evorec} (cargo build --release -p evorec-sim)')
     w = a.work
+    stamp = commit_stamp()  # before the runs: the tree they ran on
     run_step('paper', [evorec, '-q', 'paper', '--out', f'{w}/paper'], f'{w}/paper', a.reuse)
     if os.path.isdir(a.sequences):
         for name in sorted(os.listdir(a.sequences)):
@@ -136,7 +137,6 @@ def main():
              f'{w}/acquire', a.reuse)
     run_step('timing', [evorec, '-q', 'timing', '--out', f'{w}/timing'], f'{w}/timing', a.reuse)
 
-    stamp = commit_stamp()
     paper_md, readme_table = paper_sections(f'{w}/paper')
     date = datetime.date.today().isoformat()
     doc = f"""# Results

@@ -11,7 +11,7 @@ use evorec_core::tracker::{DEPTH_PROBE_DISPARITY_PX, DEPTH_PROBES, Feedforward, 
 use nalgebra::{Isometry3, Vector3};
 
 mod common;
-use common::{frame, render};
+use common::{frame, median, render};
 
 const DT_US: u64 = 33_000;
 const FOCAL_PX: f32 = 800.0;
@@ -92,12 +92,6 @@ fn approach_rms_z(mode: Feedforward, seed: u64) -> f32 {
         }
     }
     (sq / n as f32).sqrt()
-}
-
-fn median(mut v: Vec<f32>) -> f32 {
-    v.sort_by(f32::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
 
 #[test]

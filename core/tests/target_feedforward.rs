@@ -11,7 +11,7 @@ use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Vector3};
 
 mod common;
-use common::{frame, render};
+use common::{frame, median, render};
 
 const DT_US: u64 = 33_000;
 const FRAMES: u64 = 100;
@@ -66,13 +66,6 @@ fn run(mode: Feedforward, seed: u64) -> (f32, Tracker, Vector3<f32>) {
         }
     }
     ((sq / n as f32).sqrt(), tracker, v_sum / LAST as f32)
-}
-
-/// The median of `v`.
-fn median(mut v: Vec<f32>) -> f32 {
-    v.sort_by(f32::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
 
 #[test]

@@ -23,3 +23,11 @@ pub fn render(rig: &StereoRig, truth: &Psi) -> (Vec<u8>, Vec<u8>) {
 pub fn frame<'a>(l: &'a [u8], r: &'a [u8], w: u16, h: u16) -> StereoFrame<'a> {
     StereoFrame { left: HueImage::new_checked(l, w, h).unwrap(), right: HueImage::new_checked(r, w, h).unwrap() }
 }
+
+/// The median of `v` (over GA seeds: one seed's error is a draw).
+#[allow(dead_code)]
+pub fn median(mut v: Vec<f32>) -> f32 {
+    v.sort_by(f32::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}

@@ -73,7 +73,7 @@ def paper_sections(paper_dir):
 def track_section(track_dir):
     if not os.path.isdir(track_dir):
         return 'No sequences were tracked (none found).'
-    lines = ['| sequence | frames | frames | RMS x mm | RMS y mm | RMS z mm | RMS rotation ° | max rotation ° |',
+    lines = ['| sequence | over | frames | RMS x mm | RMS y mm | RMS z mm | RMS rotation ° | max rotation ° |',
              '|---|---|---|---|---|---|---|---|']
     for name in sorted(os.listdir(track_dir)):
         s = json.load(open(os.path.join(track_dir, name, 'summary.json'), encoding='utf-8'))
@@ -87,7 +87,9 @@ def track_section(track_dir):
 
 
 def acquire_section(acq_dir):
-    return open(os.path.join(acq_dir, 'acquire.md'), encoding='utf-8').read().strip()
+    text = open(os.path.join(acq_dir, 'acquire.md'), encoding='utf-8').read().strip()
+    # The report's own title is this section's heading.
+    return '\n'.join(l for l in text.splitlines() if not l.startswith('# ')).strip()
 
 
 def timing_section(timing_dir):

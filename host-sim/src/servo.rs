@@ -11,6 +11,7 @@ use plotters::prelude::*;
 use serde::Serialize;
 
 use crate::closed_loop::{self, LoopOptions, Outcome, ServoSummary};
+use crate::io;
 use crate::plot::{FONT, draw_err, ensure_font, render_png};
 use crate::scenario::{Method, Scenario, ServoSection, TargetFilterSection};
 use crate::sim::frame_total;
@@ -197,21 +198,21 @@ pub fn run_grid(g: &GridSettings, out: &Path, show_progress: bool) -> Result<Vec
 
 fn write_error_series(rows: &[closed_loop::ServoRow], dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir)?;
-    let path = dir.join("servo_error.csv");
-    let mut w = csv::Writer::from_path(&path).with_context(|| format!("creating {}", path.display()))?;
-    w.write_record(["t", "servo_err_mm", "servo_err_deg", "tracking", "camera_speed_m_s", "tracker_err_mm"])?;
-    for r in rows {
-        w.write_record([
-            format!("{:.3}", r.t),
-            format!("{:.4}", r.error.translation_norm() * 1e3),
-            format!("{:.4}", r.error.rotation_norm().to_degrees()),
-            u8::from(r.tracking).to_string(),
-            format!("{:.5}", r.camera_speed_m_s),
-            format!("{:.4}", r.tracker_error_m * 1e3),
-        ])?;
-    }
-    w.flush()?;
-    Ok(())
+    let records: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            vec![
+                format!("{:.3}", r.t),
+                format!("{:.4}", r.error.translation_norm() * 1e3),
+                format!("{:.4}", r.error.rotation_norm().to_degrees()),
+                u8::from(r.tracking).to_string(),
+                format!("{:.5}", r.camera_speed_m_s),
+                format!("{:.4}", r.tracker_error_m * 1e3),
+            ]
+        })
+        .collect();
+    let columns = ["t", "servo_err_mm", "servo_err_deg", "tracking", "camera_speed_m_s", "tracker_err_mm"];
+    io::write_csv(&dir.join("servo_error.csv"), &columns, &records)
 }
 
 /// Columns of `servo_table.csv`.
@@ -253,15 +254,8 @@ fn fields(c: &Cell, s: &ServoSummary) -> [String; 12] {
 /// # Errors
 /// I/O errors.
 pub fn write_tables(results: &[(Cell, ServoSummary)], out: &Path) -> Result<()> {
-    let path = out.join("servo_table.csv");
-    let mut w = csv::Writer::from_path(&path).with_context(|| format!("creating {}", path.display()))?;
-    w.write_record(COLUMNS)?;
-    for (c, s) in results {
-        w.write_record(fields(c, s))?;
-    }
-    w.flush()?;
-    std::fs::write(out.join("servo_table.md"), markdown(results))
-        .with_context(|| format!("writing {}", out.join("servo_table.md").display()))
+    let records: Vec<Vec<String>> = results.iter().map(|(c, s)| fields(c, s).to_vec()).collect();
+    io::write_table(out, "servo_table", &COLUMNS, &records, &markdown(results))
 }
 
 /// The tables as Markdown: converged cells per target and method, then every cell.

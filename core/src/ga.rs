@@ -418,6 +418,13 @@ impl<const P: usize> Ga<P> {
         self.fitness = [0.0; P];
     }
 
+    /// The index of the first of `params.immigrants` fresh samples that [`Ga::breed`] puts at
+    /// the end of the population (the elite and at least one child stay before it).
+    pub fn first_immigrant(&self, params: &GaParams) -> usize {
+        let n = self.len.max(1);
+        n - params.immigrants.min(n - 1)
+    }
+
     /// Replaces individual `index` by `psi` clamped into `space` (seeded immigrants; an index
     /// out of range is ignored). Its stored fitness is cleared to 0 until the next evaluation.
     pub fn set_individual(&mut self, index: usize, psi: Psi, space: &SearchSpace) {
@@ -506,7 +513,7 @@ impl<const P: usize> Ga<P> {
             }
             parents.get(winner).copied().unwrap_or(best.psi)
         };
-        let first_immigrant = n - params.immigrants.min(n - 1);
+        let first_immigrant = self.first_immigrant(params);
         let cdf = if best.fitness >= params.settled_fitness { params.settled_level_cdf } else { params.level_cdf };
         for (i, child) in self.active_mut().enumerate() {
             if i == 0 {

@@ -52,6 +52,17 @@ impl Psi {
         Vector3::new(x, y, z)
     }
 
+    /// The pose moved along the right camera's viewing ray through its position: the
+    /// translation scaled by `factor` (the depth `t_z` becomes `factor · t_z`, the image of the
+    /// centre in the right camera stays put), the orientation kept.
+    pub fn scaled_along_ray(&self, factor: f32) -> Psi {
+        let mut p = *self;
+        for x in p.0.iter_mut().take(3) {
+            *x *= factor;
+        }
+        p
+    }
+
     /// Quaternion vector part `ε`.
     pub fn eps(&self) -> Vector3<f32> {
         let [.., a, b, c] = self.0;

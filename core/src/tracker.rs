@@ -654,17 +654,12 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             return;
         }
         let unit = z * z / (optics.focal_px * optics.baseline_m);
-        let used = self.ga.len();
-        let end = used - self.config.ga.immigrants.min(used - 1);
+        let end = self.ga.first_immigrant(&self.config.ga);
         let Some(first) = end.checked_sub(DEPTH_PROBES).filter(|&f| f >= 1) else { return };
         for (j, k) in DEPTH_PROBE_DISPARITY_PX.iter().enumerate() {
             for (s, sign) in [1.0f32, -1.0].iter().enumerate() {
-                let scale = 1.0 + sign * k * unit / z;
-                let mut p = *best;
-                for x in p.0.iter_mut().take(3) {
-                    *x *= scale;
-                }
-                self.ga.set_individual(first + 2 * j + s, p, &self.config.search);
+                let probe = best.scaled_along_ray(1.0 + sign * k * unit / z);
+                self.ga.set_individual(first + 2 * j + s, probe, &self.config.search);
             }
         }
     }

@@ -1,10 +1,7 @@
 //! Diagnostics of one acquisition trial: per frame, the seed's and the estimate's errors.
 use evorec_core::acquire;
-use evorec_core::image::HueImage;
-use evorec_core::tracker::StereoFrame;
 use evorec_sim::acquire::{Case, pose_error, scenario};
 use evorec_sim::experiment::{SimTracker, tracker_config};
-use evorec_sim::render;
 use evorec_sim::sim::World;
 
 fn main() -> anyhow::Result<()> {
@@ -18,19 +15,12 @@ fn main() -> anyhow::Result<()> {
     let mut tracker = SimTracker::new(tracker_config(&s)?).map_err(|e| anyhow::anyhow!("{e}"))?;
     let cfg = *tracker.config();
     let half = tracker.model().half_size();
-    let (w, h) = (s.camera.width, s.camera.height);
-    let n = usize::from(w) * usize::from(h);
+    let n = usize::from(s.camera.width) * usize::from(s.camera.height);
     let (mut l, mut r) = (vec![0u8; n], vec![0u8; n]);
     for k in 0..frames {
         let t = k as f64 * s.frame_period_s;
         world.advance_to(t);
-        let img = world.render();
-        render::hue_into(&img.left, &mut l);
-        render::hue_into(&img.right, &mut r);
-        let frame = StereoFrame {
-            left: HueImage::new_checked(&l[..], w, h).map_err(|e| anyhow::anyhow!("{e:?}"))?,
-            right: HueImage::new_checked(&r[..], w, h).map_err(|e| anyhow::anyhow!("{e:?}"))?,
-        };
+        let frame = world.render().hue_frame(&mut l, &mut r)?;
         let truth = world.truth();
         let (bl, br) = tracker.blobs_of(&frame).map_err(|e| anyhow::anyhow!("{e}"))?;
         let hh = [half.x, half.y, half.z];

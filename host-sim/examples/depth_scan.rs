@@ -3,10 +3,7 @@
 //! Shows how sharply the fitness resolves each axis, and where its peak is.
 //!
 //! `cargo run --release -p evorec-sim --example depth_scan -- SCENARIO [TIME_S]`
-use evorec_core::image::HueImage;
-use evorec_core::tracker::StereoFrame;
 use evorec_sim::experiment::{SimTracker, tracker_config};
-use evorec_sim::render;
 use evorec_sim::scenario::Scenario;
 use evorec_sim::sim::World;
 
@@ -19,26 +16,15 @@ fn main() -> anyhow::Result<()> {
     let t: f64 = args.get(2).and_then(|v| v.parse().ok()).unwrap_or(0.0);
     let mut world = World::new(&s)?;
     let tracker = SimTracker::new(tracker_config(&s)?).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let (w, h) = (s.camera.width, s.camera.height);
-    let n = usize::from(w) * usize::from(h);
+    let n = usize::from(s.camera.width) * usize::from(s.camera.height);
     let (mut l, mut r) = (vec![0u8; n], vec![0u8; n]);
     world.advance_to(t);
-    let img = world.render();
-    render::hue_into(&img.left, &mut l);
-    render::hue_into(&img.right, &mut r);
-    let frame = StereoFrame {
-        left: HueImage::new_checked(&l[..], w, h).map_err(|e| anyhow::anyhow!("{e:?}"))?,
-        right: HueImage::new_checked(&r[..], w, h).map_err(|e| anyhow::anyhow!("{e:?}"))?,
-    };
+    let frame = world.render().hue_frame(&mut l, &mut r)?;
     let truth = world.truth();
     println!("truth {:?}", truth.0);
     for k in -40..=40 {
         let d = k as f32 * 0.0005;
-        let mut p = truth;
-        let z = p.0[2];
-        for i in 0..3 {
-            p.0[i] *= 1.0 + d / z;
-        }
+        let p = truth.scaled_along_ray(1.0 + d / truth.0[2]);
         let fz = tracker.fitness_of(&p, &frame).map_err(|e| anyhow::anyhow!("{e}"))?.total;
         let mut q = truth;
         q.0[0] += d;

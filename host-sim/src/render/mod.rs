@@ -23,8 +23,9 @@
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::MIN_DEPTH_M;
 use evorec_core::hue::rgb_to_hue;
-use evorec_core::image::{rgb565_to_rgb888, rgb888_to_rgb565};
+use evorec_core::image::{HueImage, ImageError, rgb565_to_rgb888, rgb888_to_rgb565};
 use evorec_core::model::{Block, FACES};
+use evorec_core::tracker::StereoFrame;
 use image::{Rgb, RgbImage};
 use nalgebra::{Isometry3, Point2, Vector3};
 use rand_core::Rng;
@@ -467,6 +468,21 @@ pub fn hue_image(img: &RgbImage) -> Vec<u8> {
     let mut out = vec![0u8; (img.width() * img.height()) as usize];
     hue_into(img, &mut out);
     out
+}
+
+impl StereoImages {
+    /// Both images' hue planes ([`hue_into`]) written into `left` and `right` (`width·height`
+    /// bytes each), as the core's frame pair.
+    ///
+    /// # Errors
+    /// The core's [`ImageError`] when a buffer does not hold an image of the images' size.
+    pub fn hue_frame<'a>(&self, left: &'a mut [u8], right: &'a mut [u8]) -> Result<StereoFrame<'a>, ImageError> {
+        hue_into(&self.left, left);
+        hue_into(&self.right, right);
+        let side = |v: u32| u16::try_from(v).unwrap_or(u16::MAX);
+        let (w, h) = (side(self.right.width()), side(self.right.height()));
+        Ok(StereoFrame { left: HueImage::new_checked(&*left, w, h)?, right: HueImage::new_checked(&*right, w, h)? })
+    }
 }
 
 /// `img` as RGB565 bytes ([`rgb565_into`] into a new buffer of `2·width·height` bytes).

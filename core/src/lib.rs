@@ -22,7 +22,9 @@
 //!   `J_n` term) and the hand-over of a pose to a later time; [`servo`]: a position-based
 //!   visual servo law on the handed-over pose.
 //! - [`status`]: searching / tracking / lost; [`acquire`]: the colour-blob pose seed.
-//! - [`tracker`]: one generation per frame pair; [`board`]: the camera-controller trait and
+//! - [`tracker`]: one generation per frame pair (the paper's 1-step GA), or up to
+//!   [`MAX_GENERATIONS_PER_FRAME`](tracker::MAX_GENERATIONS_PER_FRAME) where the frame period
+//!   allows; [`board`]: the camera-controller trait and
 //!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.
 //!
 //! ## Work per generation
@@ -30,7 +32,9 @@
 //! [`SurfaceStrips::WALKED_PER_CAMERA`](model::SurfaceStrips::WALKED_PER_CAMERA)
 //! `= 48·G` sample points, visible or not; a generation evaluates `P` individuals in
 //! two cameras and breeds `P − 1` children with a fixed number of random draws each. No loop
-//! depends on the data, so the worst case is the typical case.
+//! depends on the data, so the worst case is the typical case. A frame runs
+//! [`TrackerConfig::generations_per_frame`](tracker::TrackerConfig::generations_per_frame)
+//! such generations after one feedforward shift, and one target-filter update.
 //!
 //! ## Example
 //! ```

@@ -42,6 +42,10 @@ pub const DEPTH_PROBES: usize = 2 * DEPTH_PROBE_DISPARITY_PX.len();
 /// depths apart, to two pixels, beyond which the coarse mutation takes over.
 pub const DEPTH_PROBE_DISPARITY_PX: [f32; 4] = [0.25, 0.5, 1.0, 2.0];
 
+/// Most GA generations [`TrackerConfig::generations_per_frame`] may ask for on one frame pair:
+/// the work of a frame is at most this many generations' (see the crate docs' bound).
+pub const MAX_GENERATIONS_PER_FRAME: u8 = 4;
+
 /// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Feedforward {
@@ -106,6 +110,8 @@ pub enum ConfigError {
     Acquire(AcquireError),
     /// Status thresholds.
     Status(StatusError),
+    /// `generations_per_frame` outside `1..=`[`MAX_GENERATIONS_PER_FRAME`].
+    GenerationsPerFrame,
 }
 
 impl core::fmt::Display for ConfigError {
@@ -118,6 +124,9 @@ impl core::fmt::Display for ConfigError {
             Self::NonFiniteTransform => f.write_str("flange-to-camera transform is not finite"),
             Self::Acquire(e) => write!(f, "acquisition: {e}"),
             Self::Status(e) => write!(f, "status: {e}"),
+            Self::GenerationsPerFrame => {
+                write!(f, "generations_per_frame must be 1 to {MAX_GENERATIONS_PER_FRAME}")
+            }
         }
     }
 }
@@ -234,6 +243,11 @@ pub struct TrackerConfig<const DOF: usize> {
     pub acquire: AcquireConfig,
     /// Status thresholds ([`crate::status`]).
     pub status: StatusConfig,
+    /// GA generations run on each frame pair, 1 to [`MAX_GENERATIONS_PER_FRAME`]: 1 is the
+    /// paper's 1-step GA; each further generation refines on the same frame (no feedforward
+    /// shift) and costs one more generation's work. The status and the target filter are
+    /// updated once per frame, from the last generation.
+    pub generations_per_frame: u8,
 }
 
 impl TrackerConfig<PA10_DOF> {
@@ -252,6 +266,7 @@ impl TrackerConfig<PA10_DOF> {
             max_dt_s: 0.5,
             acquire: AcquireConfig::DEFAULT,
             status: StatusConfig::DEFAULT,
+            generations_per_frame: 1,
         }
     }
 }
@@ -382,6 +397,9 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
         config.acquire.validate(config.ga.population).map_err(ConfigError::Acquire)?;
         config.status.validate().map_err(ConfigError::Status)?;
+        if !(1..=MAX_GENERATIONS_PER_FRAME).contains(&config.generations_per_frame) {
+            return Err(ConfigError::GenerationsPerFrame);
+        }
         let ft = &config.flange_to_camera;
         if !ft.translation.vector.iter().chain(ft.rotation.coords.iter()).all(|v| v.is_finite()) {
             return Err(ConfigError::NonFiniteTransform);
@@ -509,7 +527,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         check(Side::Right, &frame.right, &self.config.rig.right)
     }
 
-    /// One generation on the newest frame pair (see [`Tracker::step_probed`]).
+    /// The frame's generations on the newest frame pair (see [`Tracker::step_probed`]).
     ///
     /// # Errors
     /// As [`Tracker::step_probed`].
@@ -523,11 +541,12 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.step_probed(frame, joints, dt_s, feedforward, &mut NoProbe)
     }
 
-    /// One generation: with [`Feedforward::On`] every individual is first moved by
-    /// `J_m(q) q̇ · dt` (eq. 36), with [`Feedforward::OnWithTarget`] by
-    /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then the population is evaluated on `frame`,
-    /// the best is the estimate, its fitness updates the [`Status`], the next population is
-    /// bred, and the estimate, taken into the world at `joints.q`, updates the target filter.
+    /// The generations of one frame: with [`Feedforward::On`] every individual is first moved
+    /// by `J_m(q) q̇ · dt` (eq. 36), with [`Feedforward::OnWithTarget`] by
+    /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then, [`TrackerConfig::generations_per_frame`]
+    /// times, the population is evaluated on `frame` and the next one bred; the last
+    /// generation's best is the estimate, its fitness updates the [`Status`], and the
+    /// estimate, taken into the world at `joints.q`, updates the target filter.
     /// While the status is not [`Status::Tracking`], the last
     /// [`AcquireConfig::seed_immigrants`] children are replaced by poses seeded from the
     /// colour blobs of the frame ([`crate::acquire`]). `dt_s` is the time since the previous
@@ -596,33 +615,15 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             }
         }
 
-        probe.mark(Phase::Evaluate);
-        let idle = if acquiring { self.config.acquire.idle_individuals } else { 0 };
-        let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
-        let best: Best = self.ga.evaluate_first(self.ga.len().saturating_sub(idle), |psi| {
-            eval.evaluate_psi(psi, &frame.left, &frame.right).total
-        });
+        let mut best = self.generation_on(frame, feedforward, acquiring, probe);
+        for _ in 1..self.config.generations_per_frame {
+            best = self.generation_on(frame, feedforward, acquiring, probe);
+        }
+        let (best, target_measurement) = best;
         let status = self.monitor.update(best.fitness, &self.config.status);
-
-        // The filter's measurement is taken from the evaluated population, before breeding.
-        let target_measurement = if feedforward == Feedforward::OnWithTarget {
-            Psi::new(self.ga.mean_translation_near(&best, MEASUREMENT_FITNESS_MARGIN), best.psi.eps().into())
-        } else {
-            best.psi
-        };
-
-        probe.mark(Phase::Breed);
-        self.ga.breed(&best, &self.config.ga, &self.config.search, &mut self.rng);
-        if feedforward == Feedforward::OnWithTarget && !acquiring {
-            self.probe_depth(&best.psi);
-        }
-        if acquiring {
-            self.acquire_step(frame);
-        }
         if status == Status::Tracking && acquiring {
             self.acquisition.reset();
         }
-        self.generation = self.generation.wrapping_add(1);
         // The target filter (one forward kinematics and a data-dependent update) runs only in the
         // mode that uses it, so the other modes keep the paper's constant work per generation.
         if feedforward == Feedforward::OnWithTarget {
@@ -639,6 +640,41 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             capture_time_us: joints.time_us,
             target_measurement,
         })
+    }
+
+    /// One generation on `frame` (the population already moved by the feedforward): evaluate,
+    /// breed (with the depth probes in [`Feedforward::OnWithTarget`] while tracking, with
+    /// immigrants seeded from the colour blobs while `acquiring`). Returns the best of the
+    /// evaluated population and the target filter's measurement of it.
+    fn generation_on<F: PixelFormat>(
+        &mut self,
+        frame: &StereoFrame<'_, F>,
+        feedforward: Feedforward,
+        acquiring: bool,
+        probe: &mut impl PhaseProbe,
+    ) -> (Best, Psi) {
+        probe.mark(Phase::Evaluate);
+        let idle = if acquiring { self.config.acquire.idle_individuals } else { 0 };
+        let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
+        let best: Best = self.ga.evaluate_first(self.ga.len().saturating_sub(idle), |psi| {
+            eval.evaluate_psi(psi, &frame.left, &frame.right).total
+        });
+        // The filter's measurement is taken from the evaluated population, before breeding.
+        let target_measurement = if feedforward == Feedforward::OnWithTarget {
+            Psi::new(self.ga.mean_translation_near(&best, MEASUREMENT_FITNESS_MARGIN), best.psi.eps().into())
+        } else {
+            best.psi
+        };
+        probe.mark(Phase::Breed);
+        self.ga.breed(&best, &self.config.ga, &self.config.search, &mut self.rng);
+        if feedforward == Feedforward::OnWithTarget && !acquiring {
+            self.probe_depth(&best.psi);
+        }
+        if acquiring {
+            self.acquire_step(frame);
+        }
+        self.generation = self.generation.wrapping_add(1);
+        (best, target_measurement)
     }
 
     /// Replaces the last [`DEPTH_PROBES`] bred children before the immigrants by the best

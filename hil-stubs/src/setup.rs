@@ -44,8 +44,8 @@ pub enum SetupError {
     UnsupportedRig,
     /// The arm is not the PA-10 (code 7, host side only).
     UnsupportedArm,
-    /// Acquisition or status settings other than the defaults, which the firmware always
-    /// uses (code 8, host side only).
+    /// Acquisition or status settings other than the defaults, or more than one generation
+    /// per frame, which the firmware does not receive (code 8, host side only).
     UnsupportedAcquisition,
     /// The target filter's parameters (code 9).
     TargetFilter(FilterParamsError),
@@ -78,7 +78,7 @@ impl SetupError {
             5 => "initial pose or spread rejected",
             6 => "rig is not two identical parallel cameras",
             7 => "arm is not the PA-10",
-            8 => "acquisition or status settings differ from the firmware's defaults",
+            8 => "acquisition, status or generations-per-frame settings differ from the firmware's defaults",
             9 => "target filter parameters rejected",
             _ => "unknown setup error",
         }
@@ -193,8 +193,9 @@ impl Setup {
             max_dt_s,
             acquire,
             status,
+            generations_per_frame,
         } = *config;
-        if acquire != AcquireConfig::DEFAULT || status != StatusConfig::DEFAULT {
+        if acquire != AcquireConfig::DEFAULT || status != StatusConfig::DEFAULT || generations_per_frame != 1 {
             return Err(SetupError::UnsupportedAcquisition);
         }
         let lfr = &rig.left_from_right;

@@ -196,6 +196,7 @@ pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, opts: &TrackOpt
         max_dt_s: 0.5,
         acquire: AcquireConfig::DEFAULT,
         status: StatusConfig::DEFAULT,
+        generations_per_frame: 1,
     })
 }
 

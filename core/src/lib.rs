@@ -42,7 +42,7 @@
 //! let cam = Pinhole::new_checked(400.0, 400.0, 160.0, 120.0, 320, 240).unwrap();
 //! let rig = StereoRig::parallel(cam, 0.1).unwrap();
 //! let space = SearchSpace::new_checked([-0.2, -0.2, 0.4], [0.2, 0.2, 1.0]).unwrap();
-//! let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(1);
+//! let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(1).with_feedforward(Feedforward::Off);
 //! let mut tracker: Tracker = Tracker::new(config).unwrap();
 //!
 //! // A synthetic frame pair of the block 0.7 m ahead.
@@ -58,9 +58,9 @@
 //! let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
 //! // Start 17 mm and ~1° away from the truth (the paper starts tracking at a known pose).
 //! tracker.reset_around(&Psi::new([0.01, -0.01, 0.71], [0.0, 0.19, 0.0]), &[0.01; 6]).unwrap();
-//! let mut est = tracker.step(&frame, &joints, 0.0, Feedforward::Off).unwrap();
+//! let mut est = tracker.step(&frame, &joints, 0.0).unwrap();
 //! for _ in 0..150 {
-//!     est = tracker.step(&frame, &joints, 0.033, Feedforward::Off).unwrap();
+//!     est = tracker.step(&frame, &joints, 0.033).unwrap();
 //! }
 //! let err = est.psi.translation() - truth.translation();
 //! assert!(est.fitness > 0.9);
@@ -108,5 +108,7 @@ pub mod synth;
 pub mod target_motion;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod tracker;
+pub mod tuning;
 
 pub use tracker::{Estimate, Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
+pub use tuning::{ConfigError, Tuning};

@@ -77,27 +77,6 @@ impl core::fmt::Display for Status {
     }
 }
 
-/// Why status thresholds were rejected.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum StatusError {
-    /// A threshold is not finite, outside `[0, 1]`, or `lose_fitness > acquire_fitness`.
-    Thresholds,
-    /// A generation count is 0.
-    ZeroCount,
-}
-
-impl core::fmt::Display for StatusError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::Thresholds => f.write_str("status thresholds must satisfy 0 ≤ lose_fitness ≤ acquire_fitness ≤ 1"),
-            Self::ZeroCount => f.write_str("status generation counts must be at least 1"),
-        }
-    }
-}
-
-impl core::error::Error for StatusError {}
-
 /// Thresholds of the status decision; [`StatusConfig::DEFAULT`] documents the defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StatusConfig {
@@ -125,20 +104,6 @@ impl StatusConfig {
         lost_generations_to_search: 150,
     };
 
-    /// Checks the thresholds.
-    ///
-    /// # Errors
-    /// [`StatusError::Thresholds`] or [`StatusError::ZeroCount`].
-    pub fn validate(&self) -> Result<(), StatusError> {
-        let ok = |x: f32| x.is_finite() && (0.0..=1.0).contains(&x);
-        if !ok(self.acquire_fitness) || !ok(self.lose_fitness) || self.lose_fitness > self.acquire_fitness {
-            return Err(StatusError::Thresholds);
-        }
-        if self.confirm_generations == 0 || self.lose_generations == 0 || self.lost_generations_to_search == 0 {
-            return Err(StatusError::ZeroCount);
-        }
-        Ok(())
-    }
 }
 
 impl Default for StatusConfig {
@@ -238,12 +203,5 @@ mod tests {
         }
         assert_eq!(Status::from_code(3), None);
         assert_eq!(Status::Lost.to_string(), "lost");
-        assert!(StatusConfig::DEFAULT.validate().is_ok());
-        let bad = StatusConfig { lose_fitness: 0.9, ..StatusConfig::DEFAULT };
-        assert_eq!(bad.validate(), Err(StatusError::Thresholds));
-        let bad = StatusConfig { acquire_fitness: f32::NAN, ..StatusConfig::DEFAULT };
-        assert_eq!(bad.validate(), Err(StatusError::Thresholds));
-        let bad = StatusConfig { confirm_generations: 0, ..StatusConfig::DEFAULT };
-        assert_eq!(bad.validate(), Err(StatusError::ZeroCount));
     }
 }

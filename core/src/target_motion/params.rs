@@ -4,6 +4,8 @@
 //! speeds at the first sight) and how well one estimate sees it (in image pixels, turned into
 //! metres and radians per camera axis by [`super::Optics`]).
 
+use crate::tuning::{ConfigError, Tuning};
+
 /// The target motion model's parameters (see the [module docs](super)).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TargetFilterParams {
@@ -47,70 +49,11 @@ impl TargetFilterParams {
         max_gap_s: 0.5,
     };
 
-    /// Checks that every field is finite and positive.
+    /// Checks that every field is finite and positive ([`Tuning::validate_target`]).
     ///
     /// # Errors
-    /// [`FilterParamsError`] naming the first bad field.
-    pub fn validate(&self) -> Result<(), FilterParamsError> {
-        match Self::REAL_FIELDS.iter().find(|f| !((f.get)(self).is_finite() && (f.get)(self) > 0.0)) {
-            Some(f) => Err(FilterParamsError(f.name)),
-            None => Ok(()),
-        }
+    /// [`ConfigError`] naming the first bad field (`target.…`).
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        Tuning::validate_target(self)
     }
-}
-
-/// A [`TargetFilterParams`] field is out of range (its name).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FilterParamsError(pub &'static str);
-
-impl FilterParamsError {
-    /// The rule the field broke (see [`TargetFilterParams::validate`]).
-    pub fn rule(&self) -> &'static str {
-        "finite and positive"
-    }
-}
-
-impl core::fmt::Display for FilterParamsError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "target motion parameter {} must be {}", self.0, self.rule())
-    }
-}
-
-impl core::error::Error for FilterParamsError {}
-
-/// One field of [`TargetFilterParams`] of type `T`, by name: for tools that read or send the
-/// parameters field by field (a scenario file's keys, a link message), so that the list of
-/// fields is kept once, here.
-#[derive(Clone, Copy, Debug)]
-pub struct Field<T> {
-    /// The field's name in [`TargetFilterParams`].
-    pub name: &'static str,
-    /// The field's unit.
-    pub unit: &'static str,
-    /// Reads the field.
-    pub get: fn(&TargetFilterParams) -> T,
-    /// Writes the field.
-    pub set: fn(&mut TargetFilterParams, T),
-}
-
-/// The [`Field`]s of the listed `(field, unit)` pairs of type `$ty`.
-macro_rules! fields {
-    ($ty:ty, [$(($f:ident, $unit:literal)),* $(,)?]) => {
-        [$(Field::<$ty> { name: stringify!($f), unit: $unit, get: |p| p.$f, set: |p, v| p.$f = v }),*]
-    };
-}
-
-impl TargetFilterParams {
-    /// Every field, in the order a link message carries them.
-    pub const REAL_FIELDS: [Field<f32>; 6] = fields!(
-        f32,
-        [
-            (acceleration_m_s2, "m/s²"),
-            (angular_acceleration_rad_s2, "rad/s²"),
-            (max_speed_m_s, "m/s"),
-            (max_rate_rad_s, "rad/s"),
-            (image_noise_px, "px"),
-            (max_gap_s, "s"),
-        ]
-    );
 }

@@ -65,7 +65,7 @@ pub struct LoopOptions {
 impl LoopOptions {
     /// The options a scenario's method implies (no occlusion).
     pub fn for_scenario(s: &Scenario) -> Self {
-        let target_velocity = s.method == crate::scenario::Method::FfTarget;
+        let target_velocity = s.method() == crate::scenario::Method::FfTarget;
         Self { occlusion: None, conveyor: None, feedforward: None, target_velocity }
     }
 }
@@ -389,12 +389,13 @@ pub fn run(s: &Scenario, opts: &LoopOptions, on_frame: impl FnMut()) -> Result<C
 /// Drives `board` to its end with the host's tracker (the core's `board::run`); returns the
 /// tracker and the frames it refused.
 fn run_host_tracker(s: &Scenario, board: &mut ServoBoard, mut on_frame: impl FnMut()) -> Result<(SimTracker, u32)> {
-    let mut tracker: SimTracker = experiment::scenario_tracker(s, Population::Around(board.start_pose()))?;
-    let ff = board.feedforward();
-    let n = crate::sim::image_bytes(s);
+    let mut s = *s;
+    s.tracker.0.feedforward = board.feedforward();
+    let mut tracker: SimTracker = experiment::scenario_tracker(&s, Population::Around(board.start_pose()))?;
+    let n = crate::sim::image_bytes(&s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let mut progress = ProgressBoard { inner: board, on_frame: &mut on_frame };
-    let stats = evorec_core::board::run(&mut progress, &mut tracker, ff, &mut left, &mut right, u32::MAX)
+    let stats = evorec_core::board::run(&mut progress, &mut tracker, &mut left, &mut right, u32::MAX)
         .map_err(|e| anyhow!("closed loop: {e:?}"))?;
     Ok((tracker, stats.rejected))
 }
@@ -451,7 +452,7 @@ impl ServoLoop {
         Ok(Self {
             ctl,
             filter: crate::sim::target_filter(s)?,
-            feedforward: opts.feedforward.unwrap_or_else(|| s.method.into()),
+            feedforward: opts.feedforward.unwrap_or(s.tuning().feedforward),
             opts: *opts,
             desired,
             delay_s: f64::from(sec.delay_frames) * s.frame_period_s,
@@ -544,6 +545,7 @@ pub fn write_outputs(out: &ClosedLoopOutput, dir: &std::path::Path, title: &str)
     crate::io::write_trace_with(&trace, &out.run.rows, &SERVO_COLUMNS, &extra)?;
     let summary = ClosedLoopSummary { run: &out.run.summary, servo: &out.servo_summary };
     crate::io::write_json(&dir.join("summary.json"), &summary)?;
+    crate::io::write_tracker_config(dir, out.run.summary.scenario.tuning())?;
     crate::plot::plot_trace(&trace, dir, title)?;
     Ok(())
 }

@@ -362,7 +362,7 @@ impl ArmController for Scripted {
             &estimate.target_measurement,
             estimate.status,
         );
-        let t_out = capture.t + world.scenario().tracker.delay_s;
+        let t_out = capture.t + world.scenario().start.delay_s;
         let (truth_out, joints_out) = world.look_ahead(t_out);
         let t_out_us = (t_out * 1e6).round() as u64;
         let (predicted, trusted, velocity) =
@@ -529,13 +529,13 @@ pub fn frame_time(s: &Scenario, frame: u32) -> Result<f64> {
     Ok(t)
 }
 
-/// The target motion model a scenario's `ff+target` runs with (its `[target_filter]`, seen
+/// The target motion model a scenario's `ff+target` runs with (its `[tracker] target.*`, seen
 /// through its cameras and block as the tracker's is).
 ///
 /// # Errors
 /// Parameters that [`TargetFilter::new`] refuses (a parsed scenario's never are).
 pub fn target_filter(s: &Scenario) -> Result<TargetFilter> {
-    let filter = TargetFilter::new(s.target_filter.0).map_err(|e| anyhow::anyhow!("[target_filter]: {e}"))?;
+    let filter = TargetFilter::new(s.tuning().target).map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(filter.with_optics(Optics::of(&rig(s)?, &block(s))))
 }
 

@@ -155,7 +155,7 @@ pub fn grid() -> Vec<Cell> {
 /// max(0.5, 2v²/travel) m/s².
 pub fn scenario_of(base: &Scenario, cell: &Cell) -> Scenario {
     let mut s = *base;
-    s.method = cell.method;
+    s.set_method(cell.method);
     s.robot.motion = MotionKind::A;
     s.robot.omega_rad_s = ROBOT_OMEGA;
     s.target.omega_rad_s = cell.omega_o;

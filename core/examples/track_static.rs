@@ -18,7 +18,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cam = Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, w, h)?;
     let rig = StereoRig::parallel(cam, 0.1)?;
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2])?;
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(1).with_feedforward(Feedforward::Off);
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space)
+        .with_seed(1)
+        .with_feedforward(Feedforward::Off);
     let mut tracker: Tracker = Tracker::new(config)?;
 
     let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1))?;

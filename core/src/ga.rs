@@ -228,7 +228,6 @@ impl GaParams {
         self.mutation_scale = s;
         self
     }
-
 }
 
 impl Default for GaParams {
@@ -720,5 +719,4 @@ mod tests {
         assert_eq!(SearchSpace::new_checked([0.0; 3], [0.0; 3]), Err(GaError::EmptySearchSpace));
         assert_eq!(SearchSpace::new_checked([f32::NAN; 3], [1.0; 3]), Err(GaError::NonFinite));
     }
-
 }

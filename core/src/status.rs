@@ -103,7 +103,6 @@ impl StatusConfig {
         lose_generations: 1,
         lost_generations_to_search: 150,
     };
-
 }
 
 impl Default for StatusConfig {

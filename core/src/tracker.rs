@@ -21,10 +21,8 @@ use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
 use crate::status::{Status, StatusMonitor};
+use crate::target_motion::{Optics, PredictError, Prediction, TargetFilter, TargetVelocity};
 use crate::tuning::Tuning;
-use crate::target_motion::{
-    Optics, PredictError, Prediction, TargetFilter, TargetVelocity,
-};
 
 /// The target filter is fed the mean position of the individuals whose fitness is within this
 /// of the best's ([`Ga::mean_translation_near`](crate::ga::Ga::mean_translation_near)), with
@@ -201,15 +199,7 @@ pub struct TrackerConfig<const DOF: usize> {
 impl TrackerConfig<PA10_DOF> {
     /// A PA-10 configuration with seed 0 and the default tuning ([`Tuning::DEFAULT`]).
     pub fn pa10(rig: StereoRig, block: Block, flange_to_camera: Isometry3<f32>, search: SearchSpace) -> Self {
-        Self {
-            rig,
-            block,
-            arm: PA10,
-            flange_to_camera,
-            search,
-            seed: 0,
-            tuning: Tuning::DEFAULT,
-        }
+        Self { rig, block, arm: PA10, flange_to_camera, search, seed: 0, tuning: Tuning::DEFAULT }
     }
 }
 

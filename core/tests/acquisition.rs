@@ -23,8 +23,12 @@ fn rig() -> StereoRig {
 
 fn tracker(seed: u64) -> Tracker<7, 40, 8> {
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
-    Tracker::new(TrackerConfig::pa10(rig(), Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_feedforward(Feedforward::Off))
-        .unwrap()
+    Tracker::new(
+        TrackerConfig::pa10(rig(), Block::PAPER, Isometry3::identity(), space)
+            .with_seed(seed)
+            .with_feedforward(Feedforward::Off),
+    )
+    .unwrap()
 }
 
 const STILL: JointSample<7> = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };

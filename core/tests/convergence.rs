@@ -29,7 +29,10 @@ fn run_with(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: 
     let cam = Pinhole::new_checked(f, f, f32::from(width) / 2.0, f32::from(height) / 2.0, width, height).unwrap();
     let rig = StereoRig::parallel(cam, 0.1).unwrap();
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
-    let mut config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_ga(ga).with_feedforward(Feedforward::Off);
+    let mut config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space)
+        .with_seed(seed)
+        .with_ga(ga)
+        .with_feedforward(Feedforward::Off);
     // The plain GA: no colour-blob seeding and every individual evaluated even if the status
     // drops out of tracking.
     config.tuning.acquire.seed_immigrants = 0;
@@ -182,7 +185,9 @@ fn in_place_construction_equals_new() {
     let cam = Pinhole::new_checked(200.0, 200.0, 80.0, 60.0, 160, 120).unwrap();
     let rig = StereoRig::parallel(cam, 0.1).unwrap();
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(11).with_feedforward(Feedforward::Off);
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space)
+        .with_seed(11)
+        .with_feedforward(Feedforward::Off);
     let mut other = config.with_seed(5);
     other.block = Block { size_m: [0.3, 0.2, 0.25], face_hues_deg: [30.0, 90.0, 150.0, 210.0, 270.0, 330.0] };
     other.tuning.hue_tolerance = 9;

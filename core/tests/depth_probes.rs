@@ -24,7 +24,8 @@ fn rig() -> StereoRig {
 
 fn tracker(seed: u64, start: &Psi, mode: Feedforward) -> Tracker {
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
-    let config = TrackerConfig::pa10(rig(), Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_feedforward(mode);
+    let config =
+        TrackerConfig::pa10(rig(), Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_feedforward(mode);
     let mut tracker: Tracker = Tracker::new(config).unwrap();
     tracker.reset_around(start, &[0.002, 0.002, 0.002, 0.004, 0.004, 0.004]).unwrap();
     tracker

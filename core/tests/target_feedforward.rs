@@ -44,7 +44,8 @@ const LAST: u64 = 20;
 fn run(mode: Feedforward, seed: u64) -> (f32, Tracker, Vector3<f32>) {
     let rig = rig();
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_feedforward(mode);
+    let config =
+        TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_feedforward(mode);
     let mut tracker: Tracker = Tracker::new(config).unwrap();
     tracker.reset_around(&truth(0), &[0.002, 0.002, 0.002, 0.004, 0.004, 0.004]).unwrap();
     let mut sq = 0.0;

@@ -173,8 +173,9 @@ pub fn tracker_step(data: &[u8]) {
     let Ok(space) = SearchSpace::new_checked([-0.2, -0.2, 0.4], [0.2, 0.2, 1.0]) else { return };
     let modes = [Feedforward::Off, Feedforward::On, Feedforward::OnWithTarget];
     let mode = modes[usize::from(b.u8() % 3)];
-    let config =
-        TrackerConfig::pa10(rig, Block::PAPER, nalgebra::Isometry3::identity(), space).with_seed(1).with_feedforward(mode);
+    let config = TrackerConfig::pa10(rig, Block::PAPER, nalgebra::Isometry3::identity(), space)
+        .with_seed(1)
+        .with_feedforward(mode);
     let Ok(mut tracker) = FirmwareTracker::new(config) else { return };
     if b.u8() & 1 == 1 {
         let psi = Psi::new([b.f32(), b.f32(), b.f32()], [b.f32(), b.f32(), b.f32()]);

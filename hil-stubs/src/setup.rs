@@ -159,15 +159,7 @@ impl Setup {
         initial_spread: &[f32; 6],
     ) -> Result<Self, SetupError> {
         // Destructured so that a new configuration field in the core fails to compile here.
-        let TrackerConfig {
-            rig,
-            block,
-            arm,
-            flange_to_camera,
-            search,
-            seed,
-            tuning,
-        } = *config;
+        let TrackerConfig { rig, block, arm, flange_to_camera, search, seed, tuning } = *config;
         let lfr = &rig.left_from_right;
         let t = lfr.translation.vector;
         let identity = lfr.rotation.coords == UnitQuaternion::<f32>::identity().coords;
@@ -302,9 +294,6 @@ mod tests {
         rig.left_from_right.translation.y = 0.01;
         let space = SearchSpace::new_checked([-0.2; 3], [0.2, 0.2, 1.0]).unwrap();
         let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space);
-        assert_eq!(
-            Setup::from_tracker_config(&config, &Psi::IDENTITY, &[0.0; 6]),
-            Err(SetupError::UnsupportedRig)
-        );
+        assert_eq!(Setup::from_tracker_config(&config, &Psi::IDENTITY, &[0.0; 6]), Err(SetupError::UnsupportedRig));
     }
 }

@@ -20,7 +20,7 @@ use evorec_core::image::Rgb888Image;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
-use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
+use evorec_core::tracker::{JointSample, StereoFrame, Tracker, TrackerConfig};
 use evorec_sim::render::{self, RenderOptions};
 use nalgebra::{Isometry3, Vector3};
 use rand_core::SeedableRng;

@@ -5,7 +5,7 @@
 //! uniform, entirely inside both images for the whole run; the block itself does not move)
 //! and runs two cases, the arm static and motion A at ω = 0.5 rad/s with feedforward:
 //!
-//! - **acquisition**: the tracker starts without a pose (`[tracker] initial = "unknown"`),
+//! - **acquisition**: the tracker starts without a pose (`[start] initial = "unknown"`),
 //!   [`ACQUIRE_DURATION_S`] long;
 //! - **recovery**: the tracker starts at the true pose and the block is hidden from
 //!   [`OCCLUSION_START_S`] for [`OCCLUSION_S`] (an occluder in front of both cameras in even
@@ -193,7 +193,13 @@ fn wrong_tracking(rows: &[TraceRow]) -> (usize, usize) {
 ///
 /// # Errors
 /// A run's error.
-pub fn run_trial(seed: u64, case: Case, points: usize, tuning: &Tuning, on_frame: &(impl Fn() + Sync)) -> Result<Trial> {
+pub fn run_trial(
+    seed: u64,
+    case: Case,
+    points: usize,
+    tuning: &Tuning,
+    on_frame: &(impl Fn() + Sync),
+) -> Result<Trial> {
     let go = |mut s: Scenario| {
         s.tracker.0 = *tuning;
         crate::with_rows!("--points", points, G => experiment::run_with_rows::<G>(&s, on_frame))

@@ -586,7 +586,7 @@ mod tests {
     #[test]
     fn the_boards_target_filter_is_the_trackers() {
         let mut s = scenario(2.0);
-        s.method = Method::FfTarget;
+        s.set_method(Method::FfTarget);
         let mut board =
             ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
         let (tracker, rejected) = run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}"));
@@ -598,19 +598,19 @@ mod tests {
     #[test]
     fn a_tuned_target_filter_reaches_the_tracker_and_the_boards_copy() {
         let mut s = scenario(2.0);
-        s.method = Method::FfTarget;
+        s.set_method(Method::FfTarget);
         let default_run = {
             let mut board =
                 ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
             run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}")).0
         };
         // A slower block and noisier estimates than the defaults say.
-        s.target_filter.0.acceleration_m_s2 = 0.2;
-        s.target_filter.0.image_noise_px = 2.0;
+        s.tracker.0.target.acceleration_m_s2 = 0.2;
+        s.tracker.0.target.image_noise_px = 2.0;
         let mut board =
             ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
         let (tracker, _) = run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}"));
-        assert_eq!(tracker.target_filter().params(), &s.target_filter.0);
+        assert_eq!(tracker.target_filter().params(), &s.tuning().target);
         assert_eq!(board.target_filter(), tracker.target_filter());
         assert_ne!(tracker.target_filter(), default_run.target_filter());
     }

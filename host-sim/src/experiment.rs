@@ -18,7 +18,7 @@ use crate::scenario::{HOST_POPULATION_CAPACITY, Scenario};
 use crate::sim::{self, Handover, SimBoard, TraceRow, World};
 
 /// The tracker the simulator runs: PA-10, the default population capacity (the size in use is
-/// the scenario's `[ga] population`) and sample rows.
+/// the scenario's `[tracker] ga.population`) and sample rows.
 pub type SimTracker = Tracker<PA10_DOF, HOST_POPULATION_CAPACITY, DEFAULT_GRID>;
 
 /// Half-widths of the initial population around the known true pose at `t = 0` (the paper
@@ -256,7 +256,7 @@ impl PoseRms {
     }
 }
 
-/// The hand-over at the output time (`[tracker] delay_s` after capture), over the frames
+/// The hand-over at the output time (`[start] delay_s` after capture), over the frames
 /// reported as tracking (the others carry no measurement to hand over).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct HandoverSummary {

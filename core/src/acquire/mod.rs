@@ -112,7 +112,6 @@ impl AcquireConfig {
         spread_m: [0.003, 0.010, 0.025],
         spread_rad: [0.03, 0.10, 0.25],
     };
-
 }
 
 /// Default [`AcquireConfig::scan_chunk`].

@@ -57,9 +57,9 @@ use crate::{math, quat};
 mod kalman;
 mod params;
 mod predict;
+use crate::tuning::ConfigError;
 use kalman::CvFilter;
 pub use params::TargetFilterParams;
-use crate::tuning::ConfigError;
 pub use predict::{PredictError, Prediction};
 
 /// The target's velocity screw in the world frame `Σ_W` (`^W ψ̇_M` with the angular part as

@@ -522,7 +522,8 @@ impl Scenario {
         let target = parse_target(&top.subtable("target")?)?;
         let robot = parse_robot(&top.subtable("robot")?)?;
         let servo = parse_servo(&top.subtable("servo")?)?;
-        let tracker = TrackerTable(tracker_table::parse_tracker(top.subtable("tracker")?.table, Tuning::DEFAULT, "tracker")?);
+        let tracker =
+            TrackerTable(tracker_table::parse_tracker(top.subtable("tracker")?.table, Tuning::DEFAULT, "tracker")?);
         let start_section = top.subtable("start")?;
         start_section.check_keys(&["initial", "delay_s"])?;
         let initial = acquisition::parse_initial(start_section.get("initial"))?;
@@ -542,18 +543,7 @@ impl Scenario {
         let delay_s = start_section.float_in("delay_s", frame_period_s, Bound::Closed(0.0), 1.0)?;
         let start = TrackerStart { initial, delay_s };
         let occlusion = acquisition::parse_occlusions(top.get("occlusion"), duration_s)?;
-        Ok(Self {
-            seed,
-            duration_s,
-            frame_period_s,
-            camera,
-            target,
-            robot,
-            servo,
-            start,
-            occlusion,
-            tracker,
-        })
+        Ok(Self { seed, duration_s, frame_period_s, camera, target, robot, servo, start, occlusion, tracker })
     }
 
     /// Reads, parses and validates a scenario file.

@@ -28,9 +28,7 @@ pub fn parse_tracker(t: Option<&Table>, base: Tuning, path: &str) -> Result<Tuni
     if let Some(t) = t {
         set_keys(&mut tuning, t, "", path)?;
     }
-    tuning
-        .validate(HOST_POPULATION_CAPACITY)
-        .map_err(|e| invalid(format!("{path}.{}", e.field), e.rule.to_owned()))?;
+    tuning.validate(HOST_POPULATION_CAPACITY).map_err(|e| invalid(format!("{path}.{}", e.field), e.rule.to_owned()))?;
     Ok(tuning)
 }
 
@@ -159,7 +157,9 @@ impl Serialize for TrackerTable {
         let mut map = ser.serialize_map(Some(FIELDS.len()))?;
         for f in &FIELDS {
             match (f.get)(&self.0) {
-                FieldValue::Real(x) => map.serialize_entry(f.name, &x.to_string().parse::<f64>().unwrap_or(f64::NAN))?,
+                FieldValue::Real(x) => {
+                    map.serialize_entry(f.name, &x.to_string().parse::<f64>().unwrap_or(f64::NAN))?
+                }
                 FieldValue::Int(n) => map.serialize_entry(f.name, &n)?,
                 FieldValue::Name(s) => map.serialize_entry(f.name, s)?,
             }

@@ -205,8 +205,8 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
         Some(pose) => Population::Around(Psi::from_isometry(&pose.cast::<f32>())),
         None => Population::Redrawn,
     };
-    let mut tracker: Tracker<DOF, HOST_POPULATION_CAPACITY, G> =
-        setup_tracker(config(seq, arm, opts)?, population).map_err(|e| match e {
+    let mut tracker: Tracker<DOF, HOST_POPULATION_CAPACITY, G> = setup_tracker(config(seq, arm, opts)?, population)
+        .map_err(|e| match e {
             SetupError::InitialPose(e) => anyhow!("target.initial_pose: {e}"),
             e => anyhow!("{e}"),
         })?;

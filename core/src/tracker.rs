@@ -41,18 +41,7 @@ pub const DEPTH_PROBES: usize = 2 * DEPTH_PROBE_DISPARITY_PX.len();
 /// depths apart, to two pixels, beyond which the coarse mutation takes over.
 pub const DEPTH_PROBE_DISPARITY_PX: [f32; 4] = [0.25, 0.5, 1.0, 2.0];
 
-/// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Feedforward {
-    /// Plain 1-step GA.
-    Off,
-    /// 1-step GA + motion feedforward of the arm (`J_m q̇`, eq. 24).
-    On,
-    /// 1-step GA + feedforward of the arm's and the target's motion
-    /// (`J_m q̇ + J_n ^W ψ̇_M`, eq. 23), the target's velocity from the tracker's
-    /// [`TargetFilter`] once it has observed the velocity (until then as [`Feedforward::On`]).
-    OnWithTarget,
-}
+pub use crate::tuning::Feedforward;
 
 /// A synchronised stereo pair of images in pixel format `F` (hue bytes by default).
 #[derive(Debug, Clone, Copy)]

@@ -9,6 +9,10 @@
 //! all walk this table, in its order. An array (the GA's level CDFs and mutation scales, the
 //! acquisition's spreads) has one entry per element, named after the element.
 //!
+//! The types of two of its parts are defined here and re-exported where they are used: the
+//! feedforward mode ([`Feedforward`], `crate::tracker::Feedforward`) and the target motion
+//! model's parameters ([`TargetFilterParams`], `crate::target_motion::TargetFilterParams`).
+//!
 //! What stays compiled: the population capacity `P` and the points per sample row `G` of a
 //! [`Tracker`](crate::tracker::Tracker) (const generics: storage and the model's point arrays
 //! are sized by them), and the model constants of [`crate::config`].
@@ -17,8 +21,73 @@ use crate::acquire::AcquireConfig;
 use crate::config::{DEFAULT_HUE_TOLERANCE, HUE_UNITS};
 use crate::ga::GaParams;
 use crate::status::StatusConfig;
-use crate::target_motion::TargetFilterParams;
-use crate::tracker::Feedforward;
+
+/// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Feedforward {
+    /// Plain 1-step GA.
+    Off,
+    /// 1-step GA + motion feedforward of the arm (`J_m q̇`, eq. 24).
+    On,
+    /// 1-step GA + feedforward of the arm's and the target's motion
+    /// (`J_m q̇ + J_n ^W ψ̇_M`, eq. 23), the target's velocity from the tracker's
+    /// [`TargetFilter`](crate::target_motion::TargetFilter) once it has observed the velocity (until then as [`Feedforward::On`]).
+    OnWithTarget,
+}
+
+/// The target motion model's parameters (see [`crate::target_motion`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TargetFilterParams {
+    /// The largest linear acceleration of the block expected (m/s²): the standard deviation of
+    /// the constant-velocity model's white acceleration per world axis. Larger follows starts,
+    /// stops and reversals sooner; smaller smooths the velocity of a steady block more.
+    pub acceleration_m_s2: f32,
+    /// The largest angular acceleration of the block expected (rad/s²), likewise for turns.
+    pub angular_acceleration_rad_s2: f32,
+    /// The largest speed of the block expected when it is first seen (m/s): the standard
+    /// deviation of the unknown velocity at a (re)start, so a block already moving when it
+    /// is acquired is followed from its first estimates.
+    pub max_speed_m_s: f32,
+    /// The largest angular speed of the block expected when it is first seen (rad/s).
+    pub max_rate_rad_s: f32,
+    /// Standard deviation of one estimate's image position in each camera (px). Through the
+    /// camera model ([`crate::target_motion::Optics`]) it gives the measurement noise per camera axis: at
+    /// range `Z`, `Z·σ/f` across the line of sight, `Z²·σ/(f·b)` along it (stereo depth), and
+    /// the orientation's noise as those over the block's radius.
+    pub image_noise_px: f32,
+    /// A time step longer than this (s) between two estimates restarts the model: the
+    /// velocity is not extrapolated across a longer gap.
+    pub max_gap_s: f32,
+}
+
+impl TargetFilterParams {
+    /// Defaults from physics and the camera model, not from any test scene:
+    /// - 1 m/s² (about 0.1 g): a part on a conveyor started, stopped or reversed, or handed
+    ///   over at a walking pace;
+    /// - 2 rad/s²: a part turned to 1 rad/s within half a second;
+    /// - 0.5 m/s and 1 rad/s at the first sight: a fast conveyor, a part turned by hand;
+    /// - 0.5 px: an estimate's projection is good to half a pixel (the fitness counts whole
+    ///   pixels, and one generation does not reach the optimum exactly);
+    /// - 0.5 s: fifteen frames at 30 frames/s.
+    pub const DEFAULT: TargetFilterParams = TargetFilterParams {
+        acceleration_m_s2: 1.0,
+        angular_acceleration_rad_s2: 2.0,
+        max_speed_m_s: 0.5,
+        max_rate_rad_s: 1.0,
+        image_noise_px: 0.5,
+        max_gap_s: 0.5,
+    };
+
+    /// Checks that every field is finite and positive (the `target.` rows of [`FIELDS`]).
+    ///
+    /// # Errors
+    /// [`ConfigError`] naming the first bad field (`target.…`).
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let t = Tuning { target: *self, ..Tuning::DEFAULT };
+        let bad = FIELDS.iter().filter(|f| f.name.starts_with("target.")).find(|f| !f.rule.holds((f.get)(&t)));
+        bad.map_or(Ok(()), |f| Err(ConfigError { field: f.name, rule: f.rule.text() }))
+    }
+}
 
 /// Every tuning parameter of a tracker (see the [module docs](self)).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -339,16 +408,6 @@ impl Tuning {
             return err("status.lose_fitness", "must not be above status.acquire_fitness");
         }
         Ok(())
-    }
-
-    /// Checks the target motion model's fields alone (the `target.` rows of [`FIELDS`]).
-    ///
-    /// # Errors
-    /// The first [`ConfigError`], naming its field.
-    pub fn validate_target(params: &TargetFilterParams) -> Result<(), ConfigError> {
-        let t = Tuning { target: *params, ..Tuning::DEFAULT };
-        let bad = FIELDS.iter().filter(|f| f.name.starts_with("target.")).find(|f| !f.rule.holds((f.get)(&t)));
-        bad.map_or(Ok(()), |f| Err(ConfigError { field: f.name, rule: f.rule.text() }))
     }
 }
 

@@ -55,11 +55,10 @@ use crate::status::Status;
 use crate::{math, quat};
 
 mod kalman;
-mod params;
 mod predict;
 use crate::tuning::ConfigError;
+pub use crate::tuning::TargetFilterParams;
 use kalman::CvFilter;
-pub use params::TargetFilterParams;
 pub use predict::{PredictError, Prediction};
 
 /// The target's velocity screw in the world frame `Σ_W` (`^W ψ̇_M` with the angular part as

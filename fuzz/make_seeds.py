@@ -1,16 +1,59 @@
 #!/usr/bin/env python3
 """Writes the hand-made seed inputs of the fuzz corpora (fuzz/corpus/<target>/seed-*).
 
-Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 9: 24-byte header,
+Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 10: 24-byte header,
 payload, CRC-32/ISO-HDLC trailer = zlib.crc32, the whole COBS-framed between two zero bytes;
 frames carry RGB565 images, 2 bytes a pixel). Run from anywhere: python3 fuzz/make_seeds.py
 """
 import os
+import re
 import struct
 import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-VERSION = 9
+VERSION = 10
+TABLE = os.path.join(HERE, "..", "core", "src", "tuning", "table.rs")
+
+
+def tuning_table():
+    """(name, kind) of every field of the core's tuning table, in order (kind 1 real, 2 int, 3 name)."""
+    text = open(TABLE, encoding="utf-8").read()
+    kinds = {"real": 1, "int": 2}
+    rows = re.findall(r'(real|int)!\(\s*"([^"]+)"|name: "([^"]+)",\s*unit: "[^"]*",\s*meaning: "[^"]*",\s*kind: Kind::Name', text)
+    return [(m[2], 3) if m[2] else (m[1], kinds[m[0]]) for m in rows]
+
+
+def table_id(table):
+    """The core's tuning::TABLE_ID: FNV-1a over every name's bytes and kind, in order."""
+    h = 0x811C9DC5
+    for name, kind in table:
+        for b in name.encode():
+            h = ((h ^ b) * 0x01000193) % 2**32
+        h = ((h ^ kind) * 0x01000193) % 2**32
+    return h
+
+
+# Tuning::DEFAULT in the table's order: method ("ff", index 1), hue tolerance, max dt, the GA
+# (population, three probabilities, immigrants, tournament, the level CDF, the settled CDF and
+# fitness, the mutation scales), the acquisition, the status, the target motion model.
+DEFAULT_TUNING = (
+    [1, 5, 0.5, 40, 0.2, 0.9, 0.35, 1, 3, 0.25, 0.6, 0.15, 0.5, 0.95]
+    + [0.02, 0.02, 0.02, 0.04, 0.04, 0.04, 0.004, 0.004, 0.004, 0.008, 0.008, 0.008]
+    + [0.001, 0.001, 0.001, 0.004, 0.004, 0.004]
+    + [8, 1200, 8, 6, 6, 0.003, 0.010, 0.025, 0.03, 0.10, 0.25]
+    + [0.75, 3, 0.4, 1, 150]
+    + [1.0, 2.0, 0.5, 1.0, 0.5, 0.5]
+)
+
+
+def tuning():
+    """The tuning part of CONFIG: table id, count (+2 reserved), each field's 4 bytes."""
+    table = tuning_table()
+    assert len(table) == len(DEFAULT_TUNING), (len(table), len(DEFAULT_TUNING))
+    p = struct.pack("<IHH", table_id(table), len(table), 0)
+    for (name, kind), v in zip(table, DEFAULT_TUNING):
+        p += f32s(v) if kind == 1 else struct.pack("<I", v)
+    return p
 
 
 def cobs(raw):
@@ -47,18 +90,9 @@ def setup(width, height):
     p += f32s(0, 120, 240, 0, 120, 240)  # face hues
     p += f32s(0, 0.06, 0.1) + f32s(1, 0, 0, 0)  # flange to camera
     p += f32s(-0.2, -0.2, 0.4) + f32s(0.2, 0.2, 1.0)  # search box
-    p += struct.pack("<QBBH", 1, 5, 1, 0)  # seed, hue tolerance, feedforward on, reserved
-    p += f32s(0.5)  # max dt
-    # GA (GaParams::DEFAULT): population, three probabilities, immigrants, tournament, the
-    # level CDF, the settled CDF and fitness, the mutation scales
-    p += struct.pack("<I", 40) + f32s(0.2, 0.9, 0.35) + struct.pack("<II", 1, 3)
-    p += f32s(0.25, 0.6) + f32s(0.15, 0.5, 0.95)
-    p += f32s(0.02, 0.02, 0.02, 0.04, 0.04, 0.04, 0.004, 0.004, 0.004, 0.008, 0.008, 0.008)
-    p += f32s(0.001, 0.001, 0.001, 0.004, 0.004, 0.004)
+    p += struct.pack("<Q", 1)  # seed
+    p += tuning()
     p += f32s(0, 0, 0.7, 0, 0, 0) + f32s(*[0.02] * 6)  # initial pose and spread
-    # target motion model (TargetFilterParams::DEFAULT): acceleration, angular acceleration,
-    # max speed, max rate, image noise, max gap
-    p += f32s(1.0, 2.0, 0.5, 1.0, 0.5, 0.5)
     return p
 
 

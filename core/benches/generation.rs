@@ -16,7 +16,7 @@ use evorec_core::image::HueImage;
 use evorec_core::image::{Rgb565Image, rgb888_to_rgb565};
 use evorec_core::model::{Block, SurfaceStrips};
 use evorec_core::pose::Psi;
-use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
+use evorec_core::tracker::{JointSample, StereoFrame, Tracker, TrackerConfig};
 use evorec_core::{quat, synth};
 use nalgebra::{Isometry3, Vector3};
 use std::hint::black_box;
@@ -93,7 +93,7 @@ fn benches(c: &mut Criterion) {
     let mut group = c.benchmark_group("generation");
     group.throughput(Throughput::Elements((points * tracker.population().len()) as u64));
     group.bench_function("default_rgb565_ff", |b| {
-        b.iter(|| tracker.step(black_box(&frame), &joints, 0.033, Feedforward::On).expect("step"))
+        b.iter(|| tracker.step(black_box(&frame), &joints, 0.033).expect("step"))
     });
     group.finish();
 }

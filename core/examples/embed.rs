@@ -65,7 +65,7 @@ mod firmware {
     use evorec_core::servo::{Servo, ServoConfig, ServoInput, ServoLimits};
     use evorec_core::status::Status;
     use evorec_core::target_motion;
-    use evorec_core::tracker::{Estimate, Feedforward, JointSample, Tracker, TrackerConfig};
+    use evorec_core::tracker::{Estimate, JointSample, Tracker, TrackerConfig};
     use nalgebra::{Isometry3, Translation3, UnitQuaternion};
     use static_cell::ConstStaticCell;
 
@@ -457,7 +457,7 @@ mod firmware {
         loop {
             // One generation per frame pair, until the board fails.
             // PORT: log the error, count it, reset the cameras on repeated timeouts.
-            if board::run(&mut camera, tracker, Feedforward::On, left, right, u32::MAX).is_err() {
+            if board::run(&mut camera, tracker, left, right, u32::MAX).is_err() {
                 // Stop servoing on an old estimate, then capture again; the tracker keeps its
                 // state, and the first frame after the gap becomes its new time base.
                 critical_section::with(|cs| SERVO_TARGET.borrow(cs).set(None));

@@ -18,7 +18,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cam = Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, w, h)?;
     let rig = StereoRig::parallel(cam, 0.1)?;
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2])?;
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(1);
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space)
+        .with_seed(1)
+        .with_feedforward(Feedforward::Off);
     let mut tracker: Tracker = Tracker::new(config)?;
 
     let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1))?;
@@ -40,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("truth: t = {:?} mm, eps = {:?}", (truth.translation() * 1e3).as_slice(), truth.eps().as_slice());
     println!("{:>5} {:>7} {:>9} {:>9} {:>9} {:>9}", "gen", "F", "|dt| mm", "dx mm", "dz mm", "|deps|");
     for i in 0..300 {
-        let est = tracker.step(&frame, &joints, 0.033, Feedforward::Off)?;
+        let est = tracker.step(&frame, &joints, 0.033)?;
         if i % 10 == 0 || i == 299 {
             let d = est.psi.translation() - truth.translation();
             let de = (est.psi.eps() - truth.eps()).norm();

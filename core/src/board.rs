@@ -18,7 +18,7 @@
 //! [`ErrorKind`] generic code can act on ([`ErrorKind::EndOfStream`] ends [`run`] normally).
 
 use crate::image::{Image, PixelFormat};
-use crate::tracker::{Estimate, Feedforward, JointSample, NoProbe, PhaseProbe, StepError, StereoFrame, Tracker};
+use crate::tracker::{Estimate, JointSample, NoProbe, PhaseProbe, StepError, StereoFrame, Tracker};
 
 /// What went wrong on a board, for generic code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -134,7 +134,7 @@ pub struct LoopStats {
 /// `dt` is the capture-time difference to the last accepted frame (0 for the first). A frame
 /// the tracker refuses is counted, logged and skipped; the tracker is unchanged by it. A frame
 /// refused because the gap since the last accepted one is longer than
-/// [`TrackerConfig::max_dt_s`](crate::tracker::TrackerConfig::max_dt_s) (frames dropped under
+/// [`Tuning::max_dt_s`](crate::tuning::Tuning::max_dt_s) (frames dropped under
 /// overload, a stalled camera) becomes the new time base, so the next frame is tracked again
 /// instead of every later frame being refused for an ever longer gap.
 ///
@@ -143,7 +143,6 @@ pub struct LoopStats {
 pub fn run<B, const DOF: usize, const P: usize, const G: usize>(
     board: &mut B,
     tracker: &mut Tracker<DOF, P, G>,
-    feedforward: Feedforward,
     left_buf: &mut [u8],
     right_buf: &mut [u8],
     max_frames: u32,
@@ -151,7 +150,7 @@ pub fn run<B, const DOF: usize, const P: usize, const G: usize>(
 where
     B: CameraController<DOF> + ?Sized,
 {
-    run_probed(board, tracker, feedforward, left_buf, right_buf, max_frames, &mut NoProbe)
+    run_probed(board, tracker, left_buf, right_buf, max_frames, &mut NoProbe)
 }
 
 /// [`run`] with a [`PhaseProbe`] told the phases of every generation.
@@ -161,7 +160,6 @@ where
 pub fn run_probed<B, const DOF: usize, const P: usize, const G: usize>(
     board: &mut B,
     tracker: &mut Tracker<DOF, P, G>,
-    feedforward: Feedforward,
     left_buf: &mut [u8],
     right_buf: &mut [u8],
     max_frames: u32,
@@ -195,7 +193,7 @@ where
             }
         };
         let frame = StereoFrame { left, right };
-        match tracker.step_probed(&frame, &joints, dt_s, feedforward, probe) {
+        match tracker.step_probed(&frame, &joints, dt_s, probe) {
             Ok(estimate) => {
                 board.publish(&info, &estimate)?;
                 stats.published += 1;

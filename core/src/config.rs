@@ -17,6 +17,10 @@ pub const DEFAULT_POPULATION: usize = 40;
 /// a larger capacity).
 pub const POPULATION_CAPACITY: usize = 40;
 
+/// Most GA generations [`crate::tuning::Tuning::generations_per_frame`] may ask for on one
+/// frame pair: the work of a frame is at most this many generations' (see the crate docs).
+pub const MAX_GENERATIONS_PER_FRAME: u8 = 4;
+
 /// Default number of sample points on each row of the surface-strips model.
 pub const DEFAULT_GRID: usize = 8;
 

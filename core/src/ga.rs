@@ -34,10 +34,6 @@ pub enum GaError {
     NonFinite,
     /// A search-space minimum is not below its maximum.
     EmptySearchSpace,
-    /// A probability is outside `[0, 1]`, a level CDF decreases, or a scale is negative.
-    BadParameter,
-    /// Too many immigrants for the population (at least the elite and one child must remain).
-    TooManyImmigrants,
     /// The population size is below 2 or above the capacity the GA was compiled with.
     PopulationSize {
         /// The size asked for.
@@ -52,8 +48,6 @@ impl core::fmt::Display for GaError {
         match self {
             Self::NonFinite => f.write_str("GA parameter is not finite"),
             Self::EmptySearchSpace => f.write_str("search space is empty"),
-            Self::BadParameter => f.write_str("GA probability or scale out of range"),
-            Self::TooManyImmigrants => f.write_str("too many immigrants for the population"),
             Self::PopulationSize { got, capacity } => {
                 write!(f, "population {got} is out of range (2..={capacity}, the compiled capacity)")
             }
@@ -184,7 +178,7 @@ impl GaParams {
         ],
     };
 
-    /// Builder: population size (checked against the capacity by [`GaParams::validate`]).
+    /// Builder: population size (checked against the capacity by [`crate::tuning::Tuning::validate`]).
     #[must_use]
     pub fn with_population(mut self, n: usize) -> Self {
         self.population = n;
@@ -233,34 +227,6 @@ impl GaParams {
     pub fn with_mutation_scale(mut self, s: [[f32; 6]; MUTATION_LEVELS]) -> Self {
         self.mutation_scale = s;
         self
-    }
-
-    /// Checks the parameters for a GA of capacity `capacity` (its `P`).
-    ///
-    /// # Errors
-    /// [`GaError::PopulationSize`] unless `2 ≤ population ≤ capacity`; [`GaError::NonFinite`],
-    /// [`GaError::BadParameter`] or [`GaError::TooManyImmigrants`].
-    pub fn validate(&self, capacity: usize) -> Result<(), GaError> {
-        let population = self.population;
-        if population < 2 || population > capacity {
-            return Err(GaError::PopulationSize { got: population, capacity });
-        }
-        let scales = self.mutation_scale.iter().flatten();
-        let probs = [self.crossover_prob, self.mutation_prob, self.gene_mutation_prob];
-        let cdfs = [self.level_cdf, self.settled_level_cdf];
-        let values = probs.iter().chain(cdfs.iter().flatten()).chain(scales.clone());
-        if !self.settled_fitness.is_finite() || !values.clone().all(|v| v.is_finite()) {
-            return Err(GaError::NonFinite);
-        }
-        let prob_ok = |p: f32| (0.0..=1.0).contains(&p);
-        let cdf_ok = |[a, b]: &[f32; MUTATION_LEVELS - 1]| prob_ok(*a) && prob_ok(*b) && a <= b;
-        if !probs.iter().all(|p| prob_ok(*p)) || !cdfs.iter().all(cdf_ok) || scales.clone().any(|&s| s < 0.0) {
-            return Err(GaError::BadParameter);
-        }
-        if self.immigrants + 2 > population {
-            return Err(GaError::TooManyImmigrants);
-        }
-        Ok(())
     }
 }
 
@@ -637,7 +603,6 @@ mod tests {
             .with_mutation_scale([[0.1; 6], [0.1; 6], [1e-4; 6]])
             .with_settled_levels([0.0, 0.0], 0.9);
         let params = GaParams { level_cdf: [1.0, 1.0], ..params };
-        assert!(params.validate(16).is_ok());
         let largest_move = |fitness: f32| {
             let mut rng = Xoshiro128PlusPlus::seed_from_u64(2);
             let mut ga = Ga::<16>::new(start);
@@ -654,18 +619,6 @@ mod tests {
         assert!(below > 0.01, "below the gate the coarse scale moved at most {below}");
         assert!(settled < 2e-4, "from the gate on the fine scale moved {settled}");
         assert_eq!(r_below, r_settled, "the gate changes no draw");
-    }
-
-    #[test]
-    fn level_probabilities_must_be_cumulative() {
-        for cdf in [[0.7, 0.6], [-0.1, 0.5], [0.2, 1.1]] {
-            assert_eq!(GaParams { level_cdf: cdf, ..GaParams::DEFAULT }.validate(40), Err(GaError::BadParameter));
-            let settled = GaParams::DEFAULT.with_settled_levels(cdf, 0.95);
-            assert_eq!(settled.validate(40), Err(GaError::BadParameter), "{cdf:?}");
-        }
-        let nan = GaParams::DEFAULT.with_settled_levels([0.1, 0.5], f32::NAN);
-        assert_eq!(nan.validate(40), Err(GaError::NonFinite));
-        assert!(GaParams::DEFAULT.with_settled_levels([0.0, 1.0], 2.0).validate(40).is_ok());
     }
 
     #[test]
@@ -762,18 +715,8 @@ mod tests {
     }
 
     #[test]
-    fn parameter_validation() {
-        let p = GaParams::DEFAULT;
-        assert_eq!(p.with_population(0).validate(64), Err(GaError::PopulationSize { got: 0, capacity: 64 }));
-        assert_eq!(p.with_population(1).validate(64), Err(GaError::PopulationSize { got: 1, capacity: 64 }));
-        assert_eq!(p.with_population(65).validate(64), Err(GaError::PopulationSize { got: 65, capacity: 64 }));
-        assert!(p.with_population(64).validate(64).is_ok());
-        assert!(p.with_population(2).with_immigrants(0).validate(64).is_ok());
+    fn search_space_validation() {
         assert_eq!(SearchSpace::new_checked([0.0; 3], [0.0; 3]), Err(GaError::EmptySearchSpace));
         assert_eq!(SearchSpace::new_checked([f32::NAN; 3], [1.0; 3]), Err(GaError::NonFinite));
-        let p10 = p.with_population(10);
-        assert_eq!(p10.with_crossover_prob(1.5).validate(10), Err(GaError::BadParameter));
-        assert_eq!(p10.with_immigrants(9).validate(10), Err(GaError::TooManyImmigrants));
-        assert!(p10.validate(10).is_ok());
     }
 }

@@ -23,7 +23,7 @@
 //!   visual servo law on the handed-over pose.
 //! - [`status`]: searching / tracking / lost; [`acquire`]: the colour-blob pose seed.
 //! - [`tracker`]: one generation per frame pair (the paper's 1-step GA), or up to
-//!   [`MAX_GENERATIONS_PER_FRAME`](tracker::MAX_GENERATIONS_PER_FRAME) where the frame period
+//!   [`MAX_GENERATIONS_PER_FRAME`](config::MAX_GENERATIONS_PER_FRAME) where the frame period
 //!   allows; [`board`]: the camera-controller trait and
 //!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.
 //!
@@ -33,7 +33,7 @@
 //! `= 48·G` sample points, visible or not; a generation evaluates `P` individuals in
 //! two cameras and breeds `P − 1` children with a fixed number of random draws each. No loop
 //! depends on the data, so the worst case is the typical case. A frame runs
-//! [`TrackerConfig::generations_per_frame`](tracker::TrackerConfig::generations_per_frame)
+//! [`Tuning::generations_per_frame`](tuning::Tuning::generations_per_frame)
 //! such generations after one feedforward shift, and one target-filter update.
 //!
 //! ## Example
@@ -46,7 +46,7 @@
 //! let cam = Pinhole::new_checked(400.0, 400.0, 160.0, 120.0, 320, 240).unwrap();
 //! let rig = StereoRig::parallel(cam, 0.1).unwrap();
 //! let space = SearchSpace::new_checked([-0.2, -0.2, 0.4], [0.2, 0.2, 1.0]).unwrap();
-//! let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(1);
+//! let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(1).with_feedforward(Feedforward::Off);
 //! let mut tracker: Tracker = Tracker::new(config).unwrap();
 //!
 //! // A synthetic frame pair of the block 0.7 m ahead.
@@ -62,9 +62,9 @@
 //! let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
 //! // Start 17 mm and ~1° away from the truth (the paper starts tracking at a known pose).
 //! tracker.reset_around(&Psi::new([0.01, -0.01, 0.71], [0.0, 0.19, 0.0]), &[0.01; 6]).unwrap();
-//! let mut est = tracker.step(&frame, &joints, 0.0, Feedforward::Off).unwrap();
+//! let mut est = tracker.step(&frame, &joints, 0.0).unwrap();
 //! for _ in 0..150 {
-//!     est = tracker.step(&frame, &joints, 0.033, Feedforward::Off).unwrap();
+//!     est = tracker.step(&frame, &joints, 0.033).unwrap();
 //! }
 //! let err = est.psi.translation() - truth.translation();
 //! assert!(est.fitness > 0.9);
@@ -112,5 +112,7 @@ pub mod synth;
 pub mod target_motion;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod tracker;
+pub mod tuning;
 
 pub use tracker::{Estimate, Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
+pub use tuning::{ConfigError, Tuning};

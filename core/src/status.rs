@@ -77,39 +77,19 @@ impl core::fmt::Display for Status {
     }
 }
 
-/// Why status thresholds were rejected.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum StatusError {
-    /// A threshold is not finite, outside `[0, 1]`, or `lose_fitness > acquire_fitness`.
-    Thresholds,
-    /// A generation count is 0.
-    ZeroCount,
-}
-
-impl core::fmt::Display for StatusError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::Thresholds => f.write_str("status thresholds must satisfy 0 ≤ lose_fitness ≤ acquire_fitness ≤ 1"),
-            Self::ZeroCount => f.write_str("status generation counts must be at least 1"),
-        }
-    }
-}
-
-impl core::error::Error for StatusError {}
-
 /// Thresholds of the status decision; [`StatusConfig::DEFAULT`] documents the defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StatusConfig {
     /// Elite fitness at or above which a pose counts as found.
     pub acquire_fitness: f32,
-    /// Generations in a row at or above `acquire_fitness` before reporting `Tracking`.
+    /// Status decisions (one per frame) in a row at or above `acquire_fitness` before
+    /// reporting `Tracking`.
     pub confirm_generations: u16,
     /// Elite fitness below which a tracked block counts as gone.
     pub lose_fitness: f32,
-    /// Generations in a row below `lose_fitness` before reporting `Lost`.
+    /// Status decisions (one per frame) in a row below `lose_fitness` before reporting `Lost`.
     pub lose_generations: u16,
-    /// Generations in `Lost` after which the status falls back to `Searching` (the last pose
+    /// Status decisions (frames) in `Lost` after which the status falls back to `Searching` (the last pose
     /// is then no better than any other).
     pub lost_generations_to_search: u16,
 }
@@ -124,21 +104,6 @@ impl StatusConfig {
         lose_generations: 1,
         lost_generations_to_search: 150,
     };
-
-    /// Checks the thresholds.
-    ///
-    /// # Errors
-    /// [`StatusError::Thresholds`] or [`StatusError::ZeroCount`].
-    pub fn validate(&self) -> Result<(), StatusError> {
-        let ok = |x: f32| x.is_finite() && (0.0..=1.0).contains(&x);
-        if !ok(self.acquire_fitness) || !ok(self.lose_fitness) || self.lose_fitness > self.acquire_fitness {
-            return Err(StatusError::Thresholds);
-        }
-        if self.confirm_generations == 0 || self.lose_generations == 0 || self.lost_generations_to_search == 0 {
-            return Err(StatusError::ZeroCount);
-        }
-        Ok(())
-    }
 }
 
 impl Default for StatusConfig {
@@ -238,12 +203,5 @@ mod tests {
         }
         assert_eq!(Status::from_code(3), None);
         assert_eq!(Status::Lost.to_string(), "lost");
-        assert!(StatusConfig::DEFAULT.validate().is_ok());
-        let bad = StatusConfig { lose_fitness: 0.9, ..StatusConfig::DEFAULT };
-        assert_eq!(bad.validate(), Err(StatusError::Thresholds));
-        let bad = StatusConfig { acquire_fitness: f32::NAN, ..StatusConfig::DEFAULT };
-        assert_eq!(bad.validate(), Err(StatusError::Thresholds));
-        let bad = StatusConfig { confirm_generations: 0, ..StatusConfig::DEFAULT };
-        assert_eq!(bad.validate(), Err(StatusError::ZeroCount));
     }
 }

@@ -8,22 +8,21 @@ use nalgebra::Isometry3;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
-use crate::acquire::{self, AcquireConfig, AcquireError, Acquisition, HueBlobs};
+use crate::acquire::{self, Acquisition, HueBlobs};
 use crate::camera::{Pinhole, StereoRig};
-use crate::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, HUE_UNITS, MIN_DEPTH_M, PA10_DOF, POPULATION_CAPACITY};
+use crate::config::{DEFAULT_GRID, MIN_DEPTH_M, PA10_DOF, POPULATION_CAPACITY};
 use crate::feedforward;
 use crate::fitness::{Evaluator, Fitness};
-use crate::ga::{Best, Ga, GaError, GaParams, SearchSpace};
+use crate::ga::{Best, Ga, GaParams, SearchSpace};
 use crate::hue::HueLut;
 use crate::image::{Hue, Image, PixelFormat};
 pub use crate::kinematics::JointSample;
 use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
-use crate::status::{Status, StatusConfig, StatusError, StatusMonitor};
-use crate::target_motion::{
-    FilterParamsError, Optics, PredictError, Prediction, TargetFilter, TargetFilterParams, TargetVelocity,
-};
+use crate::status::{Status, StatusMonitor};
+use crate::target_motion::{Optics, PredictError, Prediction, TargetFilter, TargetVelocity};
+use crate::tuning::Tuning;
 
 /// The target filter is fed the mean position of the individuals whose fitness is within this
 /// of the best's ([`Ga::mean_translation_near`](crate::ga::Ga::mean_translation_near)), with
@@ -42,22 +41,7 @@ pub const DEPTH_PROBES: usize = 2 * DEPTH_PROBE_DISPARITY_PX.len();
 /// depths apart, to two pixels, beyond which the coarse mutation takes over.
 pub const DEPTH_PROBE_DISPARITY_PX: [f32; 4] = [0.25, 0.5, 1.0, 2.0];
 
-/// Most GA generations [`TrackerConfig::generations_per_frame`] may ask for on one frame pair:
-/// the work of a frame is at most this many generations' (see the crate docs' bound).
-pub const MAX_GENERATIONS_PER_FRAME: u8 = 4;
-
-/// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Feedforward {
-    /// Plain 1-step GA.
-    Off,
-    /// 1-step GA + motion feedforward of the arm (`J_m q̇`, eq. 24).
-    On,
-    /// 1-step GA + feedforward of the arm's and the target's motion
-    /// (`J_m q̇ + J_n ^W ψ̇_M`, eq. 23), the target's velocity from the tracker's
-    /// [`TargetFilter`] once it has observed the velocity (until then as [`Feedforward::On`]).
-    OnWithTarget,
-}
+pub use crate::tuning::Feedforward;
 
 /// A synchronised stereo pair of images in pixel format `F` (hue bytes by default).
 #[derive(Debug, Clone, Copy)]
@@ -92,56 +76,20 @@ pub struct Estimate {
     pub target_measurement: Psi,
 }
 
-/// Why a tracker configuration was rejected.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum ConfigError {
-    /// The block model.
-    Model(ModelError),
-    /// GA parameters or search space.
-    Ga(GaError),
-    /// Hue tolerance of half a turn or more.
-    HueTolerance,
-    /// `max_dt_s` not finite and positive.
-    MaxDt,
-    /// The flange-to-camera transform is not finite.
-    NonFiniteTransform,
-    /// Acquisition settings.
-    Acquire(AcquireError),
-    /// Status thresholds.
-    Status(StatusError),
-    /// `generations_per_frame` outside `1..=`[`MAX_GENERATIONS_PER_FRAME`].
-    GenerationsPerFrame,
-}
+pub use crate::tuning::ConfigError;
 
-impl core::fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::Model(e) => write!(f, "block model: {e}"),
-            Self::Ga(e) => write!(f, "GA: {e}"),
-            Self::HueTolerance => f.write_str("hue tolerance must be below 90 units"),
-            Self::MaxDt => f.write_str("max_dt_s must be finite and positive"),
-            Self::NonFiniteTransform => f.write_str("flange-to-camera transform is not finite"),
-            Self::Acquire(e) => write!(f, "acquisition: {e}"),
-            Self::Status(e) => write!(f, "status: {e}"),
-            Self::GenerationsPerFrame => {
-                write!(f, "generations_per_frame must be 1 to {MAX_GENERATIONS_PER_FRAME}")
-            }
-        }
-    }
-}
-
-impl core::error::Error for ConfigError {}
+/// The error of a population size the GA's storage cannot take (checked by
+/// [`TrackerConfig::validate`] first, so never returned in practice).
+const POPULATION_ERROR: ConfigError =
+    ConfigError { field: "ga.population", rule: "must be at least 2 and at most the compiled capacity" };
 
 impl From<ModelError> for ConfigError {
     fn from(e: ModelError) -> Self {
-        Self::Model(e)
-    }
-}
-
-impl From<GaError> for ConfigError {
-    fn from(e: GaError) -> Self {
-        Self::Ga(e)
+        let rule = match e {
+            ModelError::NonFinite => "sizes and hues must be finite",
+            ModelError::TooSmall => "every edge must be longer than twice the deepest inner inset plus 2 mm",
+        };
+        ConfigError { field: "block", rule }
     }
 }
 
@@ -231,43 +179,16 @@ pub struct TrackerConfig<const DOF: usize> {
     pub flange_to_camera: Isometry3<f32>,
     /// Searched positions.
     pub search: SearchSpace,
-    /// GA settings.
-    pub ga: GaParams,
-    /// Hue match half-band in hue units (2° each).
-    pub hue_tolerance: u8,
     /// Seed of the GA's random generator.
     pub seed: u64,
-    /// Largest accepted time step between frames (s); larger steps are refused.
-    pub max_dt_s: f32,
-    /// Acquisition from the colour blobs ([`crate::acquire`]).
-    pub acquire: AcquireConfig,
-    /// Status thresholds ([`crate::status`]).
-    pub status: StatusConfig,
-    /// GA generations run on each frame pair, 1 to [`MAX_GENERATIONS_PER_FRAME`]: 1 is the
-    /// paper's 1-step GA; each further generation refines on the same frame (no feedforward
-    /// shift) and costs one more generation's work. The status and the target filter are
-    /// updated once per frame, from the last generation.
-    pub generations_per_frame: u8,
+    /// Every tuning parameter ([`Tuning`], one field table: [`crate::tuning::FIELDS`]).
+    pub tuning: Tuning,
 }
 
 impl TrackerConfig<PA10_DOF> {
-    /// A PA-10 configuration with default GA settings, hue tolerance, acquisition and status
-    /// thresholds, seed 0 and `max_dt_s = 0.5`.
+    /// A PA-10 configuration with seed 0 and the default tuning ([`Tuning::DEFAULT`]).
     pub fn pa10(rig: StereoRig, block: Block, flange_to_camera: Isometry3<f32>, search: SearchSpace) -> Self {
-        Self {
-            rig,
-            block,
-            arm: PA10,
-            flange_to_camera,
-            search,
-            ga: GaParams::DEFAULT,
-            hue_tolerance: DEFAULT_HUE_TOLERANCE,
-            seed: 0,
-            max_dt_s: 0.5,
-            acquire: AcquireConfig::DEFAULT,
-            status: StatusConfig::DEFAULT,
-            generations_per_frame: 1,
-        }
+        Self { rig, block, arm: PA10, flange_to_camera, search, seed: 0, tuning: Tuning::DEFAULT }
     }
 }
 
@@ -282,8 +203,37 @@ impl<const DOF: usize> TrackerConfig<DOF> {
     /// Builder: GA parameters.
     #[must_use]
     pub fn with_ga(mut self, ga: GaParams) -> Self {
-        self.ga = ga;
+        self.tuning.ga = ga;
         self
+    }
+
+    /// Builder: the whole tuning.
+    #[must_use]
+    pub fn with_tuning(mut self, tuning: Tuning) -> Self {
+        self.tuning = tuning;
+        self
+    }
+
+    /// Builder: the feedforward mode (the table's `method`).
+    #[must_use]
+    pub fn with_feedforward(mut self, feedforward: Feedforward) -> Self {
+        self.tuning.feedforward = feedforward;
+        self
+    }
+
+    /// Checks everything [`Tracker::new`] can refuse for a population capacity `capacity`:
+    /// the block, the flange-to-camera transform, and the tuning ([`Tuning::validate`]).
+    ///
+    /// # Errors
+    /// The first [`ConfigError`], naming its field.
+    pub fn validate(&self, capacity: usize) -> Result<(), ConfigError> {
+        // The block's check does not depend on the points per row.
+        SurfaceStrips::<DEFAULT_GRID>::check(&self.block)?;
+        let ft = &self.flange_to_camera;
+        if !ft.translation.vector.iter().chain(ft.rotation.coords.iter()).all(|v| v.is_finite()) {
+            return Err(ConfigError { field: "flange_to_camera", rule: "must be finite" });
+        }
+        self.tuning.validate(capacity)
     }
 }
 
@@ -311,7 +261,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let (model, lut) = Self::checked_parts(&config)?;
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
         let mut ga = Ga::new(Psi::IDENTITY);
-        ga.set_len(config.ga.population)?;
+        ga.set_len(config.tuning.ga.population).map_err(|_| POPULATION_ERROR)?;
         ga.reset_uniform(&config.search, &mut rng);
         Ok(Self {
             config,
@@ -322,7 +272,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             generation: 0,
             monitor: StatusMonitor::new(Status::Searching),
             acquisition: Acquisition::new(),
-            target: TargetFilter::with_defaults().with_optics(Optics::of(&config.rig, &config.block)),
+            target: TargetFilter::tuned(config.tuning.target, Optics::of(&config.rig, &config.block)),
         })
     }
 
@@ -346,14 +296,14 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         t.model.rebuild(&config.block)?;
         t.config = config;
         let hues: [u8; FACES] = t.model.faces().map(|f| f.hue);
-        t.lut.fill(&hues, t.config.hue_tolerance);
+        t.lut.fill(&hues, t.config.tuning.hue_tolerance);
         t.rng = Xoshiro128PlusPlus::seed_from_u64(t.config.seed);
         t.generation = 0;
         t.monitor = StatusMonitor::new(Status::Searching);
         t.acquisition.reset();
-        t.target = TargetFilter::with_defaults().with_optics(Optics::of(&t.config.rig, &t.config.block));
+        t.target = TargetFilter::tuned(t.config.tuning.target, Optics::of(&t.config.rig, &t.config.block));
         // Checked by `check_config` (2 ≤ population ≤ P), so this cannot fail.
-        t.ga.set_len(t.config.ga.population)?;
+        t.ga.set_len(t.config.tuning.ga.population).map_err(|_| POPULATION_ERROR)?;
         t.ga.reset_uniform(&t.config.search, &mut t.rng);
         Ok(t)
     }
@@ -381,30 +331,13 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         Self::check_config(config)?;
         let model = SurfaceStrips::<G>::new(&config.block)?;
         let hues: [u8; FACES] = model.faces().map(|f| f.hue);
-        let lut = HueLut::new(&hues, config.hue_tolerance);
+        let lut = HueLut::new(&hues, config.tuning.hue_tolerance);
         Ok((model, lut))
     }
 
     /// Validates `config` (everything [`Tracker::new`] can refuse).
     fn check_config(config: &TrackerConfig<DOF>) -> Result<(), ConfigError> {
-        SurfaceStrips::<G>::check(&config.block)?;
-        config.ga.validate(P)?;
-        if config.hue_tolerance >= HUE_UNITS / 2 {
-            return Err(ConfigError::HueTolerance);
-        }
-        if !config.max_dt_s.is_finite() || config.max_dt_s <= 0.0 {
-            return Err(ConfigError::MaxDt);
-        }
-        config.acquire.validate(config.ga.population).map_err(ConfigError::Acquire)?;
-        config.status.validate().map_err(ConfigError::Status)?;
-        if !(1..=MAX_GENERATIONS_PER_FRAME).contains(&config.generations_per_frame) {
-            return Err(ConfigError::GenerationsPerFrame);
-        }
-        let ft = &config.flange_to_camera;
-        if !ft.translation.vector.iter().chain(ft.rotation.coords.iter()).all(|v| v.is_finite()) {
-            return Err(ConfigError::NonFiniteTransform);
-        }
-        Ok(())
+        config.validate(P)
     }
 
     /// The configuration.
@@ -442,14 +375,6 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// The filter of the target's own motion, updated with every estimate.
     pub fn target_filter(&self) -> &TargetFilter {
         &self.target
-    }
-
-    /// Sets the parameters of the target filter (which forgets its track).
-    ///
-    /// # Errors
-    /// [`FilterParamsError`] for invalid parameters (the tracker is then unchanged).
-    pub fn set_target_filter_params(&mut self, params: TargetFilterParams) -> Result<(), FilterParamsError> {
-        self.target.set_params(params)
     }
 
     /// Hands the latest estimate over to time `t_us` (e.g. when a controller acts on it):
@@ -503,7 +428,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// [`StepError::ImageSize`].
     pub fn blobs_of<F: PixelFormat>(&self, frame: &StereoFrame<'_, F>) -> Result<(HueBlobs, HueBlobs), StepError> {
         self.check_frame(frame)?;
-        let stride = self.config.acquire.scan_stride;
+        let stride = self.config.tuning.acquire.scan_stride;
         Ok((acquire::scan(&frame.left, &self.lut, stride), acquire::scan(&frame.right, &self.lut, stride)))
     }
 
@@ -527,7 +452,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         check(Side::Right, &frame.right, &self.config.rig.right)
     }
 
-    /// The frame's generations on the newest frame pair (see [`Tracker::step_probed`]).
+    /// One generation on the newest frame pair (see [`Tracker::step_probed`]).
     ///
     /// # Errors
     /// As [`Tracker::step_probed`].
@@ -536,19 +461,18 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         frame: &StereoFrame<'_, F>,
         joints: &JointSample<DOF>,
         dt_s: f32,
-        feedforward: Feedforward,
     ) -> Result<Estimate, StepError> {
-        self.step_probed(frame, joints, dt_s, feedforward, &mut NoProbe)
+        self.step_probed(frame, joints, dt_s, &mut NoProbe)
     }
 
-    /// The generations of one frame: with [`Feedforward::On`] every individual is first moved
-    /// by `J_m(q) q̇ · dt` (eq. 36), with [`Feedforward::OnWithTarget`] by
-    /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then, [`TrackerConfig::generations_per_frame`]
-    /// times, the population is evaluated on `frame` and the next one bred; the last
-    /// generation's best is the estimate, its fitness updates the [`Status`], and the
-    /// estimate, taken into the world at `joints.q`, updates the target filter.
+    /// One generation in the configured feedforward mode ([`Tuning::feedforward`]): with
+    /// [`Feedforward::On`] every individual is first moved by
+    /// `J_m(q) q̇ · dt` (eq. 36), with [`Feedforward::OnWithTarget`] by
+    /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then the population is evaluated on `frame`,
+    /// the best is the estimate, its fitness updates the [`Status`], the next population is
+    /// bred, and the estimate, taken into the world at `joints.q`, updates the target filter.
     /// While the status is not [`Status::Tracking`], the last
-    /// [`AcquireConfig::seed_immigrants`] children are replaced by poses seeded from the
+    /// [`AcquireConfig::seed_immigrants`](crate::acquire::AcquireConfig::seed_immigrants) children are replaced by poses seeded from the
     /// colour blobs of the frame ([`crate::acquire`]). `dt_s` is the time since the previous
     /// frame (0 for the first). `probe` is told when each [`Phase`] begins.
     ///
@@ -560,14 +484,14 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         frame: &StereoFrame<'_, F>,
         joints: &JointSample<DOF>,
         dt_s: f32,
-        feedforward: Feedforward,
         probe: &mut impl PhaseProbe,
     ) -> Result<Estimate, StepError> {
+        let feedforward = self.config.tuning.feedforward;
         self.check_frame(frame)?;
         if !joints.q.iter().chain(joints.qd.iter()).all(|v| v.is_finite()) {
             return Err(StepError::NonFiniteJoint);
         }
-        if !(dt_s >= 0.0 && dt_s <= self.config.max_dt_s) {
+        if !(dt_s >= 0.0 && dt_s <= self.config.tuning.max_dt_s) {
             return Err(StepError::BadDt(dt_s));
         }
 
@@ -615,12 +539,12 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             }
         }
 
-        let mut best = self.generation_on(frame, feedforward, acquiring, probe);
-        for _ in 1..self.config.generations_per_frame {
-            best = self.generation_on(frame, feedforward, acquiring, probe);
+        let mut last = self.generation_on(frame, feedforward, acquiring, probe);
+        for _ in 1..self.config.tuning.generations_per_frame {
+            last = self.generation_on(frame, feedforward, acquiring, probe);
         }
-        let (best, target_measurement) = best;
-        let status = self.monitor.update(best.fitness, &self.config.status);
+        let (best, target_measurement) = last;
+        let status = self.monitor.update(best.fitness, &self.config.tuning.status);
         if status == Status::Tracking && acquiring {
             self.acquisition.reset();
         }
@@ -654,7 +578,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         probe: &mut impl PhaseProbe,
     ) -> (Best, Psi) {
         probe.mark(Phase::Evaluate);
-        let idle = if acquiring { self.config.acquire.idle_individuals } else { 0 };
+        let idle = if acquiring { self.config.tuning.acquire.idle_individuals } else { 0 };
         let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
         let best: Best = self.ga.evaluate_first(self.ga.len().saturating_sub(idle), |psi| {
             eval.evaluate_psi(psi, &frame.left, &frame.right).total
@@ -666,7 +590,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             best.psi
         };
         probe.mark(Phase::Breed);
-        self.ga.breed(&best, &self.config.ga, &self.config.search, &mut self.rng);
+        self.ga.breed(&best, &self.config.tuning.ga, &self.config.search, &mut self.rng);
         if feedforward == Feedforward::OnWithTarget && !acquiring {
             self.probe_depth(&best.psi);
         }
@@ -690,7 +614,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             return;
         }
         let unit = z * z / (optics.focal_px * optics.baseline_m);
-        let end = self.ga.first_immigrant(&self.config.ga);
+        let end = self.ga.first_immigrant(&self.config.tuning.ga);
         let Some(first) = end.checked_sub(DEPTH_PROBES).filter(|&f| f >= 1) else { return };
         for (j, k) in DEPTH_PROBE_DISPARITY_PX.iter().enumerate() {
             for (s, sign) in [1.0f32, -1.0].iter().enumerate() {
@@ -701,10 +625,10 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     }
 
     /// One stage of the acquisition ([`Acquisition::step`]), then the
-    /// [`AcquireConfig::seed_immigrants`] children before the idle ones replaced by poses
+    /// [`AcquireConfig::seed_immigrants`](crate::acquire::AcquireConfig::seed_immigrants) children before the idle ones replaced by poses
     /// seeded from the latest seed (none before the first seed).
     fn acquire_step<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>) {
-        let cfg = &self.config.acquire;
+        let cfg = &self.config.tuning.acquire;
         let half = self.model.half_size();
         let half = [half.x, half.y, half.z];
         self.acquisition.step(&frame.left, &frame.right, &self.lut, &self.config.rig, &half, cfg);

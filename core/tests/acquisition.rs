@@ -23,7 +23,12 @@ fn rig() -> StereoRig {
 
 fn tracker(seed: u64) -> Tracker<7, 40, 8> {
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
-    Tracker::new(TrackerConfig::pa10(rig(), Block::PAPER, Isometry3::identity(), space).with_seed(seed)).unwrap()
+    Tracker::new(
+        TrackerConfig::pa10(rig(), Block::PAPER, Isometry3::identity(), space)
+            .with_seed(seed)
+            .with_feedforward(Feedforward::Off),
+    )
+    .unwrap()
 }
 
 const STILL: JointSample<7> = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
@@ -44,7 +49,7 @@ fn finds_the_block_says_so_loses_it_on_blank_frames_and_recovers() {
         // then trades depth against orientation for a few generations (1 px of disparity is
         // 16 mm at 0.8 m in this 320 x 240 rig) and settles within 10 mm by generation ~30.
         for i in 0..40 {
-            let e = t.step(&frame(&l, &r, W, H), &STILL, 0.033, Feedforward::Off).unwrap();
+            let e = t.step(&frame(&l, &r, W, H), &STILL, 0.033).unwrap();
             if e.status == Status::Tracking && first_tracking.is_none() {
                 first_tracking = Some(i);
             }
@@ -57,14 +62,14 @@ fn finds_the_block_says_so_loses_it_on_blank_frames_and_recovers() {
         assert!(err < 0.01, "seed {seed}: {err} m");
         // The block disappears: lost at once, never tracking while it is gone.
         for _ in 0..10 {
-            let e = t.step(&frame(&blank, &blank, W, H), &STILL, 0.033, Feedforward::Off).unwrap();
+            let e = t.step(&frame(&blank, &blank, W, H), &STILL, 0.033).unwrap();
             assert_eq!(e.status, Status::Lost);
             assert_eq!(e.fitness, 0.0);
         }
         // It comes back: tracking again after the confirmation generations.
         let mut back = None;
         for i in 0..10 {
-            let e = t.step(&frame(&l, &r, W, H), &STILL, 0.033, Feedforward::Off).unwrap();
+            let e = t.step(&frame(&l, &r, W, H), &STILL, 0.033).unwrap();
             if e.status == Status::Tracking && back.is_none() {
                 back = Some(i);
             }
@@ -81,7 +86,7 @@ fn a_known_start_is_tracking_and_set_status_forces_a_status() {
     let mut t = tracker(4);
     t.reset_around(&truth, &[0.002; 6]).unwrap();
     assert_eq!(t.status(), Status::Tracking);
-    let e = t.step(&frame(&l, &r, W, H), &STILL, 0.0, Feedforward::Off).unwrap();
+    let e = t.step(&frame(&l, &r, W, H), &STILL, 0.0).unwrap();
     assert_eq!(e.status, Status::Tracking);
     t.set_status(Status::Lost);
     assert_eq!(t.status(), Status::Lost);

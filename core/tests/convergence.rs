@@ -29,11 +29,14 @@ fn run_with(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: 
     let cam = Pinhole::new_checked(f, f, f32::from(width) / 2.0, f32::from(height) / 2.0, width, height).unwrap();
     let rig = StereoRig::parallel(cam, 0.1).unwrap();
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
-    let mut config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_ga(ga);
+    let mut config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space)
+        .with_seed(seed)
+        .with_ga(ga)
+        .with_feedforward(Feedforward::Off);
     // The plain GA: no colour-blob seeding and every individual evaluated even if the status
     // drops out of tracking.
-    config.acquire.seed_immigrants = 0;
-    config.acquire.idle_individuals = 0;
+    config.tuning.acquire.seed_immigrants = 0;
+    config.tuning.acquire.idle_individuals = 0;
     let mut tracker: Acquiring = Tracker::new(config).unwrap();
     let q = quat::from_angle_axis(0.5, &Vector3::new(0.3, 1.0, 0.1)).unwrap();
     let truth = Psi::from_parts(&Vector3::new(0.03, -0.02, 0.72), &q);
@@ -49,7 +52,7 @@ fn run_with(width: u16, height: u16, f: f32, seed: u64, frames: usize, verbose: 
     let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
     let mut est = None;
     for i in 0..frames {
-        let e = tracker.step(&frame, &joints, 0.033, Feedforward::Off).unwrap();
+        let e = tracker.step(&frame, &joints, 0.033).unwrap();
         if verbose && i % 10 == 0 {
             let d: Vec<f32> = e.psi.0.iter().zip(truth.0.iter()).map(|(a, b)| a - b).collect();
             println!("{i:4} F={:.4} d={:?}", e.fitness, d);
@@ -182,23 +185,25 @@ fn in_place_construction_equals_new() {
     let cam = Pinhole::new_checked(200.0, 200.0, 80.0, 60.0, 160, 120).unwrap();
     let rig = StereoRig::parallel(cam, 0.1).unwrap();
     let space = SearchSpace::new_checked([-0.3, -0.3, 0.3], [0.3, 0.3, 1.2]).unwrap();
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(11);
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space)
+        .with_seed(11)
+        .with_feedforward(Feedforward::Off);
     let mut other = config.with_seed(5);
     other.block = Block { size_m: [0.3, 0.2, 0.25], face_hues_deg: [30.0, 90.0, 150.0, 210.0, 270.0, 330.0] };
-    other.hue_tolerance = 9;
+    other.tuning.hue_tolerance = 9;
     let truth = Psi::new([0.01, 0.0, 0.6], [0.1, 0.2, 0.0]);
     let (l, r) = render(&rig, &truth);
     let frame = frame(&l, &r, 160, 120);
     let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
     let mut reference: Acquiring = Tracker::new(config).unwrap();
-    let expected = reference.step(&frame, &joints, 0.0, Feedforward::Off).unwrap();
+    let expected = reference.step(&frame, &joints, 0.0).unwrap();
     let mut empty: Option<Acquiring> = None;
     let mut reused: Option<Acquiring> = Some(Tracker::new(other).unwrap());
     for slot in [&mut empty, &mut reused] {
         let t = Tracker::new_in(slot, config).unwrap();
         assert_eq!(t.model(), Tracker::<7, 40, 8>::new(config).unwrap().model());
         assert_eq!(t.config(), &config);
-        let got = t.step(&frame, &joints, 0.0, Feedforward::Off).unwrap();
+        let got = t.step(&frame, &joints, 0.0).unwrap();
         assert_eq!(got.psi.0.map(f32::to_bits), expected.psi.0.map(f32::to_bits));
         assert_eq!(got.fitness.to_bits(), expected.fitness.to_bits());
     }

@@ -22,9 +22,10 @@ fn rig() -> StereoRig {
     StereoRig::parallel(cam, BASELINE_M).unwrap()
 }
 
-fn tracker(seed: u64, start: &Psi) -> Tracker {
+fn tracker(seed: u64, start: &Psi, mode: Feedforward) -> Tracker {
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
-    let config = TrackerConfig::pa10(rig(), Block::PAPER, Isometry3::identity(), space).with_seed(seed);
+    let config =
+        TrackerConfig::pa10(rig(), Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_feedforward(mode);
     let mut tracker: Tracker = Tracker::new(config).unwrap();
     tracker.reset_around(start, &[0.002, 0.002, 0.002, 0.004, 0.004, 0.004]).unwrap();
     tracker
@@ -45,16 +46,16 @@ fn the_probes_line_the_best_poses_viewing_ray() {
     let (l, r) = render(&rig(), &truth);
     let frame = frame(&l, &r, 640, 480);
     for mode in [Feedforward::OnWithTarget, Feedforward::On] {
-        let mut t = tracker(5, &truth);
+        let mut t = tracker(5, &truth, mode);
         let mut last = None;
         for k in 0..3u64 {
             let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: k * DT_US };
             let dt = if k == 0 { 0.0 } else { DT_US as f32 * 1e-6 };
-            last = Some(t.step(&frame, &joints, dt, mode).unwrap());
+            last = Some(t.step(&frame, &joints, dt).unwrap());
         }
         let best = last.unwrap();
         assert_eq!(best.status, Status::Tracking);
-        let end = t.population().len() - t.config().ga.immigrants;
+        let end = t.population().len() - t.config().tuning.ga.immigrants;
         let z = best.psi.0[2];
         let unit = z * z / (FOCAL_PX * BASELINE_M);
         let mut probes = 0;
@@ -79,13 +80,13 @@ fn the_probes_line_the_best_poses_viewing_ray() {
 fn approach_rms_z(mode: Feedforward, seed: u64) -> f32 {
     let truth = |k: u64| block_at(0.85 - 0.1 * (k * DT_US) as f32 * 1e-6);
     let rig = rig();
-    let mut t = tracker(seed, &truth(0));
+    let mut t = tracker(seed, &truth(0), mode);
     let (mut sq, mut n) = (0.0, 0);
     for k in 0..100u64 {
         let (l, r) = render(&rig, &truth(k));
         let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: k * DT_US };
         let dt = if k == 0 { 0.0 } else { DT_US as f32 * 1e-6 };
-        let e = t.step(&frame(&l, &r, 640, 480), &joints, dt, mode).unwrap();
+        let e = t.step(&frame(&l, &r, 640, 480), &joints, dt).unwrap();
         if k >= 30 {
             sq += (e.psi.0[2] - truth(k).0[2]).powi(2);
             n += 1;

@@ -3,11 +3,12 @@
 //! itself without any feedforward of its motion.
 
 use evorec_core::camera::{Pinhole, StereoRig};
+use evorec_core::config::MAX_GENERATIONS_PER_FRAME;
 use evorec_core::ga::SearchSpace;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
-use evorec_core::tracker::{ConfigError, Feedforward, JointSample, MAX_GENERATIONS_PER_FRAME, Tracker, TrackerConfig};
+use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Vector3};
 
 mod common;
@@ -23,7 +24,8 @@ fn rig() -> StereoRig {
 fn config(seed: u64, generations: u8) -> TrackerConfig<7> {
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
     let mut c = TrackerConfig::pa10(rig(), Block::PAPER, Isometry3::identity(), space).with_seed(seed);
-    c.generations_per_frame = generations;
+    c.tuning.generations_per_frame = generations;
+    c.tuning.feedforward = Feedforward::Off;
     c
 }
 
@@ -36,9 +38,9 @@ fn truth(k: u64, speed_m_s: f32) -> Psi {
 #[test]
 fn out_of_range_counts_are_refused_by_name() {
     for n in [0, MAX_GENERATIONS_PER_FRAME + 1] {
-        let e = Tracker::<7>::new(config(1, n)).err();
-        assert_eq!(e, Some(ConfigError::GenerationsPerFrame), "{n}");
-        assert!(e.unwrap().to_string().contains("generations_per_frame"));
+        let Err(e) = Tracker::<7>::new(config(1, n)) else { panic!("{n} accepted") };
+        assert_eq!(e.field, "generations_per_frame", "{n}");
+        assert!(e.to_string().contains("tracker.generations_per_frame"), "{e}");
     }
     assert!(Tracker::<7>::new(config(1, MAX_GENERATIONS_PER_FRAME)).is_ok());
 }
@@ -52,7 +54,7 @@ fn a_frame_runs_its_generations_and_one_status_decision() {
     for k in 0..4u64 {
         let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: k * DT_US };
         let dt = if k == 0 { 0.0 } else { 0.033 };
-        let e = t.step(&f, &joints, dt, Feedforward::Off).unwrap();
+        let e = t.step(&f, &joints, dt).unwrap();
         assert_eq!(e.generation, 3 * (k as u32 + 1));
         assert_eq!(t.generation(), e.generation);
     }
@@ -68,7 +70,7 @@ fn sliding_rms_x(seed: u64, generations: u8, speed: f32) -> f32 {
         let (l, r) = render(&rig(), &truth(k, speed));
         let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: k * DT_US };
         let dt = if k == 0 { 0.0 } else { 0.033 };
-        let e = t.step(&frame(&l, &r, 320, 240), &joints, dt, Feedforward::Off).unwrap();
+        let e = t.step(&frame(&l, &r, 320, 240), &joints, dt).unwrap();
         if k >= 20 {
             sq += (e.psi.0[0] - truth(k, speed).0[0]).powi(2);
             n += 1;

@@ -2,11 +2,11 @@
 
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::{DEFAULT_POPULATION, POPULATION_CAPACITY};
-use evorec_core::ga::{GaError, GaParams, SearchSpace};
+use evorec_core::ga::{GaParams, SearchSpace};
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
-use evorec_core::tracker::{ConfigError, Estimate, Feedforward, JointSample, Tracker, TrackerConfig};
+use evorec_core::tracker::{Estimate, JointSample, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Vector3};
 
 mod common;
@@ -24,9 +24,9 @@ fn config(population: usize) -> TrackerConfig<7> {
         .with_ga(GaParams::DEFAULT.with_population(population));
     // The acquisition's seeded and idle individuals need a population of at least
     // `seed_immigrants + idle_individuals + 2`; below that these tests switch it off.
-    if population < c.acquire.seed_immigrants + c.acquire.idle_individuals + 2 {
-        c.acquire.seed_immigrants = 0;
-        c.acquire.idle_individuals = 0;
+    if population < c.tuning.acquire.seed_immigrants + c.tuning.acquire.idle_individuals + 2 {
+        c.tuning.acquire.seed_immigrants = 0;
+        c.tuning.acquire.idle_individuals = 0;
     }
     c
 }
@@ -44,14 +44,14 @@ fn track<const P: usize>(population: usize, steps: usize) -> Vec<Estimate> {
     assert_eq!(t.population().len(), population);
     t.reset_around(&truth(), &[0.01, 0.01, 0.01, 0.02, 0.02, 0.02]).unwrap();
     let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
-    (0..steps).map(|_| t.step(&frame, &joints, 0.033, Feedforward::On).unwrap()).collect()
+    (0..steps).map(|_| t.step(&frame, &joints, 0.033).unwrap()).collect()
 }
 
 #[test]
 fn sizes_outside_two_to_the_capacity_are_refused_with_the_capacity_named() {
     for bad in [0, 1, POPULATION_CAPACITY + 1] {
         let e = Tracker::<7>::new(config(bad)).unwrap_err();
-        assert_eq!(e, ConfigError::Ga(GaError::PopulationSize { got: bad, capacity: POPULATION_CAPACITY }));
+        assert_eq!(e.field, "ga.population");
         let mut slot: Option<Tracker<7>> = None;
         assert!(Tracker::new_in(&mut slot, config(bad)).is_err());
         assert!(slot.is_none(), "the slot is unchanged on error");

@@ -44,7 +44,8 @@ const LAST: u64 = 20;
 fn run(mode: Feedforward, seed: u64) -> (f32, Tracker, Vector3<f32>) {
     let rig = rig();
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed);
+    let config =
+        TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space).with_seed(seed).with_feedforward(mode);
     let mut tracker: Tracker = Tracker::new(config).unwrap();
     tracker.reset_around(&truth(0), &[0.002, 0.002, 0.002, 0.004, 0.004, 0.004]).unwrap();
     let mut sq = 0.0;
@@ -55,7 +56,7 @@ fn run(mode: Feedforward, seed: u64) -> (f32, Tracker, Vector3<f32>) {
         let frame = frame(&l, &r, 640, 480);
         let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: k * DT_US };
         let dt = if k == 0 { 0.0 } else { DT_US as f32 * 1e-6 };
-        let e = tracker.step(&frame, &joints, dt, mode).unwrap();
+        let e = tracker.step(&frame, &joints, dt).unwrap();
         assert_eq!(e.capture_time_us, k * DT_US);
         if k >= 30 {
             sq += (e.psi.translation() - truth(k).translation()).norm_squared();

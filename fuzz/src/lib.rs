@@ -158,8 +158,9 @@ fn population_bits(t: &FirmwareTracker) -> Vec<[u32; 6]> {
 }
 
 /// `Rgb565Image` and `Tracker::step` (the firmware's tracker type, on the link's RGB565 frames)
-/// on arbitrary image sizes and bytes, joint values and time steps: the camera size, then up to 4 steps, each with image
-/// sizes, joint values, `dt` and the feedforward flag from the input. A refused step must leave
+/// on arbitrary image sizes and bytes, joint values and time steps: the camera size and the
+/// feedforward mode, then up to 4 steps, each with image sizes, joint values and `dt` from the
+/// input. A refused step must leave
 /// the tracker unchanged; an accepted one must give a valid pose and a fitness in `[0, 1]`.
 pub fn tracker_step(data: &[u8]) {
     let mut b = Bytes(data);
@@ -170,7 +171,11 @@ pub fn tracker_step(data: &[u8]) {
     };
     let Ok(rig) = StereoRig::parallel(cam, 0.1) else { return };
     let Ok(space) = SearchSpace::new_checked([-0.2, -0.2, 0.4], [0.2, 0.2, 1.0]) else { return };
-    let config = TrackerConfig::pa10(rig, Block::PAPER, nalgebra::Isometry3::identity(), space).with_seed(1);
+    let modes = [Feedforward::Off, Feedforward::On, Feedforward::OnWithTarget];
+    let mode = modes[usize::from(b.u8() % 3)];
+    let config = TrackerConfig::pa10(rig, Block::PAPER, nalgebra::Isometry3::identity(), space)
+        .with_seed(1)
+        .with_feedforward(mode);
     let Ok(mut tracker) = FirmwareTracker::new(config) else { return };
     if b.u8() & 1 == 1 {
         let psi = Psi::new([b.f32(), b.f32(), b.f32()], [b.f32(), b.f32(), b.f32()]);
@@ -199,9 +204,8 @@ pub fn tracker_step(data: &[u8]) {
         let joints =
             JointSample { q: core::array::from_fn(|_| b.f32()), qd: core::array::from_fn(|_| b.f32()), time_us: 0 };
         let dt = b.f32();
-        let ff = if b.u8() & 1 == 1 { Feedforward::On } else { Feedforward::Off };
         let (before, generation) = (population_bits(&tracker), tracker.generation());
-        match tracker.step(&StereoFrame { left: l, right: r }, &joints, dt, ff) {
+        match tracker.step(&StereoFrame { left: l, right: r }, &joints, dt) {
             Ok(est) => {
                 assert!(est.psi.validate().is_ok(), "estimate is not a valid pose: {est:?}");
                 assert!((0.0..=1.0).contains(&est.fitness), "fitness out of [0, 1]: {est:?}");

@@ -301,8 +301,8 @@ where
     W: ByteSink<Error = E>,
     E: core::fmt::Debug,
 {
-    let (tracker, feedforward) = configure(board, slot, left, right)?;
-    let stats = board::run(board, tracker, feedforward, left, right, u32::MAX)?;
+    let tracker = configure(board, slot, left, right)?;
+    let stats = board::run(board, tracker, left, right, u32::MAX)?;
     board.answer_pending()?;
     let s = stack();
     board.send(&Envelope::bare(Message::Done(Done {
@@ -325,7 +325,7 @@ fn configure<'s, R, W, E, const P: usize, const G: usize>(
     slot: &'s mut Option<Tracker<DOF, P, G>>,
     left: &mut [u8],
     right: &mut [u8],
-) -> Result<(&'s mut Tracker<DOF, P, G>, evorec_core::tracker::Feedforward), ServeError<E>>
+) -> Result<&'s mut Tracker<DOF, P, G>, ServeError<E>>
 where
     R: ByteSource<Error = E>,
     W: ByteSink<Error = E>,
@@ -350,9 +350,9 @@ where
         "tracker ready: {}x{} px, population {P}, grid {G}, feedforward {:?}",
         setup.width,
         setup.height,
-        setup.feedforward
+        setup.tuning.feedforward
     );
-    Ok((tracker, setup.feedforward))
+    Ok(tracker)
 }
 
 #[cfg(test)]
@@ -444,10 +444,10 @@ mod tests {
             right: Rgb565Image::new_checked(&r[..], setup.width, setup.height).unwrap(),
         };
         let j = JointSample { q: [0.1; DOF], qd: [0.02; DOF], time_us: 0 };
-        let e1 = host.step(&frame, &j, 0.0, setup.feedforward).unwrap();
+        let e1 = host.step(&frame, &j, 0.0).unwrap();
         // The loop's time step: capture-time difference to the last accepted frame (1 → 3).
         let dt = (3 * 33_333u64 - 33_333) as f32 * 1e-6;
-        let e3 = host.step(&frame, &j, dt, setup.feedforward).unwrap();
+        let e3 = host.step(&frame, &j, dt).unwrap();
         assert_eq!(got[1].message, Message::Estimate(e1));
         assert_eq!(got[3].message, Message::Estimate(e3));
     }
@@ -538,7 +538,7 @@ mod tests {
         // frame 1, more than max_dt_s = 0.5 s. It is refused and becomes the time base; frame
         // 22 is tracked again (before, every later frame was refused for an ever longer gap).
         let setup = sample_setup();
-        assert_eq!(setup.max_dt_s, 0.5);
+        assert_eq!(setup.tuning.max_dt_s, 0.5);
         let n = usize::from(setup.width) * usize::from(setup.height) * BYTES_PER_PIXEL;
         let l = vec![0u8; n];
         let mut input = encode(&Envelope::bare(Message::Config(setup)));

@@ -15,7 +15,6 @@
 mod firmware {
     use cortex_m_rt::entry;
     use evorec_core::board;
-    use evorec_core::tracker::Feedforward;
     use evorec_firmware::link_board::{self, StackUsage};
     use evorec_firmware::protocol::Setup;
     use evorec_firmware::{FirmwareTracker, rt, selftest, sys};
@@ -80,7 +79,7 @@ mod firmware {
     fn demo(slot: &mut Option<FirmwareTracker>, left: &mut [u8], right: &mut [u8]) -> bool {
         let Some(tracker) = demo_tracker(slot) else { return false };
         let Ok(mut camera) = selftest::SynthBoard::new(DEMO_FRAMES) else { return false };
-        match board::run(&mut camera, tracker, Feedforward::On, left, right, DEMO_FRAMES) {
+        match board::run(&mut camera, tracker, left, right, DEMO_FRAMES) {
             Ok(stats) => {
                 log::info!("demo: {} frames, {} estimates", stats.frames, stats.published);
                 report_stack();
@@ -98,7 +97,7 @@ mod firmware {
     #[inline(never)]
     fn demo_tracker(slot: &mut Option<FirmwareTracker>) -> Option<&mut FirmwareTracker> {
         let config = selftest::tracker_config().ok()?;
-        let setup = Setup::from_tracker_config(&config, Feedforward::On, &selftest::START, &selftest::SPREAD).ok()?;
+        let setup = Setup::from_tracker_config(&config, &selftest::START, &selftest::SPREAD).ok()?;
         setup.build_tracker_in(slot).ok()
     }
 }

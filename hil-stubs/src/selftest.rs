@@ -18,7 +18,7 @@ use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
 use evorec_core::synth;
-use evorec_core::tracker::{Estimate, Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
+use evorec_core::tracker::{Estimate, JointSample, StereoFrame, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Translation3, Vector3};
 
 /// Image width of the scenario (the on-board frame size).
@@ -129,8 +129,8 @@ pub fn render(rig: &StereoRig, psi: &Psi, left: &mut [u8], right: &mut [u8]) -> 
 }
 
 /// Builds the scenario's tracker (reset around [`START`]), renders [`TRUTH`] and runs
-/// [`STEPS`] generations: the first with feedforward off and `dt = 0`, the others with
-/// feedforward on, [`joints`]`(k)` and one frame period.
+/// [`STEPS`] generations with motion feedforward (the default tuning's), [`joints`]`(k)`, the
+/// first with `dt = 0`, the others one frame period apart.
 ///
 /// # Errors
 /// A [`Failure`] (never for the fixed numbers unless the core changed).
@@ -145,8 +145,8 @@ pub fn run_steps(left: &mut [u8], right: &mut [u8]) -> Result<[EstimateBits; STE
     };
     let mut out = [EstimateBits { psi: [0; 6], fitness: 0, generation: 0 }; STEPS];
     for (k, slot) in out.iter_mut().enumerate() {
-        let (ff, dt) = if k == 0 { (Feedforward::Off, 0.0) } else { (Feedforward::On, FRAME_PERIOD_US as f32 * 1e-6) };
-        let e = tracker.step(&frame, &joints(k as u32), dt, ff).map_err(|_| Failure::Step)?;
+        let dt = if k == 0 { 0.0 } else { FRAME_PERIOD_US as f32 * 1e-6 };
+        let e = tracker.step(&frame, &joints(k as u32), dt).map_err(|_| Failure::Step)?;
         *slot = EstimateBits::of(&e);
     }
     Ok(out)

@@ -5,19 +5,14 @@
 //! `Setup::from_tracker_config(&c, ..)?.tracker_config()? == c` exactly. The arm is always
 //! the PA-10 and the rig two identical parallel cameras ([`StereoRig::parallel`]); other
 //! configurations cannot be sent and are refused by [`Setup::from_tracker_config`]. The
-//! target filter's tuning is not part of a [`TrackerConfig`] (the tracker holds it): it travels
-//! in [`Setup::target_filter`] ([`Setup::with_target_filter`]) and is given to the tracker
-//! when it is built.
+//! whole tuning ([`TrackerConfig::tuning`]) travels as the core's field table.
 
-use evorec_core::acquire::AcquireConfig;
 use evorec_core::camera::{CameraError, Pinhole, StereoRig};
 use evorec_core::ga::{GaError, SearchSpace};
 use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
-use evorec_core::status::StatusConfig;
-use evorec_core::target_motion::{FilterParamsError, TargetFilterParams};
-use evorec_core::tracker::{ConfigError, Feedforward, StepError, Tracker, TrackerConfig};
+use evorec_core::tracker::{ConfigError, StepError, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 
 use crate::protocol::{DOF, Setup};
@@ -44,11 +39,6 @@ pub enum SetupError {
     UnsupportedRig,
     /// The arm is not the PA-10 (code 7, host side only).
     UnsupportedArm,
-    /// Acquisition or status settings other than the defaults, or more than one generation
-    /// per frame, which the firmware does not receive (code 8, host side only).
-    UnsupportedAcquisition,
-    /// The target filter's parameters (code 9).
-    TargetFilter(FilterParamsError),
 }
 
 impl SetupError {
@@ -62,8 +52,6 @@ impl SetupError {
             Self::InitialPose(_) => 5,
             Self::UnsupportedRig => 6,
             Self::UnsupportedArm => 7,
-            Self::UnsupportedAcquisition => 8,
-            Self::TargetFilter(_) => 9,
         }
     }
 
@@ -78,8 +66,6 @@ impl SetupError {
             5 => "initial pose or spread rejected",
             6 => "rig is not two identical parallel cameras",
             7 => "arm is not the PA-10",
-            8 => "acquisition, status or generations-per-frame settings differ from the firmware's defaults",
-            9 => "target filter parameters rejected",
             _ => "unknown setup error",
         }
     }
@@ -92,7 +78,6 @@ impl core::fmt::Display for SetupError {
             Self::Search(e) => write!(f, "search space: {e}"),
             Self::Tracker(e) => write!(f, "tracker: {e}"),
             Self::InitialPose(e) => write!(f, "initial pose: {e}"),
-            Self::TargetFilter(e) => write!(f, "target filter: {} {}", e.0, e.rule()),
             other => f.write_str(Self::describe_code(other.code())),
         }
     }
@@ -123,19 +108,15 @@ impl Setup {
             UnitQuaternion::new_unchecked(Quaternion::new(w, i, j, k)),
         );
         let block = Block { size_m: self.block_size_m, face_hues_deg: self.face_hues_deg };
-        let mut config =
-            TrackerConfig::pa10(rig, block, flange_to_camera, search).with_seed(self.seed).with_ga(self.ga);
-        config.hue_tolerance = self.hue_tolerance;
-        config.max_dt_s = self.max_dt_s;
-        Ok(config)
+        Ok(TrackerConfig::pa10(rig, block, flange_to_camera, search).with_seed(self.seed).with_tuning(self.tuning))
     }
 
     /// Builds the tracker and seeds its population around [`Setup::initial_psi`]
     /// ([`Tracker::new`] then [`Tracker::reset_around`]).
     ///
     /// # Errors
-    /// As [`Setup::tracker_config`], plus [`SetupError::Tracker`],
-    /// [`SetupError::TargetFilter`] and [`SetupError::InitialPose`].
+    /// As [`Setup::tracker_config`], plus [`SetupError::Tracker`] and
+    /// [`SetupError::InitialPose`].
     pub fn build_tracker<const P: usize, const G: usize>(&self) -> Result<Tracker<DOF, P, G>, SetupError> {
         let mut tracker = Tracker::new(self.tracker_config()?).map_err(SetupError::Tracker)?;
         self.prepare(&mut tracker)?;
@@ -144,8 +125,8 @@ impl Setup {
 
     /// [`Setup::build_tracker`] into `slot` (the firmware's static) through
     /// [`Tracker::new_in`], which builds it in place and keeps whole-tracker copies off the
-    /// stack. After a target-filter or initial-pose error `slot` holds a tracker that was not
-    /// prepared; do not use it.
+    /// stack. After an initial-pose error `slot` holds a tracker that was not prepared; do not
+    /// use it.
     ///
     /// # Errors
     /// As [`Setup::build_tracker`].
@@ -159,16 +140,14 @@ impl Setup {
         Ok(tracker)
     }
 
-    /// What the setup holds beyond the tracker's configuration: the target filter's tuning,
-    /// then the population seeded around [`Setup::initial_psi`].
+    /// What the setup holds beyond the tracker's configuration: the population seeded around
+    /// [`Setup::initial_psi`].
     fn prepare<const P: usize, const G: usize>(&self, tracker: &mut Tracker<DOF, P, G>) -> Result<(), SetupError> {
-        tracker.set_target_filter_params(self.target_filter).map_err(SetupError::TargetFilter)?;
         tracker.reset_around(&self.initial_psi, &self.initial_spread).map_err(SetupError::InitialPose)
     }
 
-    /// The `Setup` of a tracker configuration plus the loop's feedforward switch and the
-    /// initial population, with the target filter's defaults
-    /// ([`TargetFilterParams::DEFAULT`]; see [`Setup::with_target_filter`]).
+    /// The `Setup` of a tracker configuration (its whole tuning included) and the initial
+    /// population.
     ///
     /// # Errors
     /// [`SetupError::UnsupportedRig`] unless the rig is [`StereoRig::parallel`] (identical
@@ -176,28 +155,11 @@ impl Setup {
     /// unless the arm is [`PA10`].
     pub fn from_tracker_config(
         config: &TrackerConfig<DOF>,
-        feedforward: Feedforward,
         initial_psi: &Psi,
         initial_spread: &[f32; 6],
     ) -> Result<Self, SetupError> {
         // Destructured so that a new configuration field in the core fails to compile here.
-        let TrackerConfig {
-            rig,
-            block,
-            arm,
-            flange_to_camera,
-            search,
-            ga,
-            hue_tolerance,
-            seed,
-            max_dt_s,
-            acquire,
-            status,
-            generations_per_frame,
-        } = *config;
-        if acquire != AcquireConfig::DEFAULT || status != StatusConfig::DEFAULT || generations_per_frame != 1 {
-            return Err(SetupError::UnsupportedAcquisition);
-        }
+        let TrackerConfig { rig, block, arm, flange_to_camera, search, seed, tuning } = *config;
         let lfr = &rig.left_from_right;
         let t = lfr.translation.vector;
         let identity = lfr.rotation.coords == UnitQuaternion::<f32>::identity().coords;
@@ -225,20 +187,10 @@ impl Setup {
             search_min: search.t_min(),
             search_max: search.t_max(),
             seed,
-            hue_tolerance,
-            feedforward,
-            max_dt_s,
-            ga,
+            tuning,
             initial_psi: *initial_psi,
             initial_spread: *initial_spread,
-            target_filter: TargetFilterParams::DEFAULT,
         })
-    }
-
-    /// This setup with the target filter tuned as `params` (checked when the tracker is
-    /// built: [`SetupError::TargetFilter`]).
-    pub fn with_target_filter(self, params: TargetFilterParams) -> Self {
-        Self { target_filter: params, ..self }
     }
 }
 
@@ -247,6 +199,7 @@ mod tests {
     use super::*;
     use crate::protocol::tests::sample_setup;
     use evorec_core::quat;
+    use evorec_core::tracker::Feedforward;
     use nalgebra::Vector3;
 
     #[test]
@@ -257,12 +210,15 @@ mod tests {
         let rot = quat::from_angle_axis(0.3, &Vector3::new(0.2, -1.0, 0.4)).unwrap();
         let ft = Isometry3::from_parts(Translation3::new(0.01, 0.07, 0.12), rot);
         let mut config = TrackerConfig::pa10(rig, Block::PAPER, ft, space).with_seed(99);
-        config.hue_tolerance = 7;
-        config.max_dt_s = 0.25;
+        config.tuning.hue_tolerance = 7;
+        config.tuning.max_dt_s = 0.25;
+        config.tuning.feedforward = Feedforward::OnWithTarget;
+        config.tuning.acquire.scan_stride = 4;
+        config.tuning.status.lose_generations = 3;
+        config.tuning.target.max_gap_s = 0.3;
         let psi = Psi::new([0.0, 0.01, 0.7], [0.1, 0.0, -0.2]);
-        let setup = Setup::from_tracker_config(&config, Feedforward::On, &psi, &[0.01; 6]).unwrap();
+        let setup = Setup::from_tracker_config(&config, &psi, &[0.01; 6]).unwrap();
         assert_eq!(setup.tracker_config().unwrap(), config);
-        assert_eq!(setup.feedforward, Feedforward::On);
     }
 
     #[test]
@@ -280,27 +236,27 @@ mod tests {
     #[test]
     fn the_population_is_chosen_at_run_time_by_the_config() {
         let mut setup = sample_setup();
-        setup.ga.population = 23;
+        setup.tuning.ga.population = 23;
         let t: Tracker = setup.build_tracker().unwrap();
         assert_eq!(t.population().len(), 23);
-        assert_eq!(setup.tracker_config().unwrap().ga.population, 23);
+        assert_eq!(setup.tracker_config().unwrap().tuning.ga.population, 23);
     }
 
     #[test]
-    fn the_setups_target_filter_reaches_the_tracker_and_bad_values_get_code_9() {
-        let mut params = TargetFilterParams::DEFAULT;
-        params.acceleration_m_s2 = 0.4;
-        let setup = sample_setup().with_target_filter(params);
+    fn the_setups_tuning_reaches_the_tracker_and_a_bad_value_names_its_field() {
+        let mut setup = sample_setup();
+        setup.tuning.target.acceleration_m_s2 = 0.4;
+        setup.tuning.status.lose_fitness = 0.3;
         let t: Tracker = setup.build_tracker().unwrap();
-        assert_eq!(*t.target_filter().params(), params);
+        assert_eq!(t.config().tuning, setup.tuning);
+        assert_eq!(t.target_filter().params().acceleration_m_s2, 0.4);
         let mut slot = None;
         let t: &mut Tracker = setup.build_tracker_in(&mut slot).unwrap();
-        assert_eq!(*t.target_filter().params(), params);
-        params.image_noise_px = -0.5;
-        let r: Result<Tracker, _> = sample_setup().with_target_filter(params).build_tracker();
-        let e = r.unwrap_err();
-        assert_eq!((e.code(), SetupError::describe_code(e.code())), (9, "target filter parameters rejected"));
-        assert_eq!(std::format!("{e}"), "target filter: image_noise_px finite and positive");
+        assert_eq!(t.config().tuning, setup.tuning);
+        setup.tuning.target.image_noise_px = -0.5;
+        let e = setup.build_tracker::<40, 8>().unwrap_err();
+        assert_eq!(e.code(), 4);
+        assert_eq!(std::format!("{e}"), "tracker: tracker.target.image_noise_px: must be finite and positive");
     }
 
     #[test]
@@ -315,16 +271,15 @@ mod tests {
         s.flange_to_camera_q = [1.0, 0.1, 0.0, 0.0];
         assert_eq!(s.tracker_config().unwrap_err(), SetupError::NotUnitQuaternion);
         let mut s = sample_setup();
-        s.hue_tolerance = 90;
+        s.tuning.hue_tolerance = 90;
         let r: Result<Tracker, _> = s.build_tracker();
         assert_eq!(r.unwrap_err().code(), 4);
         for bad in [0, evorec_core::config::POPULATION_CAPACITY + 1] {
             let mut s = sample_setup();
-            s.ga.population = bad;
+            s.tuning.ga.population = bad;
             let r: Result<Tracker, _> = s.build_tracker();
-            let capacity = evorec_core::config::POPULATION_CAPACITY;
-            let want = SetupError::Tracker(ConfigError::Ga(GaError::PopulationSize { got: bad, capacity }));
-            assert_eq!(r.unwrap_err(), want);
+            let rule = "must be at least 2 and at most the compiled capacity";
+            assert_eq!(r.unwrap_err(), SetupError::Tracker(ConfigError { field: "ga.population", rule }));
         }
         let mut s = sample_setup();
         s.initial_psi = Psi::new([0.0; 3], [1.0, 1.0, 0.0]);
@@ -339,9 +294,6 @@ mod tests {
         rig.left_from_right.translation.y = 0.01;
         let space = SearchSpace::new_checked([-0.2; 3], [0.2, 0.2, 1.0]).unwrap();
         let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space);
-        assert_eq!(
-            Setup::from_tracker_config(&config, Feedforward::Off, &Psi::IDENTITY, &[0.0; 6]),
-            Err(SetupError::UnsupportedRig)
-        );
+        assert_eq!(Setup::from_tracker_config(&config, &Psi::IDENTITY, &[0.0; 6]), Err(SetupError::UnsupportedRig));
     }
 }

@@ -20,7 +20,7 @@ use evorec_core::image::Rgb888Image;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
-use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
+use evorec_core::tracker::{JointSample, StereoFrame, Tracker, TrackerConfig};
 use evorec_sim::render::{self, RenderOptions};
 use nalgebra::{Isometry3, Vector3};
 use rand_core::SeedableRng;
@@ -63,7 +63,7 @@ fn benches(c: &mut Criterion) {
                 left: HueImage::new_checked(&left[..], W, H).expect("image"),
                 right: HueImage::new_checked(&right[..], W, H).expect("image"),
             };
-            tracker.step(black_box(&frame), &joints, 0.033, Feedforward::On).expect("step")
+            tracker.step(black_box(&frame), &joints, 0.033).expect("step")
         })
     });
     group.bench_function("hue+generation", |b| {
@@ -74,7 +74,7 @@ fn benches(c: &mut Criterion) {
                 left: HueImage::new_checked(&left[..], W, H).expect("image"),
                 right: HueImage::new_checked(&right[..], W, H).expect("image"),
             };
-            tracker.step(black_box(&frame), &joints, 0.033, Feedforward::On).expect("step")
+            tracker.step(black_box(&frame), &joints, 0.033).expect("step")
         })
     });
     group.bench_function("rgb888-generation", |b| {
@@ -83,7 +83,7 @@ fn benches(c: &mut Criterion) {
                 left: Rgb888Image::new_checked(images.left.as_raw().as_slice(), W, H).expect("image"),
                 right: Rgb888Image::new_checked(images.right.as_raw().as_slice(), W, H).expect("image"),
             };
-            tracker.step(black_box(&frame), &joints, 0.033, Feedforward::On).expect("step")
+            tracker.step(black_box(&frame), &joints, 0.033).expect("step")
         })
     });
     group.finish();

@@ -24,7 +24,7 @@ fn main() -> anyhow::Result<()> {
         let truth = world.truth();
         let (bl, br) = tracker.blobs_of(&frame).map_err(|e| anyhow::anyhow!("{e}"))?;
         let hh = [half.x, half.y, half.z];
-        let seed_pose = acquire::seed_pose(&cfg.rig, &hh, &bl, &br, cfg.acquire.min_face_hits);
+        let seed_pose = acquire::seed_pose(&cfg.rig, &hh, &bl, &br, cfg.tuning.acquire.min_face_hits);
         let raw_err = seed_pose.and_then(|sp| sp.psi()).map(|p| pose_error(&p, &truth));
         let seed_pose = seed_pose.map(|sp| {
             let m = acquire::Measured {
@@ -32,8 +32,8 @@ fn main() -> anyhow::Result<()> {
                 half: &hh,
                 left: &bl,
                 right: &br,
-                stride: cfg.acquire.scan_stride,
-                min_hits: cfg.acquire.min_face_hits,
+                stride: cfg.tuning.acquire.scan_stride,
+                min_hits: cfg.tuning.acquire.min_face_hits,
             };
             acquire::refine(&m, &sp)
         });
@@ -49,14 +49,14 @@ fn main() -> anyhow::Result<()> {
                     let mut c = tracker.clone();
                     c.set_status(status);
                     let t0 = std::time::Instant::now();
-                    let _ = std::hint::black_box(c.step(&frame, &joints, 0.033, s.method.into()));
+                    let _ = std::hint::black_box(c.step(&frame, &joints, 0.033));
                     best = best.min(t0.elapsed().as_secs_f64());
                 }
                 println!("frame {k}: {:9} {:.1} us per generation (min of 200)", status.as_str(), best * 1e6);
             }
         }
         let dt = if k == 0 { 0.0 } else { s.frame_period_s as f32 };
-        let est = tracker.step(&frame, &joints, dt, s.method.into()).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let est = tracker.step(&frame, &joints, dt).map_err(|e| anyhow::anyhow!("{e}"))?;
         let (mm, deg) = pose_error(&est.psi, &truth);
         println!(
             "{k:3} F {:.3} (truth {:.3}) {:9} err {:6.1} mm {:6.1} deg | raw {:?} seed faces {:?} err {:?} | hits L {:?} R {:?}",

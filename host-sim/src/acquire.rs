@@ -5,7 +5,7 @@
 //! uniform, entirely inside both images for the whole run; the block itself does not move)
 //! and runs two cases, the arm static and motion A at ω = 0.5 rad/s with feedforward:
 //!
-//! - **acquisition**: the tracker starts without a pose (`[tracker] initial = "unknown"`),
+//! - **acquisition**: the tracker starts without a pose (`[start] initial = "unknown"`),
 //!   [`ACQUIRE_DURATION_S`] long;
 //! - **recovery**: the tracker starts at the true pose and the block is hidden from
 //!   [`OCCLUSION_START_S`] for [`OCCLUSION_S`] (an occluder in front of both cameras in even
@@ -19,6 +19,7 @@
 //! which the block is visible again. Frames in which the block is hidden count towards the
 //! "tracking while hidden" fraction when the tracker reports `tracking`.
 
+use evorec_core::tuning::Tuning;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Mutex;
@@ -105,7 +106,7 @@ pub fn scenario(seed: u64, case: Case, recovery: bool) -> Scenario {
         s.occlusion =
             Occlusions::from_slice(&[Occlusion { start_s: OCCLUSION_START_S, duration_s: OCCLUSION_S, kind }]);
     } else {
-        s.tracker.initial = Initial::Unknown;
+        s.start.initial = Initial::Unknown;
     }
     s
 }
@@ -192,10 +193,19 @@ fn wrong_tracking(rows: &[TraceRow]) -> (usize, usize) {
 ///
 /// # Errors
 /// A run's error.
-pub fn run_trial(seed: u64, case: Case, points: usize, on_frame: &(impl Fn() + Sync)) -> Result<Trial> {
-    let go = |s: &Scenario| crate::with_rows!("--points", points, G => experiment::run_with_rows::<G>(s, on_frame));
-    let a = go(&scenario(seed, case, false))?;
-    let b = go(&scenario(seed, case, true))?;
+pub fn run_trial(
+    seed: u64,
+    case: Case,
+    points: usize,
+    tuning: &Tuning,
+    on_frame: &(impl Fn() + Sync),
+) -> Result<Trial> {
+    let go = |mut s: Scenario| {
+        s.tracker.0 = *tuning;
+        crate::with_rows!("--points", points, G => experiment::run_with_rows::<G>(&s, on_frame))
+    };
+    let a = go(scenario(seed, case, false))?;
+    let b = go(scenario(seed, case, true))?;
     let reappear = b.rows.iter().rposition(|r| r.hidden).map_or(b.rows.len(), |i| i + 1);
     let (w1, t1) = wrong_tracking(&a.rows);
     let (w2, t2) = wrong_tracking(&b.rows);
@@ -289,13 +299,22 @@ pub struct Report {
 }
 
 /// Runs `trials` trials from seed `first_seed` in parallel with a progress bar, with a
-/// tracker of `points` points per sample row (one of [`crate::rows::SUPPORTED`]), and writes `acquire.json`,
-/// `acquire.md` and `acquire_cdf.png` into `out`.
+/// tracker of `points` points per sample row (one of [`crate::rows::SUPPORTED`]) tuned as
+/// `tuning`, and writes `acquire.json`, `acquire.md`, `acquire_cdf.png` and `config.toml` (the
+/// tuning) into `out`.
 ///
 /// # Errors
 /// Any run's or file's error; `points` not in [`crate::rows::SUPPORTED`].
-pub fn run(trials: usize, first_seed: u64, points: usize, out: &Path, show_progress: bool) -> Result<Report> {
+pub fn run(
+    trials: usize,
+    first_seed: u64,
+    points: usize,
+    tuning: &Tuning,
+    out: &Path,
+    show_progress: bool,
+) -> Result<Report> {
     crate::rows::check("--points", points)?;
+    tuning.validate(crate::scenario::HOST_POPULATION_CAPACITY)?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let jobs: Vec<(u64, Case)> = (0..trials as u64).flat_map(|i| Case::ALL.map(|c| (first_seed + i, c))).collect();
     let frames: u64 = jobs
@@ -313,7 +332,7 @@ pub fn run(trials: usize, first_seed: u64, points: usize, out: &Path, show_progr
     );
     let done = Mutex::new(Vec::new());
     jobs.par_iter().try_for_each(|(seed, case)| -> Result<()> {
-        let t = run_trial(*seed, *case, points, &|| bar.inc(1))?;
+        let t = run_trial(*seed, *case, points, tuning, &|| bar.inc(1))?;
         done.lock().map_err(|_| anyhow::anyhow!("poisoned"))?.push(t);
         Ok(())
     })?;
@@ -328,6 +347,7 @@ pub fn run(trials: usize, first_seed: u64, points: usize, out: &Path, show_progr
         evorec_version: env!("CARGO_PKG_VERSION"),
     };
     crate::io::write_json(&out.join("acquire.json"), &report)?;
+    crate::io::write_tracker_config(out, tuning)?;
     crate::io::write_bytes(&out.join("acquire.md"), markdown(&report).as_bytes())?;
     plot_cdf(&report, &out.join("acquire_cdf.png"))?;
     Ok(report)

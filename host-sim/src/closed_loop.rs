@@ -65,7 +65,7 @@ pub struct LoopOptions {
 impl LoopOptions {
     /// The options a scenario's method implies (no occlusion).
     pub fn for_scenario(s: &Scenario) -> Self {
-        let target_velocity = s.method == crate::scenario::Method::FfTarget;
+        let target_velocity = s.method() == crate::scenario::Method::FfTarget;
         Self { occlusion: None, conveyor: None, feedforward: None, target_velocity }
     }
 }
@@ -389,12 +389,13 @@ pub fn run(s: &Scenario, opts: &LoopOptions, on_frame: impl FnMut()) -> Result<C
 /// Drives `board` to its end with the host's tracker (the core's `board::run`); returns the
 /// tracker and the frames it refused.
 fn run_host_tracker(s: &Scenario, board: &mut ServoBoard, mut on_frame: impl FnMut()) -> Result<(SimTracker, u32)> {
-    let mut tracker: SimTracker = experiment::scenario_tracker(s, Population::Around(board.start_pose()))?;
-    let ff = board.feedforward();
-    let n = crate::sim::image_bytes(s);
+    let mut s = *s;
+    s.tracker.0.feedforward = board.feedforward();
+    let mut tracker: SimTracker = experiment::scenario_tracker(&s, Population::Around(board.start_pose()))?;
+    let n = crate::sim::image_bytes(&s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let mut progress = ProgressBoard { inner: board, on_frame: &mut on_frame };
-    let stats = evorec_core::board::run(&mut progress, &mut tracker, ff, &mut left, &mut right, u32::MAX)
+    let stats = evorec_core::board::run(&mut progress, &mut tracker, &mut left, &mut right, u32::MAX)
         .map_err(|e| anyhow!("closed loop: {e:?}"))?;
     Ok((tracker, stats.rejected))
 }
@@ -451,7 +452,7 @@ impl ServoLoop {
         Ok(Self {
             ctl,
             filter: crate::sim::target_filter(s)?,
-            feedforward: opts.feedforward.unwrap_or_else(|| s.method.into()),
+            feedforward: opts.feedforward.unwrap_or(s.tuning().feedforward),
             opts: *opts,
             desired,
             delay_s: f64::from(sec.delay_frames) * s.frame_period_s,
@@ -544,6 +545,7 @@ pub fn write_outputs(out: &ClosedLoopOutput, dir: &std::path::Path, title: &str)
     crate::io::write_trace_with(&trace, &out.run.rows, &SERVO_COLUMNS, &extra)?;
     let summary = ClosedLoopSummary { run: &out.run.summary, servo: &out.servo_summary };
     crate::io::write_json(&dir.join("summary.json"), &summary)?;
+    crate::io::write_tracker_config(dir, out.run.summary.scenario.tuning())?;
     crate::plot::plot_trace(&trace, dir, title)?;
     Ok(())
 }
@@ -584,7 +586,7 @@ mod tests {
     #[test]
     fn the_boards_target_filter_is_the_trackers() {
         let mut s = scenario(2.0);
-        s.method = Method::FfTarget;
+        s.set_method(Method::FfTarget);
         let mut board =
             ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
         let (tracker, rejected) = run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}"));
@@ -596,19 +598,19 @@ mod tests {
     #[test]
     fn a_tuned_target_filter_reaches_the_tracker_and_the_boards_copy() {
         let mut s = scenario(2.0);
-        s.method = Method::FfTarget;
+        s.set_method(Method::FfTarget);
         let default_run = {
             let mut board =
                 ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
             run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}")).0
         };
         // A slower block and noisier estimates than the defaults say.
-        s.target_filter.0.acceleration_m_s2 = 0.2;
-        s.target_filter.0.image_noise_px = 2.0;
+        s.tracker.0.target.acceleration_m_s2 = 0.2;
+        s.tracker.0.target.image_noise_px = 2.0;
         let mut board =
             ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
         let (tracker, _) = run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}"));
-        assert_eq!(tracker.target_filter().params(), &s.target_filter.0);
+        assert_eq!(tracker.target_filter().params(), &s.tuning().target);
         assert_eq!(board.target_filter(), tracker.target_filter());
         assert_ne!(tracker.target_filter(), default_run.target_filter());
     }

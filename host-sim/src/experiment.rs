@@ -7,10 +7,8 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use evorec_core::board;
 use evorec_core::config::{DEFAULT_GRID, PA10_DOF};
-use evorec_core::ga::GaParams;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
-use evorec_core::target_motion::{FilterParamsError, TargetFilterParams};
 use evorec_core::tracker::{ConfigError, StepError, Tracker, TrackerConfig};
 use nalgebra::{Isometry3, UnitQuaternion};
 use serde::Serialize;
@@ -20,7 +18,7 @@ use crate::scenario::{HOST_POPULATION_CAPACITY, Scenario};
 use crate::sim::{self, Handover, SimBoard, TraceRow, World};
 
 /// The tracker the simulator runs: PA-10, the default population capacity (the size in use is
-/// the scenario's `[ga] population`) and sample rows.
+/// the scenario's `[tracker] ga.population`) and sample rows.
 pub type SimTracker = Tracker<PA10_DOF, HOST_POPULATION_CAPACITY, DEFAULT_GRID>;
 
 /// Half-widths of the initial population around the known true pose at `t = 0` (the paper
@@ -34,7 +32,7 @@ pub const INITIAL_SPREAD: [f32; 6] = [0.002, 0.002, 0.002, 0.004, 0.004, 0.004];
 pub fn tracker_config(s: &Scenario) -> Result<TrackerConfig<PA10_DOF>> {
     Ok(TrackerConfig::pa10(sim::rig(s)?, sim::block(s), sim::flange_to_camera(s), sim::search_space())
         .with_seed(s.seed)
-        .with_ga(GaParams::DEFAULT.with_population(s.ga.population)))
+        .with_tuning(*s.tuning()))
 }
 
 /// How a new tracker's population starts.
@@ -57,8 +55,6 @@ pub enum Population {
 pub enum SetupError {
     /// The configuration ([`Tracker::new`]).
     Config(ConfigError),
-    /// The target filter's tuning ([`Tracker::set_target_filter_params`]).
-    TargetFilter(FilterParamsError),
     /// The initial pose ([`Tracker::reset_around`]).
     InitialPose(StepError),
 }
@@ -67,7 +63,6 @@ impl core::fmt::Display for SetupError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Self::Config(e) => write!(f, "tracker: {e}"),
-            Self::TargetFilter(e) => write!(f, "[target_filter]: {e}"),
             Self::InitialPose(e) => write!(f, "initial pose: {e}"),
         }
     }
@@ -75,19 +70,17 @@ impl core::fmt::Display for SetupError {
 
 impl std::error::Error for SetupError {}
 
-/// The one set-up of a host tracker: built from `config`, its target filter tuned by `filter`,
-/// its population started as `population`. (The firmware's counterpart, which builds the
+/// The one set-up of a host tracker: built from `config` (its tuning included), its population
+/// started as `population`. (The firmware's counterpart, which builds the
 /// tracker in place, is `evorec_firmware::setup::Setup::build_tracker_in`.)
 ///
 /// # Errors
 /// [`SetupError`].
 pub fn setup_tracker<const DOF: usize, const P: usize, const G: usize>(
     config: TrackerConfig<DOF>,
-    filter: TargetFilterParams,
     population: Population,
 ) -> Result<Tracker<DOF, P, G>, SetupError> {
     let mut tracker = Tracker::new(config).map_err(SetupError::Config)?;
-    tracker.set_target_filter_params(filter).map_err(SetupError::TargetFilter)?;
     match population {
         Population::Around(psi) => tracker.reset_around(&psi, &INITIAL_SPREAD).map_err(SetupError::InitialPose)?,
         Population::Uniform => {}
@@ -96,7 +89,7 @@ pub fn setup_tracker<const DOF: usize, const P: usize, const G: usize>(
     Ok(tracker)
 }
 
-/// The tracker of a scenario ([`tracker_config`], tuned by its `[target_filter]`) with `G`
+/// The tracker of a scenario ([`tracker_config`], tuned by its `[tracker]` table) with `G`
 /// points per sample row, its population started as `population` ([`setup_tracker`]).
 ///
 /// # Errors
@@ -105,7 +98,7 @@ pub fn scenario_tracker<const G: usize>(
     s: &Scenario,
     population: Population,
 ) -> Result<Tracker<PA10_DOF, HOST_POPULATION_CAPACITY, G>> {
-    Ok(setup_tracker(tracker_config(s)?, s.target_filter.0, population)?)
+    Ok(setup_tracker(tracker_config(s)?, population)?)
 }
 
 /// Accuracy of a run (paper eq. 40–41): mean fitness and RMS errors over all frames.
@@ -263,7 +256,7 @@ impl PoseRms {
     }
 }
 
-/// The hand-over at the output time (`[tracker] delay_s` after capture), over the frames
+/// The hand-over at the output time (`[start] delay_s` after capture), over the frames
 /// reported as tracking (the others carry no measurement to hand over).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct HandoverSummary {
@@ -364,7 +357,7 @@ impl Summary {
             rotation: RotationError::of_run(rows),
             status: StatusCounts::of(rows),
             rejected,
-            handover: HandoverSummary::of(rows, scenario.tracker.delay_s),
+            handover: HandoverSummary::of(rows, scenario.start.delay_s),
             scenario: *scenario,
             evorec_version: env!("CARGO_PKG_VERSION"),
         }
@@ -396,7 +389,7 @@ pub fn run(s: &Scenario, on_frame: impl FnMut()) -> Result<RunOutput> {
 /// As [`run`].
 pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -> Result<RunOutput> {
     let board = SimBoard::new(World::new(s)?)?;
-    let population = match s.tracker.initial {
+    let population = match s.start.initial {
         Initial::Truth => Population::Around(board.start_pose()),
         Initial::Unknown => Population::Uniform,
     };
@@ -404,7 +397,7 @@ pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -
     let mut board = ProgressBoard { inner: board, on_frame: &mut on_frame };
     let n = sim::image_bytes(s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
-    let stats = board::run(&mut board, &mut tracker, s.method.into(), &mut left, &mut right, u32::MAX)
+    let stats = board::run(&mut board, &mut tracker, &mut left, &mut right, u32::MAX)
         .map_err(|e| anyhow::anyhow!("simulated board: {e:?}"))?;
     let rows = board.inner.into_rows();
     let summary = Summary::of(&rows, stats.rejected, s);
@@ -440,7 +433,8 @@ impl<B: board::CameraController<PA10_DOF>, F: FnMut()> board::CameraController<P
     }
 }
 
-/// Writes `trace.csv`, `estimate.tum`, `summary.json` and the plots of a run into `dir`.
+/// Writes `trace.csv`, `estimate.tum`, `summary.json`, `config.toml` (the tuning) and the plots
+/// of a run into `dir`.
 ///
 /// # Errors
 /// I/O errors.
@@ -450,6 +444,7 @@ pub fn write_outputs(out: &RunOutput, dir: &Path, title: &str) -> Result<()> {
     crate::io::write_trace(&trace, &out.rows)?;
     write_estimate(out, dir)?;
     crate::io::write_json(&dir.join("summary.json"), &out.summary)?;
+    crate::io::write_tracker_config(dir, out.summary.scenario.tuning())?;
     crate::plot::plot_trace(&trace, dir, title)?;
     Ok(())
 }

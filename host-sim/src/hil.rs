@@ -139,7 +139,7 @@ pub fn run_with_options(
     on_frame: impl FnMut(),
 ) -> Result<(RunOutput, LinkReport)> {
     let mut board = SimBoard::new(World::new(s)?)?;
-    let mut session = start_session(s, &board.start_pose(), s.method.into(), firmware, workdir, options)?;
+    let mut session = start_session(s, &board.start_pose(), s.tuning().feedforward, firmware, workdir, options)?;
     let rejected = drive(&mut session, &mut board, on_frame)?;
     let link = finish(session)?;
     let rows = board.into_rows();
@@ -187,10 +187,9 @@ fn start_session(
             s.camera.height
         );
     }
-    let config = experiment::tracker_config(s)?;
-    let setup = Setup::from_tracker_config(&config, feedforward, start, &INITIAL_SPREAD)
-        .map_err(|e| anyhow::anyhow!("firmware setup: {e:?}"))?
-        .with_target_filter(s.target_filter.0);
+    let config = experiment::tracker_config(s)?.with_feedforward(feedforward);
+    let setup = Setup::from_tracker_config(&config, start, &INITIAL_SPREAD)
+        .map_err(|e| anyhow::anyhow!("firmware setup: {e:?}"))?;
     HilSession::start_with(firmware, workdir, &setup, options).map_err(|e| anyhow::anyhow!("{e}"))
 }
 

@@ -286,6 +286,15 @@ pub fn write_trace_with(path: &Path, rows: &[TraceRow], extra_header: &[&str], e
     })
 }
 
+/// Writes `tuning` as `dir/config.toml`: the full `[tracker]` table (`evorec config`'s
+/// format), which `--config` reads back to the same tuning.
+///
+/// # Errors
+/// I/O errors.
+pub fn write_tracker_config(dir: &Path, tuning: &evorec_core::tuning::Tuning) -> Result<()> {
+    write_bytes(&dir.join("config.toml"), crate::scenario::TrackerTable(*tuning).to_toml().as_bytes())
+}
+
 /// Writes `value` as pretty JSON, atomically.
 ///
 /// # Errors

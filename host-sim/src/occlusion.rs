@@ -1,9 +1,9 @@
-//! Acquisition scenarios: an unknown start (`[tracker] initial`), a random block pose
+//! Acquisition scenarios: an unknown start (`[start] initial`), a random block pose
 //! (`[target] placement`) and occlusions (`[[occlusion]]`), and the occluder's rendering. The
 //! keys are parsed and validated with the rest of the scenario file (`crate::scenario`).
 //!
 //! ```toml
-//! [tracker]
+//! [start]
 //! initial = "unknown"      # "truth" (default: the population starts around the true pose,
 //!                          # as in the paper) | "unknown" (uniform over the search space)
 //!
@@ -33,7 +33,7 @@ pub const OCCLUDER_MARGIN_PX: f32 = 30.0;
 /// Grey level of the occluder (no hue).
 pub const OCCLUDER_LEVEL: u8 = 85;
 
-/// How the tracker's population starts (`[tracker] initial`).
+/// How the tracker's population starts (`[start] initial`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
 pub enum Initial {
     /// Around the true pose at `t = 0` (the paper's set-up).
@@ -164,24 +164,21 @@ mod tests {
     #[test]
     fn scenario_keys_round_trip_and_are_checked() {
         use crate::scenario::Scenario;
-        let text = "seed = 3\nduration_s = 4.0\nmethod = \"ff\"\n[tracker]\ninitial = \"unknown\"\n[target]\nplacement = \"random\"\n[[occlusion]]\nstart_s = 1.0\nduration_s = 1.0\nkind = \"removed\"\n";
+        let text = "seed = 3\nduration_s = 4.0\n[start]\ninitial = \"unknown\"\n[target]\nplacement = \"random\"\n[[occlusion]]\nstart_s = 1.0\nduration_s = 1.0\nkind = \"removed\"\n";
         let s = Scenario::from_toml_str(text).unwrap_or_else(|e| unreachable!("{e}"));
-        assert_eq!(s.tracker.initial, Initial::Unknown);
+        assert_eq!(s.start.initial, Initial::Unknown);
         assert_eq!(s.target.placement, Placement::Random);
         assert_eq!(s.occlusion.at(1.5), Some(OcclusionKind::Removed));
         let back = Scenario::from_toml_str(&s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}")))
             .unwrap_or_else(|e| unreachable!("{e}"));
         assert_eq!(back, s);
-        let err = |t: &str| {
-            Scenario::from_toml_str(&format!("seed = 1\nduration_s = 2\nmethod = \"ff\"\n{t}"))
-                .err()
-                .map(|e| e.to_string())
-        };
+        let err =
+            |t: &str| Scenario::from_toml_str(&format!("seed = 1\nduration_s = 2\n{t}")).err().map(|e| e.to_string());
         assert_eq!(
-            err("[tracker]\ninitial = \"maybe\"\n").as_deref(),
-            Some("tracker.initial: expected \"truth\" or \"unknown\", got \"maybe\"")
+            err("[start]\ninitial = \"maybe\"\n").as_deref(),
+            Some("start.initial: expected \"truth\" or \"unknown\", got \"maybe\"")
         );
-        assert!(err("[tracker]\nstart = 1\n").is_some_and(|e| e.starts_with("tracker.start: unknown key")));
+        assert!(err("[start]\nstart = 1\n").is_some_and(|e| e.starts_with("start.start: unknown key")));
         assert!(
             err("[[occlusion]]\nstart_s = 3\nduration_s = 1\n").is_some_and(|e| e.starts_with("occlusion[0].start_s"))
         );

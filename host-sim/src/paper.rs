@@ -120,7 +120,7 @@ pub fn grid() -> Vec<Cell> {
 pub fn scenario_of(base: &Scenario, cell: &Cell) -> Scenario {
     let mut s = *base;
     s.duration_s = DURATION_S;
-    s.method = cell.method;
+    s.set_method(cell.method);
     s.robot.motion = cell.motion;
     s.robot.omega_rad_s = cell.omega;
     s

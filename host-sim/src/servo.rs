@@ -13,7 +13,7 @@ use serde::Serialize;
 use crate::closed_loop::{self, LoopOptions, Outcome, ServoSummary};
 use crate::io;
 use crate::plot::{FONT, draw_err, ensure_font, render_png};
-use crate::scenario::{Method, Scenario, ServoSection, TargetFilterSection};
+use crate::scenario::{Method, Scenario, ServoSection, TrackerTable};
 use crate::sim::frame_total;
 use crate::target_path::Conveyor;
 
@@ -71,9 +71,9 @@ pub struct GridSettings {
     pub conveyor_accel_m_s2: f64,
     /// Seed of every run.
     pub seed: u64,
-    /// The target filter's tuning in every cell (`ff+target`; `--target-filter`).
-    #[serde(skip_serializing_if = "TargetFilterSection::is_default")]
-    pub target_filter: TargetFilterSection,
+    /// The tracker's tuning in every cell (`--config`; each cell's method replaces its `method`).
+    #[serde(skip_serializing_if = "TrackerTable::is_default")]
+    pub tracker: TrackerTable,
 }
 
 impl Default for GridSettings {
@@ -96,7 +96,7 @@ impl Default for GridSettings {
             conveyor_travel_m: 1.0,
             conveyor_accel_m_s2: 0.5,
             seed: 1,
-            target_filter: TargetFilterSection::default(),
+            tracker: TrackerTable::default(),
         }
     }
 }
@@ -144,7 +144,8 @@ pub fn cells(g: &GridSettings) -> Vec<Cell> {
 /// The scenario and loop options of a cell.
 pub fn scenario_of(g: &GridSettings, cell: &Cell) -> (Scenario, LoopOptions) {
     let mut s = Scenario::new(g.seed, g.duration_s, cell.method);
-    s.target_filter = g.target_filter;
+    s.tracker = g.tracker;
+    s.set_method(cell.method);
     let w = g.width;
     s.camera.width = w;
     s.camera.height = w / 4 * 3;
@@ -372,15 +373,17 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_cell_runs_the_grids_target_filter() {
+    fn every_cell_runs_the_grids_tuning() {
         let mut g = GridSettings::default();
-        g.target_filter.0.image_noise_px = 0.75;
+        g.tracker.0.target.image_noise_px = 0.75;
         for cell in cells(&g) {
-            assert_eq!(scenario_of(&g, &cell).0.target_filter, g.target_filter);
+            let s = scenario_of(&g, &cell).0;
+            assert_eq!(s.tuning().target, g.tracker.0.target);
+            assert_eq!(s.method(), cell.method);
         }
         let json = serde_json::to_string(&g).unwrap_or_default();
-        assert!(json.contains("\"image_noise_px\":0.75"), "{json}");
+        assert!(json.contains("\"target.image_noise_px\":0.75"), "{json}");
         let plain = serde_json::to_string(&GridSettings::default()).unwrap_or_default();
-        assert!(!plain.contains("target_filter"), "{plain}");
+        assert!(!plain.contains("tracker"), "{plain}");
     }
 }

@@ -15,7 +15,7 @@
 //!
 //! ## Hand-over
 //! [`Scripted`] also plays the consumer of the estimates (a visual-servo loop): the estimate of
-//! the frame captured at `t` is output at `t + delay_s` (`[tracker] delay_s`). It feeds
+//! the frame captured at `t` is output at `t + delay_s` (`[start] delay_s`). It feeds
 //! every published estimate to its own copy of the core's [`TargetFilter`] with the tracker's
 //! own call, [`TargetFilter::update_from_estimate`], on the measurement the estimate carries
 //! ([`Estimate::target_measurement`]): the same code on the same inputs as the tracker's
@@ -325,7 +325,7 @@ pub trait ArmController {
 }
 
 /// The scenario's scripted flange motion ([`World::advance_to`]), and a consumer of the
-/// estimates that hands each over `[tracker] delay_s` after capture with its own copy of the
+/// estimates that hands each over `[start] delay_s` after capture with its own copy of the
 /// target filter (see the module documentation).
 pub struct Scripted {
     filter: TargetFilter,
@@ -362,7 +362,7 @@ impl ArmController for Scripted {
             &estimate.target_measurement,
             estimate.status,
         );
-        let t_out = capture.t + world.scenario().tracker.delay_s;
+        let t_out = capture.t + world.scenario().start.delay_s;
         let (truth_out, joints_out) = world.look_ahead(t_out);
         let t_out_us = (t_out * 1e6).round() as u64;
         let (predicted, trusted, velocity) =
@@ -529,13 +529,13 @@ pub fn frame_time(s: &Scenario, frame: u32) -> Result<f64> {
     Ok(t)
 }
 
-/// The target motion model a scenario's `ff+target` runs with (its `[target_filter]`, seen
+/// The target motion model a scenario's `ff+target` runs with (its `[tracker] target.*`, seen
 /// through its cameras and block as the tracker's is).
 ///
 /// # Errors
 /// Parameters that [`TargetFilter::new`] refuses (a parsed scenario's never are).
 pub fn target_filter(s: &Scenario) -> Result<TargetFilter> {
-    let filter = TargetFilter::new(s.target_filter.0).map_err(|e| anyhow::anyhow!("[target_filter]: {e}"))?;
+    let filter = TargetFilter::new(s.tuning().target).map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(filter.with_optics(Optics::of(&rig(s)?, &block(s))))
 }
 
@@ -695,17 +695,14 @@ mod tests {
     #[test]
     fn the_boards_filter_copy_runs_the_scenarios_tuning() {
         let mut s = Scenario::new(3, 1.0, Method::FfTarget);
-        s.target_filter.0.max_gap_s = 0.3;
+        s.tracker.0.target.max_gap_s = 0.3;
         let board = SimBoard::new(World::new(&s).unwrap_or_else(|e| unreachable!("{e}")))
             .unwrap_or_else(|e| unreachable!("{e}"));
-        assert_eq!(board.arm.filter.params(), &s.target_filter.0);
+        assert_eq!(board.arm.filter.params(), &s.tuning().target);
         // Parameters the core refuses are refused here too, naming the section and the field.
-        s.target_filter.0.image_noise_px = 0.0;
+        s.tracker.0.target.image_noise_px = 0.0;
         let e = SimBoard::new(World::new(&s).unwrap_or_else(|e| unreachable!("{e}"))).err().map(|e| e.to_string());
-        assert_eq!(
-            e.as_deref(),
-            Some("[target_filter]: target motion parameter image_noise_px must be finite and positive")
-        );
+        assert_eq!(e.as_deref(), Some("tracker.target.image_noise_px: must be finite and positive"));
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //! axis at [`DEPTH_SPEEDS`], "approach" (first run towards the cameras) and "recede" (away),
 //! started at full speed in the middle of its [`DEPTH_TRAVEL_M`] travel (the tracker starts on a
 //! moving block); each with "1-step GA + FF" and "1-step GA + FF + target". Per
-//! run also the hand-over one `[tracker] delay_s` after capture ([`crate::sim::Handover`]).
+//! run also the hand-over one `[start] delay_s` after capture ([`crate::sim::Handover`]).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -155,7 +155,7 @@ pub fn grid() -> Vec<Cell> {
 /// max(0.5, 2v²/travel) m/s².
 pub fn scenario_of(base: &Scenario, cell: &Cell) -> Scenario {
     let mut s = *base;
-    s.method = cell.method;
+    s.set_method(cell.method);
     s.robot.motion = MotionKind::A;
     s.robot.omega_rad_s = ROBOT_OMEGA;
     s.target.omega_rad_s = cell.omega_o;
@@ -339,7 +339,7 @@ mod tests {
             // Every cell is a valid scenario (the conveyor can reverse within its travel).
             let back = Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{c:?}: {e}"));
             assert_eq!(back, s);
-            assert_eq!((s.robot.motion, s.robot.omega_rad_s, s.method), (MotionKind::A, ROBOT_OMEGA, c.method));
+            assert_eq!((s.robot.motion, s.robot.omega_rad_s, s.method()), (MotionKind::A, ROBOT_OMEGA, c.method));
         }
     }
 

@@ -45,7 +45,7 @@ fn missing_scenario_file() {
 fn bad_field_in_scenario() {
     let dir = scratch("bad-field");
     let scenario = dir.join("bad.toml");
-    let text = "seed = 1\nduration_s = 1.0\nmethod = \"ff\"\n[camera]\nwidth = 0\n";
+    let text = "seed = 1\nduration_s = 1.0\n[camera]\nwidth = 0\n";
     std::fs::write(&scenario, text).unwrap_or_else(|e| panic!("{e}"));
     let out = evorec(&["run", path_str(&scenario), "--out", path_str(&dir.join("out"))]);
     let line = single_error_line(&out);

@@ -23,7 +23,7 @@ fn seeds_write_one_row_per_seed_and_cell() {
     let summary = std::fs::read_to_string(dir.join("runs/B_ff_w1_s4/summary.json")).unwrap_or_else(|e| panic!("{e}"));
     let summary: serde_json::Value = serde_json::from_str(&summary).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(summary["scenario"]["seed"], 4);
-    assert_eq!(summary["scenario"]["method"], "ff");
+    assert_eq!(summary["scenario"]["tracker"]["method"], "ff");
     let row: Vec<f64> = lines[3].split(',').skip(3).map(|v| v.parse().unwrap_or(f64::NAN)).collect();
     for (value, key) in row.iter().zip(["F_mean", "rms_x_mm", "rms_y_mm", "rms_z_mm", "rms_e1", "rms_e2", "rms_e3"]) {
         let want = summary[key].as_f64().unwrap_or(f64::NAN);

@@ -18,7 +18,7 @@ fn path_str(p: &std::path::Path) -> &str {
 /// A short run of the approaching belt (camera-frame direction, moving start).
 fn scenario(seed: u64) -> String {
     format!(
-        "seed = {seed}\nduration_s = 0.3\nmethod = \"ff+target\"\n[target]\nconveyor_speed_m_s = 0.1\n\
+        "seed = {seed}\nduration_s = 0.3\n[tracker]\nmethod = \"ff+target\"\n[target]\nconveyor_speed_m_s = 0.1\n\
          conveyor_direction = [0, 0, -1]\nconveyor_direction_frame = \"camera\"\nconveyor_start = \"moving\"\n\
          [robot]\nmotion = \"A\"\nomega_rad_s = 0.5\n"
     )

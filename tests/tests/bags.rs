@@ -24,7 +24,7 @@ fn exported(dir: &Path) -> Sequence {
     let mut s = Scenario::from_toml_str(&std::fs::read_to_string(path).expect("scenario")).expect("valid");
     s.duration_s = 2.0;
     s.robot.omega_rad_s = 0.5;
-    s.method = Method::Ff;
+    s.set_method(Method::Ff);
     export::export(&s, "sway", &dir.join("seq"), None).unwrap_or_else(|e| panic!("{e:#}"));
     Sequence::load(&dir.join("seq")).unwrap_or_else(|e| panic!("{e}"))
 }

@@ -10,6 +10,7 @@ use std::collections::BTreeSet;
 use std::path::PathBuf;
 
 use evorec_core::tracker::Feedforward;
+use evorec_core::tuning::Tuning;
 use evorec_sim::scenario::{Method, Scenario};
 use evorec_sim::sequence::Sequence;
 use evorec_sim::{experiment, export, track};
@@ -21,7 +22,7 @@ fn scenario(method: Method) -> Scenario {
     // About 2 s of 160x120 frames, the arm swaying fast enough for the feedforward to matter.
     s.duration_s = 2.0;
     s.robot.omega_rad_s = 0.5;
-    s.method = method;
+    s.set_method(method);
     s
 }
 
@@ -39,7 +40,8 @@ fn check(method: Method, ff: Feedforward, pixels: track::Pixels, tag: &str) {
     assert_eq!(stats.frames, 62);
     assert!(stats.joint_samples > 2000, "1 kHz joint samples: {}", stats.joint_samples);
     let seq = Sequence::load(&seq_dir).unwrap_or_else(|e| panic!("{e}"));
-    let opts = track::TrackOptions { feedforward: ff, seed: s.seed, pixels, ..Default::default() };
+    let tuning = Tuning { feedforward: ff, ..Tuning::DEFAULT };
+    let opts = track::TrackOptions { tuning, seed: s.seed, pixels, ..Default::default() };
     let tracked = track::run(&seq, &opts).unwrap_or_else(|e| panic!("{e:#}"));
     let run = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
     assert_eq!(tracked.rejected, 0);
@@ -93,16 +95,16 @@ fn a_bad_png_found_while_tracking_is_named_and_nothing_is_written() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `ff+target` with a tuned `[target_filter]`: tracking the exported sequence with the same
-/// tuning (`evorec track --target-filter`) gives `evorec run`'s estimates bit for bit, and the
+/// `ff+target` with a tuned target motion model: tracking the exported sequence with the same
+/// tuning (`evorec track --config`) gives `evorec run`'s estimates bit for bit, and the
 /// tuning changed them (so it reached both trackers).
 #[test]
 fn a_tuned_target_filter_tracks_as_in_run() {
     let mut s = scenario(Method::FfTarget);
     s.target.conveyor_speed_m_s = 0.1;
     let default_run = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
-    s.target_filter.0.acceleration_m_s2 = 0.3;
-    s.target_filter.0.image_noise_px = 1.5;
+    s.tracker.0.target.acceleration_m_s2 = 0.3;
+    s.tracker.0.target.image_noise_px = 1.5;
     let tuned_run = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
     let differ = default_run.rows.iter().zip(&tuned_run.rows).any(|(a, b)| a.estimate != b.estimate);
     assert!(differ, "the tuning changed nothing in 2 s: the test would prove nothing");
@@ -110,12 +112,7 @@ fn a_tuned_target_filter_tracks_as_in_run() {
     let seq_dir = dir.join("seq");
     export::export(&s, "tuned", &seq_dir, None).unwrap_or_else(|e| panic!("{e:#}"));
     let seq = Sequence::load(&seq_dir).unwrap_or_else(|e| panic!("{e}"));
-    let opts = track::TrackOptions {
-        feedforward: Feedforward::OnWithTarget,
-        seed: s.seed,
-        target_filter: s.target_filter.0,
-        ..Default::default()
-    };
+    let opts = track::TrackOptions { tuning: *s.tuning(), seed: s.seed, ..Default::default() };
     let tracked = track::run(&seq, &opts).unwrap_or_else(|e| panic!("{e:#}"));
     assert_eq!(tracked.tracked.len(), tuned_run.rows.len());
     for (t, r) in tracked.tracked.iter().zip(&tuned_run.rows) {

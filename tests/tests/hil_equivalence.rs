@@ -27,7 +27,7 @@ use evorec_core::image::expand_hue_to_rgb565;
 use evorec_core::kinematics::PA10;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
-use evorec_core::tracker::{Estimate, Feedforward, JointSample, Tracker, TrackerConfig};
+use evorec_core::tracker::{Estimate, JointSample, Tracker, TrackerConfig};
 use evorec_core::{quat, synth};
 use evorec_firmware::BoardProfile;
 use evorec_firmware::host::{HilOptions, HilSession, Reply, build_firmware};
@@ -142,7 +142,7 @@ fn scenario(width: u16, height: u16) -> Result<(TrackerConfig<7>, Setup, Vec<Rec
     }
 
     let initial = Psi::from_isometry(&block_in_cam0);
-    let setup = Setup::from_tracker_config(&config, Feedforward::On, &initial, &[0.01, 0.01, 0.01, 0.02, 0.02, 0.02])?;
+    let setup = Setup::from_tracker_config(&config, &initial, &[0.01, 0.01, 0.01, 0.02, 0.02, 0.02])?;
     Ok((config, setup, frames))
 }
 
@@ -219,7 +219,7 @@ fn equivalence(elf: &Path, profile: BoardProfile) -> Result<(), Failure> {
     let image_bytes = 2 * usize::from(profile.frame_width) * usize::from(profile.frame_height);
     let (mut lb, mut rb) = (vec![0u8; image_bytes], vec![0u8; image_bytes]);
     let mut replay = ReplayBoard { frames: frames.iter(), current: None, published: Vec::new() };
-    let stats = board::run(&mut replay, &mut host, setup.feedforward, &mut lb, &mut rb, u32::MAX)
+    let stats = board::run(&mut replay, &mut host, &mut lb, &mut rb, u32::MAX)
         .map_err(|e| fail(format!("host loop: {e:?}")))?;
     let host_time = t_host.elapsed();
     if stats.rejected != 1 || stats.published as usize != frames.len() - 1 {

@@ -38,8 +38,8 @@ fn hil_trace_equals_host_trace() {
     let _ = std::fs::remove_dir_all(&work);
 }
 
-/// `CONFIG` carries the target filter's tuning : an `ff+target` scenario
-/// with a conveyor and a tuned `[target_filter]` gives the same estimates on the firmware as on
+/// `CONFIG` carries the target motion model's tuning: an `ff+target` scenario with a conveyor
+/// and a tuned `[tracker] target.image_noise_px` gives the same estimates on the firmware as on
 /// the host, and the tuning changed them (a firmware running the defaults would differ).
 #[test]
 fn hil_runs_a_tuned_target_filter_as_the_host() {
@@ -52,12 +52,13 @@ fn hil_runs_a_tuned_target_filter_as_the_host() {
         .replace("method = \"ff\"", "method = \"ff+target\"")
         .replace("[target]\n", "[target]\nconveyor_speed_m_s = 0.05\n");
     assert_ne!(moving, text, "the scenario's method and [target] lines moved");
+    assert!(moving.trim_end().ends_with("ga.population = 40"), "[tracker] is the scenario's last table");
     let scenario = |tuning: &str| {
         let mut s = Scenario::from_toml_str(&format!("{moving}{tuning}")).expect("valid scenario");
         s.duration_s = 3.0;
         s
     };
-    let tuned = scenario("\n[target_filter]\nimage_noise_px = 2.0\n");
+    let tuned = scenario("target.image_noise_px = 2.0\n");
     let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));
     let work = std::env::temp_dir().join(format!("evorec-hil-tuned-filter-{}", std::process::id()));
     let on_board = hil::run(&tuned, &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
@@ -71,5 +72,40 @@ fn hil_runs_a_tuned_target_filter_as_the_host() {
     }
     let changed = on_host.rows.iter().zip(untuned.rows.iter()).filter(|(t, u)| t.estimate != u.estimate).count();
     assert!(changed > 0, "the tuning did not change the run, so this test cannot tell it was sent");
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+/// The configuration file of `evorec config` (every default) given to `evorec hil` with
+/// `--config` runs the firmware exactly as without it, and a changed `ga.mutation_prob` in it
+/// reaches the firmware (its estimates differ).
+#[test]
+fn hil_runs_a_configuration_file() {
+    if evorec_tests::hil_skipped("hil_matches_run") {
+        return;
+    }
+    use evorec_core::tuning::Tuning;
+    use evorec_sim::scenario::TrackerTable;
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
+    let mut s = Scenario::load(path).expect("valid scenario");
+    s.duration_s = 2.0;
+    let defaults = TrackerTable(Tuning::DEFAULT).to_toml();
+    let with_file = |text: &str| {
+        let mut c = s;
+        c.tracker = TrackerTable::from_toml_str(text, *s.tuning()).expect("valid configuration");
+        c
+    };
+    assert_eq!(with_file(&defaults), s, "the scenario's tuning is the defaults");
+    let changed = with_file(&defaults.replace("ga.mutation_prob = 0.9", "ga.mutation_prob = 0.5"));
+    let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));
+    let work = std::env::temp_dir().join(format!("evorec-hil-config-file-{}", std::process::id()));
+    let plain = hil::run(&s, &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    let same = hil::run(&with_file(&defaults), &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    let other = hil::run(&changed, &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    let estimates =
+        |o: &experiment::RunOutput| o.rows.iter().map(|r| r.estimate.0.map(f32::to_bits)).collect::<Vec<_>>();
+    assert_eq!(estimates(&plain), estimates(&same));
+    assert_ne!(estimates(&plain), estimates(&other), "ga.mutation_prob did not reach the firmware");
+    let on_host = experiment::run(&changed, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(estimates(&other), estimates(&on_host), "the firmware ran the changed tuning as the host does");
     let _ = std::fs::remove_dir_all(&work);
 }

@@ -85,8 +85,7 @@ fn scene(seconds: f64) -> (Setup, Vec<Recorded>) {
     s.duration_s = seconds;
     let world = World::new(&s).expect("world");
     let config = experiment::tracker_config(&s).expect("tracker config");
-    let setup =
-        Setup::from_tracker_config(&config, s.method.into(), &world.truth(), &INITIAL_SPREAD).expect("firmware setup");
+    let setup = Setup::from_tracker_config(&config, &world.truth(), &INITIAL_SPREAD).expect("firmware setup");
     let mut board = SimBoard::new(world).expect("board");
     let (mut left, mut right) = (vec![0u8; IMAGE_BYTES], vec![0u8; IMAGE_BYTES]);
     let mut frames = Vec::new();

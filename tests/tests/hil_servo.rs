@@ -20,7 +20,7 @@ fn scenario(method: Method) -> Scenario {
     let text = std::fs::read_to_string(path).expect("scenario");
     let mut s = Scenario::from_toml_str(&text).expect("valid scenario");
     s.duration_s = 3.0;
-    s.method = method;
+    s.set_method(method);
     s
 }
 

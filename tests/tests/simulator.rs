@@ -115,8 +115,9 @@ fn scenario_errors_name_the_field() {
     for (from, to, field) in [
         ("width = 640", "width = 0", "camera.width"),
         ("motion = \"A\"", "motion = \"C\"", "robot.motion"),
-        ("method = \"ff\"", "method = \"fast\"", "method"),
-        ("population = 40", "population = 7", "ga.population"),
+        ("method = \"ff\"", "method = \"fast\"", "tracker.method"),
+        ("population = 40", "population = 1", "tracker.ga.population"),
+        ("population = 40", "population = 7", "tracker.acquire.seed_immigrants"),
         ("size_m = [0.1, 0.15, 0.2]", "size_m = [0.1, 0.15]", "target.size_m"),
     ] {
         assert!(ok.contains(from), "{from}");

@@ -79,31 +79,6 @@ pub use solve::{Seed, seed_pose, seed_pose_from, triangulate};
 /// Number of perturbation scales of a seeded individual.
 pub const SEED_LEVELS: usize = 3;
 
-/// Why acquisition settings were rejected.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum AcquireError {
-    /// The scan stride or the scan chunk is 0.
-    ZeroStride,
-    /// A spread is negative or not finite.
-    BadSpread,
-    /// More seeded and idle individuals than the population can give (the elite and one
-    /// child stay).
-    TooManySeeds,
-}
-
-impl core::fmt::Display for AcquireError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::ZeroStride => f.write_str("scan stride and scan chunk must be at least 1"),
-            Self::BadSpread => f.write_str("seed spreads must be finite and non-negative"),
-            Self::TooManySeeds => f.write_str("too many seeded and idle individuals for the population"),
-        }
-    }
-}
-
-impl core::error::Error for AcquireError {}
-
 /// Settings of the acquisition; [`AcquireConfig::DEFAULT`] documents the defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AcquireConfig {
@@ -137,23 +112,6 @@ impl AcquireConfig {
         spread_m: [0.003, 0.010, 0.025],
         spread_rad: [0.03, 0.10, 0.25],
     };
-
-    /// Checks the settings for a population of `population`.
-    ///
-    /// # Errors
-    /// [`AcquireError`].
-    pub fn validate(&self, population: usize) -> Result<(), AcquireError> {
-        if self.scan_stride == 0 || self.scan_chunk == 0 {
-            return Err(AcquireError::ZeroStride);
-        }
-        if !self.spread_m.iter().chain(self.spread_rad.iter()).all(|s| s.is_finite() && *s >= 0.0) {
-            return Err(AcquireError::BadSpread);
-        }
-        if self.seed_immigrants + self.idle_individuals + 2 > population {
-            return Err(AcquireError::TooManySeeds);
-        }
-        Ok(())
-    }
 }
 
 /// Default [`AcquireConfig::scan_chunk`].

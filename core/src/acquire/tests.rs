@@ -112,15 +112,6 @@ fn nothing_seen_gives_no_seed_and_immigrants_draw_a_fixed_count() {
 }
 
 #[test]
-fn config_validation() {
-    assert!(AcquireConfig::DEFAULT.validate(40).is_ok());
-    assert_eq!(AcquireConfig { scan_stride: 0, ..AcquireConfig::DEFAULT }.validate(40), Err(AcquireError::ZeroStride));
-    assert_eq!(AcquireConfig::DEFAULT.validate(9), Err(AcquireError::TooManySeeds));
-    let bad = AcquireConfig { spread_m: [f32::NAN, 0.0, 0.0], ..AcquireConfig::DEFAULT };
-    assert_eq!(bad.validate(40), Err(AcquireError::BadSpread));
-}
-
-#[test]
 fn scan_in_chunks_is_the_whole_scan() {
     let truth = Psi::new([0.02, -0.01, 0.7], [0.2, 0.3, 0.1]);
     let (l, _) = scene(&truth);

@@ -55,10 +55,10 @@ use crate::status::Status;
 use crate::{math, quat};
 
 mod kalman;
-mod params;
 mod predict;
+use crate::tuning::ConfigError;
+pub use crate::tuning::TargetFilterParams;
 use kalman::CvFilter;
-pub use params::{Field, FilterParamsError, TargetFilterParams};
 pub use predict::{PredictError, Prediction};
 
 /// The target's velocity screw in the world frame `Σ_W` (`^W ψ̇_M` with the angular part as
@@ -200,10 +200,16 @@ impl TargetFilter {
     /// An empty filter (no track) seeing through the default [`Optics`].
     ///
     /// # Errors
-    /// [`FilterParamsError`] for invalid parameters.
-    pub fn new(params: TargetFilterParams) -> Result<Self, FilterParamsError> {
+    /// [`ConfigError`] naming the first invalid parameter (`target.…`).
+    pub fn new(params: TargetFilterParams) -> Result<Self, ConfigError> {
         params.validate()?;
         Ok(Self { params, ..Self::with_defaults() })
+    }
+
+    /// An empty filter with `params` (validated by the caller: a tracker's configuration is)
+    /// seeing through `optics`.
+    pub(crate) fn tuned(params: TargetFilterParams, optics: Optics) -> Self {
+        Self { params, ..Self::with_defaults() }.with_optics(optics)
     }
 
     /// An empty filter with [`TargetFilterParams::DEFAULT`] and [`Optics::DEFAULT`].
@@ -239,8 +245,8 @@ impl TargetFilter {
     /// Replaces the parameters and forgets the track.
     ///
     /// # Errors
-    /// [`FilterParamsError`] for invalid parameters (the filter is then unchanged).
-    pub fn set_params(&mut self, params: TargetFilterParams) -> Result<(), FilterParamsError> {
+    /// [`ConfigError`] naming the first invalid parameter (the filter is then unchanged).
+    pub fn set_params(&mut self, params: TargetFilterParams) -> Result<(), ConfigError> {
         params.validate()?;
         self.params = params;
         self.track = None;

@@ -21,7 +21,7 @@ mod probe {
 
     use cortex_m_rt::entry;
     use evorec_core::image::Rgb565Image;
-    use evorec_core::tracker::{Estimate, Feedforward, JointSample, StereoFrame};
+    use evorec_core::tracker::{Estimate, JointSample, StereoFrame};
     use evorec_firmware::protocol::{LinkReader, ReadError, SliceSource, Truncated, read_message};
     use evorec_firmware::selftest;
     use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, FirmwareTracker, rt};
@@ -54,7 +54,7 @@ mod probe {
             left: Rgb565Image::new_checked(left, w, h).ok()?,
             right: Rgb565Image::new_checked(right, w, h).ok()?,
         };
-        tracker.step(&frame, joints, dt, Feedforward::On).ok()
+        tracker.step(&frame, joints, dt).ok()
     }
 
     #[entry]

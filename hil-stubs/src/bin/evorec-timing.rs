@@ -69,7 +69,6 @@ mod firmware {
             frame: &StereoFrame<'_, Rgb565>,
             joints: &JointSample<7>,
             dt_s: f32,
-            feedforward: Feedforward,
             timer: &Timer0,
         ) -> Option<(u32, PhaseTicks, f32)>;
     }
@@ -109,10 +108,9 @@ mod firmware {
                         frame: &StereoFrame<'_, Rgb565>,
                         joints: &JointSample<7>,
                         dt_s: f32,
-                        feedforward: Feedforward,
                         timer: &Timer0,
                     ) -> Option<(u32, PhaseTicks, f32)> {
-                        timed_generation(tracker, frame, joints, dt_s, feedforward, timer)
+                        timed_generation(tracker, frame, joints, dt_s, timer)
                     }
                 }
             )*
@@ -129,19 +127,19 @@ mod firmware {
     static SLOT: ConstStaticCell<Slot> = ConstStaticCell::new(Slot::Empty);
 
     /// The body of every [`Timed::generation`]: TIMER0 read before and after
-    /// `Tracker::step_probed` (in mode `feedforward`), and at each phase boundary by the probe.
+    /// `Tracker::step_probed` (in the tracker's configured mode), and at each phase boundary by
+    /// the probe.
     #[inline(always)]
     fn timed_generation<const P: usize, const G: usize>(
         tracker: &mut Tracker<7, P, G>,
         frame: &StereoFrame<'_, Rgb565>,
         joints: &JointSample<7>,
         dt_s: f32,
-        feedforward: Feedforward,
         timer: &Timer0,
     ) -> Option<(u32, PhaseTicks, f32)> {
         let mut probe = PhaseTimer::new(timer);
         let t0 = timer.read();
-        let result = tracker.step_probed(frame, joints, dt_s, feedforward, &mut probe);
+        let result = tracker.step_probed(frame, joints, dt_s, &mut probe);
         let t1 = timer.read();
         let estimate = result.ok()?;
         Some((t0.wrapping_sub(t1), probe.phases()?, estimate.fitness))
@@ -161,16 +159,17 @@ mod firmware {
         right: &mut [u8],
     ) -> bool {
         let Ok(mut config) = selftest::tracker_config() else { return false };
+        config.tuning.feedforward = feedforward;
         // The board profile's frame size (160×120 on the M4, 320×240 on the M7).
         let Ok(rig) = rig_for(FRAME_WIDTH, FRAME_HEIGHT) else { return false };
         config.rig = rig;
         let Ok(mut cases) = CaseGen::new(config.rig, config.flange_to_camera, FRAME_SEED) else { return false };
         let start = cases.truth(0, false);
-        let Ok(mut setup) = Setup::from_tracker_config(&config, feedforward, &start, &selftest::SPREAD) else {
+        let Ok(mut setup) = Setup::from_tracker_config(&config, &start, &selftest::SPREAD) else {
             return false;
         };
         // Every configuration runs at its full capacity (the worst case of that storage).
-        setup.ga.population = P;
+        setup.tuning.ga.population = P;
         let Some(slot) = C::slot(slot) else { return false };
         let Ok(tracker) = setup.build_tracker_in(slot) else {
             hprintln!("ERROR tracker {}x{} refused", P, G);
@@ -212,7 +211,7 @@ mod firmware {
             let target_shift = feedforward == Feedforward::OnWithTarget
                 && tracker.target_feedforward_velocity() != TargetVelocity::ZERO;
             cmsdk_timer::repaint_free_stack();
-            let measured = C::generation(tracker, &frame, &joints, dt_s, feedforward, timer);
+            let measured = C::generation(tracker, &frame, &joints, dt_s, timer);
             let stack = sys::stack_usage().used_bytes;
             let Some((call, phases, fitness)) = measured else {
                 hprintln!("ERROR generation {} refused", k);

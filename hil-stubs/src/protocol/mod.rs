@@ -49,10 +49,9 @@
 //! two small traits [`ByteSource`] and [`ByteSink`].
 
 use evorec_core::config::PA10_DOF;
-use evorec_core::ga::{GaParams, MUTATION_LEVELS};
 use evorec_core::pose::Psi;
-use evorec_core::target_motion::TargetFilterParams;
-use evorec_core::tracker::{Estimate, Feedforward, JointSample};
+use evorec_core::tracker::{Estimate, JointSample};
+use evorec_core::tuning::{FIELDS, Tuning};
 
 use payload::{Dec, Enc};
 
@@ -77,13 +76,15 @@ pub const DOF: usize = PA10_DOF;
 
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
-/// Protocol version carried in every header (8: `CONFIG` carries the target filter's
+/// Protocol version carried in every header (10: `CONFIG` carries the whole tuning as the
+/// core's field table, [`evorec_core::tuning::FIELDS`], acquisition and status included; 9:
+/// `CONFIG` carries the six parameters of the target motion model; 8: `CONFIG` carries the target filter's
 /// parameters; 7: `ESTIMATE` carries the target filter's
 /// measured position; 6: `CONFIG` carries the GA's settled mutation levels; 5: COBS framing,
 /// header flags, drop counts in `DONE`; 4: `CONFIG` carries the population size; 3:
 /// estimates carry the tracker's status; 2: frames carry the sensor's RGB565 pixels; 1: hue
 /// frames).
-pub const VERSION: u8 = 9;
+pub const VERSION: u8 = 10;
 /// The pixel format of a frame's images on the link: the camera sensor's own RGB565, so the
 /// hue is computed on the board (see [`evorec_core::image::Rgb565`]).
 pub type LinkFormat = evorec_core::image::Rgb565;
@@ -93,17 +94,13 @@ pub const BYTES_PER_PIXEL: usize = <LinkFormat as evorec_core::image::PixelForma
 pub const HEADER_LEN: usize = 24;
 /// CRC trailer size in bytes.
 pub const CRC_LEN: usize = 4;
-/// Size of the GA parameters inside `CONFIG`: population (u32), three probabilities,
-/// immigrants, tournament size, the mutation-level CDF, the settled CDF and its fitness, and
-/// the mutation scales.
-const GA_LEN: usize = 4 + 3 * 4 + 4 + 4 + 2 * 4 * (MUTATION_LEVELS - 1) + 4 + 4 * 6 * MUTATION_LEVELS;
-/// Size of the target motion model's parameters inside `CONFIG`: its `f32` fields.
-const TARGET_FILTER_LEN: usize = TargetFilterParams::REAL_FIELDS.len() * 4;
+/// Size of the tuning inside `CONFIG`: the table's fingerprint ([`evorec_core::tuning::TABLE_ID`]), its field
+/// count (u16, +2 reserved), then every field of [`FIELDS`] as 4 bytes in table order (a real
+/// as its `f32` bits, an integer as `u32`, a name as the `u32` index of its choice).
+pub const TUNING_LEN: usize = 4 + 4 + 4 * FIELDS.len();
 /// `CONFIG` payload size: intrinsics and image size, baseline, block, flange-to-camera,
-/// search box, seed, hue tolerance, feedforward flag (+2 reserved), `max_dt_s`, GA
-/// parameters, initial pose and spread, target filter parameters.
-pub const CONFIG_LEN: usize =
-    4 * 4 + 2 * 2 + 4 + 4 * 9 + 4 * 7 + 4 * 6 + 8 + 4 + 4 + GA_LEN + 4 * 12 + TARGET_FILTER_LEN;
+/// search box, seed, the tuning ([`TUNING_LEN`]), initial pose and spread.
+pub const CONFIG_LEN: usize = 4 * 4 + 2 * 2 + 4 + 4 * 9 + 4 * 7 + 4 * 6 + 8 + TUNING_LEN + 4 * 12;
 /// `FRAME` payload size before the two images.
 pub const FRAME_FIXED_LEN: usize = 2 + 2 + 8 + 4 * DOF * 2;
 /// `ESTIMATE` payload size: ψ, fitness, generation, status code, the filter's measured position.
@@ -296,21 +293,12 @@ pub struct Setup {
     pub search_max: [f32; 3],
     /// GA seed.
     pub seed: u64,
-    /// Hue match half-band (hue units).
-    pub hue_tolerance: u8,
-    /// Whether the arm's motion is fed forward.
-    pub feedforward: Feedforward,
-    /// Largest accepted time step between frames (s).
-    pub max_dt_s: f32,
-    /// GA settings.
-    pub ga: GaParams,
+    /// Every tuning parameter, sent field by field through the core's table.
+    pub tuning: Tuning,
     /// Pose the population starts around ([`evorec_core::Tracker::reset_around`]).
     pub initial_psi: Psi,
     /// Per-gene spread of the initial population.
     pub initial_spread: [f32; 6],
-    /// Tuning of the target filter that `ff+target` feeds forward
-    /// ([`evorec_core::Tracker::set_target_filter_params`]).
-    pub target_filter: TargetFilterParams,
 }
 
 /// A stereo frame with its joint sample (the `FRAME` payload); sequence number and capture

@@ -1,10 +1,9 @@
 //! Payload layouts: every field little-endian, every `f32` as its raw bits.
 
-use evorec_core::ga::{GaParams, MUTATION_LEVELS};
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
-use evorec_core::target_motion::TargetFilterParams;
-use evorec_core::tracker::{Estimate, Feedforward};
+use evorec_core::tracker::Estimate;
+use evorec_core::tuning::{FIELDS, Kind, TABLE_ID, Tuning, Value};
 
 use super::{DecodeError, Done, DropCounts, FRAME_FIXED_LEN, MAX_SMALL_PAYLOAD, Message, MsgType, Setup};
 
@@ -69,59 +68,46 @@ fn encode_setup(e: &mut Enc<'_>, s: &Setup) {
     e.f32s(&s.search_min);
     e.f32s(&s.search_max);
     e.u64(s.seed);
-    e.u8(s.hue_tolerance);
-    e.u8(match s.feedforward {
-        Feedforward::Off => 0,
-        Feedforward::On => 1,
-        Feedforward::OnWithTarget => 2,
-    });
-    e.u16(0);
-    e.f32(s.max_dt_s);
-    // Destructured so that a new GA parameter in the core fails to compile here.
-    let GaParams {
-        population,
-        crossover_prob,
-        mutation_prob,
-        gene_mutation_prob,
-        immigrants,
-        tournament,
-        level_cdf,
-        settled_level_cdf,
-        settled_fitness,
-        mutation_scale,
-    } = s.ga;
-    e.u32(u32::try_from(population).unwrap_or(u32::MAX));
-    e.f32(crossover_prob);
-    e.f32(mutation_prob);
-    e.f32(gene_mutation_prob);
-    e.u32(u32::try_from(immigrants).unwrap_or(u32::MAX));
-    e.u32(u32::try_from(tournament).unwrap_or(u32::MAX));
-    e.f32s(&level_cdf);
-    e.f32s(&settled_level_cdf);
-    e.f32(settled_fitness);
-    for row in &mutation_scale {
-        e.f32s(row);
-    }
+    encode_tuning(e, &s.tuning);
     e.f32s(&s.initial_psi.0);
     e.f32s(&s.initial_spread);
-    encode_target_filter(e, &s.target_filter);
 }
 
-fn encode_target_filter(e: &mut Enc<'_>, p: &TargetFilterParams) {
-    for f in TargetFilterParams::REAL_FIELDS {
-        e.f32((f.get)(p));
+/// The tuning as the core's table lists it: fingerprint, count, then each field's 4 bytes.
+fn encode_tuning(e: &mut Enc<'_>, t: &Tuning) {
+    e.u32(TABLE_ID);
+    e.u16(FIELDS.len() as u16);
+    e.u16(0);
+    for f in &FIELDS {
+        e.u32(match ((f.get)(t), f.kind) {
+            (Value::Real(x), _) => x.to_bits(),
+            (Value::Int(n), _) => n,
+            (Value::Name(name), Kind::Name(names)) => names.iter().position(|c| *c == name).unwrap_or(0) as u32,
+            (Value::Name(_), _) => 0,
+        });
     }
 }
 
-/// The target motion model's parameters as sent (the fields in the order of the core's table,
-/// [`TargetFilterParams::REAL_FIELDS`]); their values are checked when the tracker is built
-/// ([`crate::setup::SetupError::TargetFilter`]).
-fn decode_target_filter(d: &mut Dec<'_>) -> TargetFilterParams {
-    let mut p = TargetFilterParams::DEFAULT;
-    for f in TargetFilterParams::REAL_FIELDS {
-        (f.set)(&mut p, d.f32());
+/// The tuning sent by [`encode_tuning`], set field by field through the core's table; a
+/// different table (fingerprint or count), an unknown name index or an integer too large for
+/// its field is [`DecodeError::BadValue`]. The values' rules are checked when the tracker is
+/// built ([`crate::setup::SetupError::Tracker`]).
+fn decode_tuning(d: &mut Dec<'_>) -> Result<Tuning, DecodeError> {
+    let (id, count, _reserved) = (d.u32(), d.u16(), d.u16());
+    if id != TABLE_ID || usize::from(count) != FIELDS.len() {
+        return Err(DecodeError::BadValue);
     }
-    p
+    let mut t = Tuning::DEFAULT;
+    for f in &FIELDS {
+        let raw = d.u32();
+        let value = match f.kind {
+            Kind::Real => Value::Real(f32::from_bits(raw)),
+            Kind::Int => Value::Int(raw),
+            Kind::Name(names) => Value::Name(names.get(raw as usize).copied().ok_or(DecodeError::BadValue)?),
+        };
+        (f.set)(&mut t, value).map_err(|_| DecodeError::BadValue)?;
+    }
+    Ok(t)
 }
 
 fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {
@@ -136,31 +122,9 @@ fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {
     let search_min = d.f32s();
     let search_max = d.f32s();
     let seed = d.u64();
-    let hue_tolerance = d.u8();
-    let feedforward = match d.u8() {
-        0 => Feedforward::Off,
-        1 => Feedforward::On,
-        2 => Feedforward::OnWithTarget,
-        _ => return Err(DecodeError::BadValue),
-    };
-    let _reserved = d.u16();
-    let max_dt_s = d.f32();
-    let population = usize::try_from(d.u32()).map_err(|_| DecodeError::BadValue)?;
-    let crossover_prob = d.f32();
-    let mutation_prob = d.f32();
-    let gene_mutation_prob = d.f32();
-    let immigrants = usize::try_from(d.u32()).map_err(|_| DecodeError::BadValue)?;
-    let tournament = usize::try_from(d.u32()).map_err(|_| DecodeError::BadValue)?;
-    let level_cdf = d.f32s();
-    let settled_level_cdf = d.f32s();
-    let settled_fitness = d.f32();
-    let mut mutation_scale = [[0.0f32; 6]; MUTATION_LEVELS];
-    for row in mutation_scale.iter_mut() {
-        *row = d.f32s();
-    }
+    let tuning = decode_tuning(d)?;
     let initial_psi = Psi(d.f32s());
     let initial_spread = d.f32s();
-    let target_filter = decode_target_filter(d);
     Ok(Setup {
         fx,
         fy,
@@ -176,24 +140,9 @@ fn decode_setup(d: &mut Dec<'_>) -> Result<Setup, DecodeError> {
         search_min,
         search_max,
         seed,
-        hue_tolerance,
-        feedforward,
-        max_dt_s,
-        ga: GaParams {
-            population,
-            crossover_prob,
-            mutation_prob,
-            gene_mutation_prob,
-            immigrants,
-            tournament,
-            level_cdf,
-            settled_level_cdf,
-            settled_fitness,
-            mutation_scale,
-        },
+        tuning,
         initial_psi,
         initial_spread,
-        target_filter,
     })
 }
 

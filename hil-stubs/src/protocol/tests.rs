@@ -22,13 +22,9 @@ pub(crate) fn sample_setup() -> Setup {
         search_min: [-0.2, -0.2, 0.4],
         search_max: [0.2, 0.2, 1.0],
         seed: 0x0123_4567_89AB_CDEF,
-        hue_tolerance: 5,
-        feedforward: Feedforward::On,
-        max_dt_s: 0.5,
-        ga: GaParams::DEFAULT,
+        tuning: Tuning::DEFAULT,
         initial_psi: Psi::new([0.01, -0.02, 0.7], [0.05, 0.1, -0.03]),
         initial_spread: [0.02; 6],
-        target_filter: evorec_core::target_motion::TargetFilterParams::DEFAULT,
     }
 }
 
@@ -109,39 +105,44 @@ fn small_messages_round_trip() {
     }
 }
 
+/// Every field of the table crosses the link bit for bit, each set to a value of its own.
 #[test]
-fn the_population_crosses_the_link() {
-    let mut setup = sample_setup();
-    setup.ga.population = 23;
-    let bytes = encode(&Envelope::bare(Message::Config(setup)));
-    let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
-    assert_eq!(back.message, Message::Config(setup));
+fn every_tuning_field_crosses_the_link() {
+    use evorec_core::tuning::{FIELDS, Kind, Value};
+    for (i, f) in FIELDS.iter().enumerate() {
+        let mut setup = sample_setup();
+        let value = match f.kind {
+            Kind::Real => Value::Real(0.125 + i as f32),
+            Kind::Int => Value::Int(3 + i as u32),
+            Kind::Name(names) => Value::Name(names[names.len() - 1]),
+        };
+        setup.tuning.set(f.name, value).unwrap();
+        assert_ne!(setup, sample_setup(), "{}", f.name);
+        let bytes = encode(&Envelope::bare(Message::Config(setup)));
+        let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
+        assert_eq!(back.message, Message::Config(setup), "{}", f.name);
+    }
 }
 
+/// A `CONFIG` from another table (fingerprint or field count) or with a name index out of
+/// range is refused.
 #[test]
-fn the_target_filter_crosses_the_link() {
-    let mut setup = sample_setup();
-    let f = &mut setup.target_filter;
-    f.image_noise_px = 0.75;
-    f.acceleration_m_s2 = 0.25;
-    f.max_gap_s = 0.2;
-    assert_ne!(setup, sample_setup());
-    let bytes = encode(&Envelope::bare(Message::Config(setup)));
-    let (back, _) = decode(&bytes, &mut [], &mut []).unwrap();
-    assert_eq!(back.message, Message::Config(setup));
-}
-
-#[test]
-fn the_target_motion_parameters_close_config() {
+fn a_config_from_another_table_is_refused() {
     let mut payload = [0u8; MAX_SMALL_PAYLOAD];
     let (len, _) = encode_payload(&Message::Config(sample_setup()), &mut payload);
     assert_eq!(len, CONFIG_LEN);
-    // The last field is max_gap_s, little-endian.
-    let max_gap = evorec_core::target_motion::TargetFilterParams::DEFAULT.max_gap_s;
-    assert_eq!(payload[len - 4..len], max_gap.to_le_bytes());
-    payload[len - 4..len].copy_from_slice(&0.25f32.to_le_bytes());
-    let Ok(Message::Config(s)) = decode_small(MsgType::Config, &payload[..len]) else { panic!("decodes") };
-    assert_eq!(s.target_filter.max_gap_s, 0.25);
+    // The tuning starts after 30 f32 fields, the image size and the seed.
+    let at = 4 * 4 + 2 * 2 + 4 + 12 + 24 + 12 + 16 + 12 + 12 + 8;
+    assert_eq!(payload[at..at + 4], evorec_core::tuning::TABLE_ID.to_le_bytes());
+    for (offset, byte) in [(at, 1u8), (at + 4, 1)] {
+        let mut bad = payload;
+        bad[offset] ^= byte;
+        assert_eq!(decode_small(MsgType::Config, &bad[..len]), Err(DecodeError::BadValue));
+    }
+    // `method` is the first field: its name index 3 does not exist.
+    let mut bad = payload;
+    bad[at + 8] = 3;
+    assert_eq!(decode_small(MsgType::Config, &bad[..len]), Err(DecodeError::BadValue));
 }
 
 /// `fuzz/make_seeds.py` writes the link seeds by hand, field by field: its `CONFIG` must be
@@ -329,17 +330,6 @@ fn after_garbage_the_next_message_decodes() {
         assert_eq!(last, Some(env));
         assert!(errors <= 1, "{errors} errors after {g:?}");
     }
-}
-
-#[test]
-fn bad_feedforward_flag_is_rejected() {
-    let mut payload = [0u8; MAX_SMALL_PAYLOAD];
-    let (len, _) = encode_payload(&Message::Config(sample_setup()), &mut payload);
-    // The feedforward flag sits after 30 f32 fields, the seed and the hue tolerance.
-    let ff = 4 * 4 + 2 * 2 + 4 + 12 + 24 + 12 + 16 + 12 + 12 + 8 + 1;
-    assert_eq!(payload[ff], 1);
-    payload[ff] = 3;
-    assert_eq!(decode_small(MsgType::Config, &payload[..len]), Err(DecodeError::BadValue));
 }
 
 #[test]

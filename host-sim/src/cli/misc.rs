@@ -4,7 +4,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use evorec_sim::scenario::TargetFilterSection;
+use evorec_core::tuning::Tuning;
+use evorec_sim::scenario::{TrackerTable, with_config_file};
 use evorec_sim::{export, frame, servo};
 
 use super::{OutArgs, load};
@@ -29,10 +30,10 @@ pub struct ServoArgs {
     /// is a single draw, so compare grids over several seeds.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// A TOML file holding a `[target_filter]` table (as in a scenario): the "ff+target"
-    /// filter's tuning in every cell (default: the core's defaults).
+    /// A TOML file holding a `[tracker]` table (as `evorec config` prints it): the tuning of
+    /// every cell, whose method replaces the file's `method`.
     #[arg(long, value_name = "FILE")]
-    target_filter: Option<PathBuf>,
+    config: Option<PathBuf>,
 }
 
 impl ServoArgs {
@@ -61,9 +62,7 @@ impl ServoArgs {
         };
         g.targets = self.speeds.iter().map(|&speed_m_s| servo::TargetCase::Conveyor { speed_m_s }).collect();
         g.targets.push(servo::TargetCase::Rotating { omega_rad_s: 0.5 });
-        if let Some(path) = &self.target_filter {
-            g.target_filter = TargetFilterSection::load(path)?;
-        }
+        g.tracker = TrackerTable(with_config_file(Tuning::DEFAULT, self.config.as_deref())?);
         Ok(g)
     }
 }
@@ -122,13 +121,18 @@ pub struct AcquireArgs {
     points: usize,
     #[command(flatten)]
     out: OutArgs,
+    /// A TOML file holding a `[tracker]` table (as `evorec config` prints it): the tuning of
+    /// every trial (default: the core's defaults).
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
 }
 
 impl AcquireArgs {
     pub fn run(self, progress: bool) -> Result<()> {
         let t0 = Instant::now();
         let out = &self.out.out;
-        let report = evorec_sim::acquire::run(self.trials, self.first_seed, self.points, out, progress)?;
+        let tuning = with_config_file(Tuning::DEFAULT, self.config.as_deref())?;
+        let report = evorec_sim::acquire::run(self.trials, self.first_seed, self.points, &tuning, out, progress)?;
         println!("{}", evorec_sim::acquire::markdown(&report));
         println!("{} trials per case in {:.1} s; wrote {}", self.trials, t0.elapsed().as_secs_f64(), out.display());
         Ok(())
@@ -153,6 +157,26 @@ impl RenderArgs {
         for f in files {
             println!("wrote {}", f.display());
         }
+        Ok(())
+    }
+}
+
+#[derive(clap::Args, Debug)]
+pub struct ConfigArgs {
+    /// A scenario whose `[tracker]` table to print (default: the core's defaults).
+    scenario: Option<PathBuf>,
+    /// A TOML file holding a `[tracker]` table over the scenario's or the defaults.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+}
+
+impl ConfigArgs {
+    pub fn run(self) -> Result<()> {
+        let base = match &self.scenario {
+            Some(path) => *load(path)?.tuning(),
+            None => Tuning::DEFAULT,
+        };
+        print!("{}", TrackerTable(with_config_file(base, self.config.as_deref())?).to_toml());
         Ok(())
     }
 }

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use evorec_sim::io;
-use evorec_sim::scenario::{Method, Scenario};
+use evorec_sim::scenario::{Method, Scenario, with_config_file};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -72,6 +72,10 @@ pub enum Command {
     /// Render one frame of a scenario: left/right PNGs, the same with the projected search
     /// model at the true pose drawn over them, and frame.json with the geometry.
     Render(misc::RenderArgs),
+    /// Print the tracker's tuning as a `[tracker]` TOML table, every field with its unit and
+    /// meaning: the defaults, or a scenario's (and a `--config` file's) effective values. Give
+    /// the file to `run`, `hil`, `track`, `servo` or `acquire` with `--config FILE`.
+    Config(misc::ConfigArgs),
 }
 
 impl Command {
@@ -88,6 +92,7 @@ impl Command {
             Self::Export(a) => a.run(progress),
             Self::Acquire(a) => a.run(progress),
             Self::Render(a) => a.run(),
+            Self::Config(a) => a.run(),
         }
     }
 }
@@ -108,9 +113,14 @@ impl OutArgs {
     }
 }
 
-/// `--method` and `--seed` of the subcommands that run one scenario file (`run`, `hil`).
-#[derive(clap::Args, Debug, Clone, Copy)]
+/// `--config`, `--method` and `--seed` of the subcommands that run one scenario file (`run`,
+/// `hil`).
+#[derive(clap::Args, Debug, Clone)]
 pub struct Overrides {
+    /// A TOML file holding a `[tracker]` table (as `evorec config` prints it, or a run's
+    /// `config.toml`): its keys replace the scenario's.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
     /// Override the scenario's method: ga, ff or ff+target.
     #[arg(long, value_parser = Method::parse)]
     pub method: Option<Method>,
@@ -120,10 +130,14 @@ pub struct Overrides {
 }
 
 impl Overrides {
-    /// The scenario file `path` with the overrides applied.
+    /// The scenario file `path` with the overrides applied: the configuration file's keys,
+    /// then `--method`, then `--seed`.
     pub fn load(&self, path: &Path) -> Result<Scenario> {
         let mut s = load(path)?;
-        s.method = self.method.unwrap_or(s.method);
+        s.tracker.0 = with_config_file(*s.tuning(), self.config.as_deref())?;
+        if let Some(m) = self.method {
+            s.set_method(m);
+        }
         s.seed = self.seed.unwrap_or(s.seed);
         Ok(s)
     }

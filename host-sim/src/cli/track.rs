@@ -6,7 +6,8 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::ValueEnum;
-use evorec_sim::scenario::{Method, TargetFilterSection};
+use evorec_core::tuning::Tuning;
+use evorec_sim::scenario::{HOST_POPULATION_CAPACITY, Method, with_config_file};
 use evorec_sim::sequence::Sequence;
 use evorec_sim::{bag, track};
 
@@ -29,10 +30,10 @@ pub struct TrackArgs {
     #[arg(long, conflicts_with = "method")]
     no_ff: bool,
     /// `ga` (plain 1-step GA), `ff` (+ the arm's motion fed forward) or `ff+target` (+ the
-    /// target's own motion, estimated from past estimates, fed forward too; the default: a
-    /// recorded target may move, and on a still one nothing significant is fed forward).
-    #[arg(long, value_enum, default_value_t = Method::FfTarget)]
-    method: Method,
+    /// target's own motion, estimated from past estimates, fed forward too; the default unless
+    /// `--config` says otherwise: a recorded target may move).
+    #[arg(long, value_enum)]
+    method: Option<Method>,
     /// Seed of the GA.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -53,10 +54,11 @@ pub struct TrackArgs {
     /// Frame indices (frames.csv `index`) to draw the model at its estimate over, e.g. 0,90.
     #[arg(long, value_delimiter = ',')]
     overlay: Vec<u64>,
-    /// A TOML file holding a `[target_filter]` table (as in a scenario): the tuning of the
-    /// target-velocity filter that `ff+target` feeds forward (default: the core's).
+    /// A TOML file holding a `[tracker]` table (as `evorec config` prints it, or a run's
+    /// `config.toml`): its keys replace the defaults; `--method`, `--no-ff` and `--population`
+    /// replace its keys.
     #[arg(long, value_name = "FILE")]
-    target_filter: Option<PathBuf>,
+    config: Option<PathBuf>,
 }
 
 /// `evorec track --pixels`.
@@ -92,21 +94,32 @@ impl TrackArgs {
     }
 
     fn options(&self, progress: bool) -> Result<track::TrackOptions> {
-        let target_filter = match &self.target_filter {
-            Some(path) => TargetFilterSection::load(path)?,
-            None => TargetFilterSection::default(),
-        };
         Ok(track::TrackOptions {
-            feedforward: if self.no_ff { Method::Ga } else { self.method }.into(),
+            tuning: self.tuning()?,
             seed: self.seed,
-            population: self.population,
             points_per_row: self.points_per_row,
             frames: self.frames,
             overlay: self.overlay.iter().copied().collect(),
             progress,
             pixels: self.pixels.into(),
-            target_filter: target_filter.0,
         })
+    }
+
+    /// The tuning: `ff+target` over the defaults, then the `--config` file, then `--method`
+    /// (or `--no-ff`) and `--population`.
+    fn tuning(&self) -> Result<Tuning> {
+        let base = Tuning { feedforward: Method::FfTarget.into(), ..Tuning::DEFAULT };
+        let mut t = with_config_file(base, self.config.as_deref())?;
+        if let Some(m) = if self.no_ff { Some(Method::Ga) } else { self.method } {
+            t.feedforward = m.into();
+        }
+        if let Some(p) = self.population {
+            t.ga.population = p;
+            if let Err(e) = t.validate(HOST_POPULATION_CAPACITY) {
+                anyhow::bail!("--population {p}: {e}");
+            }
+        }
+        Ok(t)
     }
 }
 

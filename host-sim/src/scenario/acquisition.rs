@@ -1,4 +1,4 @@
-//! The acquisition keys of a scenario file: `[tracker] initial`, `[target] placement` and the
+//! The acquisition keys of a scenario file: `[start] initial`, `[target] placement` and the
 //! `[[occlusion]]` array (the types and the occluder's rendering are in [`crate::occlusion`]).
 
 use toml::Value;
@@ -9,13 +9,13 @@ use crate::occlusion::{Initial, MAX_OCCLUSIONS, Occlusion, OcclusionKind, Occlus
 /// Parses `initial` of `[tracker]` (`None`: the default).
 ///
 /// # Errors
-/// One [`ScenarioError::Invalid`] naming `tracker.initial`.
+/// One [`ScenarioError::Invalid`] naming `start.initial`.
 pub fn parse_initial(v: Option<&Value>) -> Result<Initial, ScenarioError> {
     match v {
         None => Ok(Initial::Truth),
         Some(Value::String(s)) if s == "truth" => Ok(Initial::Truth),
         Some(Value::String(s)) if s == "unknown" => Ok(Initial::Unknown),
-        Some(other) => Err(invalid("tracker.initial", format!("expected \"truth\" or \"unknown\", got {other}"))),
+        Some(other) => Err(invalid("start.initial", format!("expected \"truth\" or \"unknown\", got {other}"))),
     }
 }
 
@@ -123,7 +123,7 @@ mod tests {
         assert_eq!(parse_initial(Some(&Value::String("unknown".into()))).ok(), Some(Initial::Unknown));
         assert_eq!(
             parse_initial(Some(&Value::Integer(1))).err().map(|e| e.to_string()),
-            Some("tracker.initial: expected \"truth\" or \"unknown\", got 1".to_owned())
+            Some("start.initial: expected \"truth\" or \"unknown\", got 1".to_owned())
         );
         assert_eq!(parse_placement(None).ok(), Some(Placement::Fixed));
         assert!(parse_placement(Some(&Value::String("anywhere".into()))).is_err());

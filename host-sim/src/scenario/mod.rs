@@ -9,8 +9,6 @@
 //! seed = 1                 # required, 0 ..= 2^63−1; seeds the GA and the image noise
 //! duration_s = 72.0        # required, (0, 3600]
 //! frame_period_s = 0.033   # [0.001, 1], ≤ duration_s
-//! method = "ff"            # required: "ga" (plain 1-step GA) | "ff" (GA + motion feedforward)
-//!                          #   | "ff+target" (GA + feedforward of the arm's and the target's motion)
 //!
 //! [camera]                 # both cameras share these intrinsics
 //! width = 640              # 16 ..= 4096 pixels
@@ -48,9 +46,6 @@
 //! amplitude_m = 0.1        # [0, 0.3]: motion A amplitude along world y
 //! amplitude_deg = 15.0     # [0, 45]: motion B orbit amplitude
 //!
-//! [ga]
-//! population = 40          # min_population()..=HOST_POPULATION_CAPACITY (the host's compiled capacity, 64)
-//!
 //! [servo]                  # optional: closes the loop (position-based visual servoing)
 //! desired_t_m = [-0.05, 0.0, 0.6]  # required in [servo]: block centre in Σ_CR (m)
 //! desired_q_xyzw = [0, 0, 0, 1]    # optional ^CR Q_M* (unit); default: the one at t = 0
@@ -61,19 +56,27 @@
 //! max_rot_accel_rad_s2 = 3.0   # (0, 50]
 //! delay_frames = 1         # 0 ..= 10: processing delay between capture and estimate
 //!
-//! [tracker]
+//! [start]
 //! delay_s = 0.033          # [0, 1]: capture → output delay of the hand-over; default frame_period_s
+//!
+//! [tracker]                # the tracker's tuning: every key of `evorec config`, e.g.
+//! method = "ff"            # "ga" (plain 1-step GA) | "ff" (GA + motion feedforward)
+//!                          #   | "ff+target" (GA + feedforward of the arm's and the target's motion)
+//! ga.population = 40       # 2..=HOST_POPULATION_CAPACITY (the host's compiled capacity, 64)
 //! ```
 //! The target's paths (conveyor, random) are described in [`crate::target_path`].
-//! Acquisition keys (`[tracker] initial`, `[target] placement`, `[[occlusion]]`) are
-//! described in [`crate::occlusion`].
-//! All tables and all keys except `seed`, `duration_s` and `method` are optional; the values
-//! shown are the defaults (`robot.motion` defaults to `"static"`, no `[servo]` runs the
-//! scripted motion open loop).
+//! Acquisition keys (`[start] initial`, `[target] placement`, `[[occlusion]]`) are
+//! described in [`crate::occlusion`]. `[tracker]` is the core's field table
+//! ([`evorec_core::tuning::FIELDS`], [`TrackerTable`]); `evorec config` prints it with every
+//! default, unit and meaning.
+//! All tables and all keys except `seed` and `duration_s` are optional; the values shown are
+//! the defaults (`robot.motion` defaults to `"static"`, no `[servo]` runs the scripted motion
+//! open loop).
 
 use std::path::{Path, PathBuf};
 
 use evorec_core::tracker::Feedforward;
+use evorec_core::tuning::Tuning;
 use serde::Serialize;
 use toml::Table;
 
@@ -371,20 +374,6 @@ impl Default for RobotConfig {
     }
 }
 
-/// `[ga]`: genetic algorithm settings.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct GaConfig {
-    /// Population size, chosen at run time up to the core's compiled capacity
-    /// ([`HOST_POPULATION_CAPACITY`]); checked against the GA's other settings.
-    pub population: usize,
-}
-
-impl Default for GaConfig {
-    fn default() -> Self {
-        Self { population: evorec_core::config::DEFAULT_POPULATION }
-    }
-}
-
 /// `[servo]`: the closed loop (see `evorec_core::servo`). With it the flange follows the servo's
 /// camera twist instead of `[robot]`'s scripted motion.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -424,7 +413,7 @@ impl ServoSection {
     }
 }
 
-/// `[tracker]`: how the tracker starts, and when its estimates are handed over.
+/// `[start]`: how the tracker starts, and when its estimates are handed over.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct TrackerStart {
     /// Around the true pose, or unknown.
@@ -451,27 +440,22 @@ pub struct Scenario {
     pub duration_s: f64,
     /// Time between stereo frames (s).
     pub frame_period_s: f64,
-    /// Recognition method.
-    pub method: Method,
     /// Camera settings.
     pub camera: CameraConfig,
     /// Target settings.
     pub target: TargetConfig,
     /// Robot motion.
     pub robot: RobotConfig,
-    /// GA settings.
-    pub ga: GaConfig,
     /// The closed loop, if any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub servo: Option<ServoSection>,
     /// How the tracker starts.
-    pub tracker: TrackerStart,
+    pub start: TrackerStart,
     /// Times when the block is hidden.
     #[serde(skip_serializing_if = "Occlusions::is_empty")]
     pub occlusion: Occlusions,
-    /// The target-velocity filter's tuning (`[target_filter]`, used by `ff+target`).
-    #[serde(skip_serializing_if = "TargetFilterSection::is_default")]
-    pub target_filter: TargetFilterSection,
+    /// The tracker's tuning (`[tracker]`).
+    pub tracker: TrackerTable,
 }
 
 impl Scenario {
@@ -481,16 +465,29 @@ impl Scenario {
             seed,
             duration_s,
             frame_period_s: 0.033,
-            method,
             camera: CameraConfig::default(),
             target: TargetConfig::default(),
             robot: RobotConfig::default(),
-            ga: GaConfig::default(),
             servo: None,
-            tracker: TrackerStart::new(0.033),
+            start: TrackerStart::new(0.033),
             occlusion: Occlusions::default(),
-            target_filter: TargetFilterSection::default(),
+            tracker: TrackerTable(Tuning { feedforward: method.into(), ..Tuning::DEFAULT }),
         }
+    }
+
+    /// The recognition method (`[tracker] method`).
+    pub fn method(&self) -> Method {
+        self.tracker.0.feedforward.into()
+    }
+
+    /// Sets the recognition method (`[tracker] method`).
+    pub fn set_method(&mut self, method: Method) {
+        self.tracker.0.feedforward = method.into();
+    }
+
+    /// The tuning the scenario's tracker runs with.
+    pub fn tuning(&self) -> &Tuning {
+        &self.tracker.0
     }
 
     /// Parses and validates a scenario.
@@ -513,21 +510,23 @@ impl Scenario {
                 "target",
                 "robot",
                 "ga",
+                "start",
                 "tracker",
                 "occlusion",
                 "servo",
                 "target_filter",
             ],
         )?;
+        refuse_old_keys(&table)?;
         let camera = parse_camera(&top.subtable("camera")?)?;
         let target = parse_target(&top.subtable("target")?)?;
         let robot = parse_robot(&top.subtable("robot")?)?;
-        let ga = parse_ga(&top.subtable("ga")?)?;
         let servo = parse_servo(&top.subtable("servo")?)?;
-        let target_filter = target_filter::parse_target_filter(&top.subtable("target_filter")?)?;
-        let tracker_section = top.subtable("tracker")?;
-        tracker_section.check_keys(&["initial", "delay_s"])?;
-        let initial = acquisition::parse_initial(tracker_section.get("initial"))?;
+        let tracker =
+            TrackerTable(tracker_table::parse_tracker(top.subtable("tracker")?.table, Tuning::DEFAULT, "tracker")?);
+        let start_section = top.subtable("start")?;
+        start_section.check_keys(&["initial", "delay_s"])?;
+        let initial = acquisition::parse_initial(start_section.get("initial"))?;
 
         let seed = top.int("seed", None)?;
         let seed = u64::try_from(seed).map_err(|_| invalid("seed", format!("must be ≥ 0, got {seed}")))?;
@@ -541,24 +540,10 @@ impl Scenario {
                 format!("must not exceed duration_s ({duration_s}), got {frame_period_s}"),
             ));
         }
-        let method = Method::parse(&top.string("method", None)?).map_err(|m| invalid("method", m))?;
-        let delay_s = tracker_section.float_in("delay_s", frame_period_s, Bound::Closed(0.0), 1.0)?;
-        let tracker = TrackerStart { initial, delay_s };
+        let delay_s = start_section.float_in("delay_s", frame_period_s, Bound::Closed(0.0), 1.0)?;
+        let start = TrackerStart { initial, delay_s };
         let occlusion = acquisition::parse_occlusions(top.get("occlusion"), duration_s)?;
-        Ok(Self {
-            seed,
-            duration_s,
-            frame_period_s,
-            method,
-            camera,
-            target,
-            robot,
-            ga,
-            servo,
-            tracker,
-            occlusion,
-            target_filter,
-        })
+        Ok(Self { seed, duration_s, frame_period_s, camera, target, robot, servo, start, occlusion, tracker })
     }
 
     /// Reads, parses and validates a scenario file.
@@ -777,31 +762,21 @@ fn parse_robot(s: &Section<'_>) -> Result<RobotConfig> {
     Ok(RobotConfig { motion, omega_rad_s, amplitude_m, amplitude_deg })
 }
 
-fn parse_ga(s: &Section<'_>) -> Result<GaConfig> {
-    s.check_keys(&["population"])?;
-    let population = s.int("population", Some(GaConfig::default().population as i64))?;
-    let capacity = HOST_POPULATION_CAPACITY;
-    let ga = evorec_core::ga::GaParams::DEFAULT;
-    let acquire = evorec_core::acquire::AcquireConfig::DEFAULT;
-    let fits = |p: usize| ga.with_population(p).validate(capacity).is_ok() && acquire.validate(p).is_ok();
-    let checked = usize::try_from(population).ok().filter(|&p| fits(p));
-    match checked {
-        Some(p) => Ok(GaConfig { population: p }),
-        None => Err(invalid(
-            s.path("population"),
-            format!(
-                "must be in [{}, {capacity}] (room for the elite, one child, the immigrants and the \
-                 acquisition's seeded and idle individuals; at most the host's compiled capacity), got {population}",
-                min_population(),
-            ),
-        )),
+/// The places that moved into `[tracker]` and `[start]`: an error naming the new place.
+fn refuse_old_keys(table: &Table) -> Result<()> {
+    let moved = [
+        ("method", "moved to [tracker] method"),
+        ("ga", "moved to [tracker] ga.* (e.g. ga.population)"),
+        ("target_filter", "moved to [tracker] target.* (e.g. target.acceleration_m_s2)"),
+    ];
+    if let Some((key, to)) = moved.iter().find(|(k, _)| table.contains_key(*k)) {
+        return Err(invalid(*key, *to));
     }
-}
-
-/// The smallest population the default GA and acquisition settings accept.
-pub fn min_population() -> usize {
-    let (ga, acquire) = (evorec_core::ga::GaParams::DEFAULT, evorec_core::acquire::AcquireConfig::DEFAULT);
-    (ga.immigrants + 2).max(acquire.seed_immigrants + acquire.idle_individuals + 2)
+    let tracker = table.get("tracker").and_then(|t| t.as_table());
+    match ["initial", "delay_s"].iter().find(|k| tracker.is_some_and(|t| t.contains_key(**k))) {
+        Some(k) => Err(invalid(format!("tracker.{k}"), format!("moved to [start] {k}"))),
+        None => Ok(()),
+    }
 }
 
 fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
@@ -858,8 +833,8 @@ fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
 
 mod acquisition;
 mod section;
-mod target_filter;
-pub use target_filter::TargetFilterSection;
+mod tracker_table;
+pub use tracker_table::{TrackerTable, parse_tracker, with_config_file};
 #[cfg(test)]
 mod tests;
 

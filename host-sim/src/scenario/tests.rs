@@ -2,7 +2,7 @@
 
 use super::*;
 
-const BASE: &str = "seed = 1\nduration_s = 10.0\nmethod = \"ff\"\n";
+const BASE: &str = "seed = 1\nduration_s = 10.0\n";
 
 fn err(text: &str) -> String {
     match Scenario::from_toml_str(text) {
@@ -36,17 +36,17 @@ fn validation_errors_name_the_field() {
     assert!(err(&with("[camera]\nwidht = 640\n")).starts_with("camera.widht: unknown key"));
     assert!(err(&with("colour = 3\n")).starts_with("colour: unknown key"));
     assert!(err(&with("[lens]\nk1 = 0.1\n")).starts_with("lens: unknown key"));
-    assert_eq!(err("seed = 1\nmethod = \"ga\"\n"), "duration_s: missing (this key is required)");
+    assert_eq!(err("seed = 1\n"), "duration_s: missing (this key is required)");
     assert_eq!(
         err(&with("[camera]\ncx = 700.0\n")),
         "camera.cx: must be in [0, 640] (inside the image width), got 700"
     );
-    assert_eq!(err("seed = 1\nduration_s = 0\nmethod = \"ga\"\n"), "duration_s: must be in (0, 3600], got 0");
-    assert_eq!(err("seed = 1\nduration_s = 4000\nmethod = \"ga\"\n"), "duration_s: must be in (0, 3600], got 4000");
-    assert_eq!(err("seed = -3\nduration_s = 1\nmethod = \"ga\"\n"), "seed: must be ≥ 0, got -3");
+    assert_eq!(err("seed = 1\nduration_s = 0\n"), "duration_s: must be in (0, 3600], got 0");
+    assert_eq!(err("seed = 1\nduration_s = 4000\n"), "duration_s: must be in (0, 3600], got 4000");
+    assert_eq!(err("seed = -3\nduration_s = 1\n"), "seed: must be ≥ 0, got -3");
     assert_eq!(
-        err("seed = 1\nduration_s = 1\nmethod = \"GA\"\n"),
-        "method: expected \"ga\", \"ff\" or \"ff+target\", got \"GA\""
+        err(&with("[tracker]\nmethod = \"GA\"\n")),
+        "tracker.method: expected one of \"ga\", \"ff\", \"ff+target\", got \"GA\""
     );
     assert_eq!(
         err(&with("[target]\nconveyor_speed_m_s = 0.01\n")),
@@ -66,7 +66,8 @@ fn validation_errors_name_the_field() {
         "target.random_amplitude_m: the block follows one path: set conveyor_speed_m_s or random_amplitude_m to 0"
     );
     assert_eq!(err(&with("[target]\nrandom_omega_rad_s = 0\n")), "target.random_omega_rad_s: must be in (0, 2], got 0");
-    assert_eq!(err(&with("[tracker]\ndelay_s = -0.1\n")), "tracker.delay_s: must be in [0, 1], got -0.1");
+    assert_eq!(err(&with("[start]\ndelay_s = -0.1\n")), "start.delay_s: must be in [0, 1], got -0.1");
+    assert!(err(&with("[start]\ndelay = 0.1\n")).starts_with("start.delay: unknown key"));
     assert!(err(&with("[tracker]\ndelay = 0.1\n")).starts_with("tracker.delay: unknown key"));
     assert_eq!(err(&with("[camera]\nwidth = \"640\"\n")), "camera.width: expected an integer, got a string (\"640\")");
     assert_eq!(err(&with("camera = 3\n")), "camera: expected a table, got an integer (3)");
@@ -77,16 +78,19 @@ fn validation_errors_name_the_field() {
         err(&with("[target]\nface_hues_deg = [0, 120, 360, 0, 120, 240]\n")),
         "target.face_hues_deg[2]: must be in [0, 360), got 360"
     );
+    let population = |text: &str| Scenario::from_toml_str(&with(text)).map(|s| s.tuning().ga.population).ok();
     assert_eq!(
-        err(&with("[ga]\npopulation = 0\n")),
-        "ga.population: must be in [16, 64] (room for the elite, one child, the immigrants and the \
-         acquisition's seeded and idle individuals; at most the host's compiled capacity), got 0"
+        err(&with("[tracker]\nga.population = 0\n")),
+        "tracker.ga.population: must be at least 2 and at most the compiled capacity"
     );
-    assert!(err(&with("[ga]\npopulation = 65\n")).ends_with("got 65"));
-    assert!(err(&with("[ga]\npopulation = 15\n")).ends_with("got 15"));
-    assert_eq!(Scenario::from_toml_str(&with("[ga]\npopulation = 16\n")).map(|s| s.ga.population).ok(), Some(16));
-    assert!(err(&with("[ga]\npopulation = -1\n")).starts_with("ga.population: must be in [16, 64]"));
-    assert_eq!(Scenario::from_toml_str(&with("[ga]\npopulation = 64\n")).map(|s| s.ga.population).ok(), Some(64));
+    assert!(err(&with("[tracker]\nga.population = 65\n")).starts_with("tracker.ga.population: must be at least 2"));
+    assert!(err(&with("[tracker]\nga.population = 15\n")).starts_with("tracker.acquire.seed_immigrants: plus"));
+    assert_eq!(population("[tracker]\nga.population = 16\n"), Some(16));
+    assert!(
+        err(&with("[tracker]\nga.population = -1\n"))
+            .starts_with("tracker.ga.population: expected a non-negative integer")
+    );
+    assert_eq!(population("[tracker.ga]\npopulation = 64\n"), Some(64));
     assert!(err("seed = 1\nduration_s = \n").starts_with("TOML syntax error"));
 }
 
@@ -136,7 +140,8 @@ fn integers_are_accepted_for_floats_but_not_the_reverse() {
 fn round_trip_through_toml() {
     let mut s = Scenario::new(7, 12.5, Method::FfTarget);
     s.frame_period_s = 0.04;
-    s.tracker.delay_s = 0.05;
+    s.start.delay_s = 0.05;
+    s.tracker.0.ga.mutation_prob = 0.7;
     s.target.conveyor_speed_m_s = 0.2;
     s.target.conveyor_accel_m_s2 = 0.8;
     s.camera.width = 320;
@@ -150,8 +155,9 @@ fn round_trip_through_toml() {
     assert_eq!(back, s);
     let json = serde_json::to_value(s).unwrap_or_else(|e| unreachable!("{e}"));
     assert_eq!(json["robot"]["motion"], "B");
-    assert_eq!(json["method"], "ff+target");
-    assert_eq!(json["tracker"]["delay_s"], 0.05);
+    assert_eq!(json["tracker"]["method"], "ff+target");
+    assert_eq!(json["tracker"]["ga.mutation_prob"], 0.7);
+    assert_eq!(json["start"]["delay_s"], 0.05);
 }
 
 #[test]
@@ -198,68 +204,69 @@ fn shipped_scenarios_have_the_specified_settings() {
         ("motion_b_ga.toml", MotionKind::B, Method::Ga),
     ] {
         let s = load(file);
-        assert_eq!((s.robot.motion, s.method, s.seed, s.duration_s), (motion, method, 1, 72.0), "{file}");
+        assert_eq!((s.robot.motion, s.method(), s.seed, s.duration_s), (motion, method, 1, 72.0), "{file}");
         assert_eq!(s.robot.omega_rad_s, 0.125, "{file}");
     }
     let smoke = load("smoke.toml");
     assert_eq!(
-        (smoke.robot.motion, smoke.robot.omega_rad_s, smoke.method, smoke.duration_s),
+        (smoke.robot.motion, smoke.robot.omega_rad_s, smoke.method(), smoke.duration_s),
         (MotionKind::A, 0.5, Method::Ff, 3.0)
     );
     assert_eq!(load("static.toml").robot.motion, MotionKind::Static);
 }
 
 #[test]
-fn target_filter_section_tunes_the_filter_and_names_bad_fields() {
+fn the_tracker_table_tunes_the_tracker_and_names_bad_fields() {
     use evorec_core::target_motion::TargetFilterParams;
-    let s = Scenario::from_toml_str(&with("[target_filter]\nacceleration_m_s2 = 0.3\nimage_noise_px = 1\n"))
+    let s = Scenario::from_toml_str(&with("[tracker]\ntarget.acceleration_m_s2 = 0.3\ntarget.image_noise_px = 1\n"))
         .unwrap_or_else(|e| unreachable!("{e}"));
     let want = TargetFilterParams { acceleration_m_s2: 0.3, image_noise_px: 1.0, ..TargetFilterParams::DEFAULT };
-    assert_eq!(s.target_filter.0, want);
-    // Written back in full and read back to the same parameters.
+    assert_eq!(s.tuning().target, want);
     let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
-    assert!(text.contains("[target_filter]") && text.contains("max_speed_m_s = 0.5"), "{text}");
     assert_eq!(Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{e}\n{text}")), s);
-    // Absent: the core's defaults, and nothing written.
-    let plain = Scenario::from_toml_str(BASE).unwrap_or_else(|e| unreachable!("{e}"));
-    assert!(plain.target_filter.is_default());
-    assert!(!plain.to_toml_string().unwrap_or_default().contains("target_filter"));
-
     assert_eq!(
-        err(&with("[target_filter]\nimage_noise_px = -0.5\n")),
-        "target_filter.image_noise_px: finite and positive, got -0.5"
-    );
-    assert_eq!(err(&with("[target_filter]\nmax_gap_s = 0\n")), "target_filter.max_gap_s: finite and positive, got 0");
-    assert_eq!(
-        err(&with("[target_filter]\nacceleration_m_s2 = \"fast\"\n")),
-        "target_filter.acceleration_m_s2: expected a number, got a string (\"fast\")"
+        err(&with("[tracker]\ntarget.image_noise_px = -0.5\n")),
+        "tracker.target.image_noise_px: must be finite and positive"
     );
     assert_eq!(
-        err(&with("[target_filter]\nmax_speed_m_s = 1e40\n")),
-        "target_filter.max_speed_m_s: must fit a 32-bit float, got 10000000000000000000000000000000000000000"
+        err(&with("[tracker]\ntarget.acceleration_m_s2 = \"fast\"\n")),
+        "tracker.target.acceleration_m_s2: expected a number, got \"fast\""
     );
     assert!(
-        err(&with("[target_filter]\nposition_noise_m = 0.001\n"))
-            .starts_with("target_filter.position_noise_m: unknown key")
+        err(&with("[tracker]\ntarget.max_speed_m_s = 1e40\n")).starts_with("tracker.target.max_speed_m_s: expected")
     );
-    assert_eq!(err(&with("target_filter = 3\n")), "target_filter: expected a table, got an integer (3)");
+    assert!(
+        err(&with("[tracker]\ntarget.position_noise_m = 0.001\n"))
+            .starts_with("tracker.target.position_noise_m: unknown key")
+    );
+    assert_eq!(err(&with("tracker = 3\n")), "tracker: expected a table, got an integer (3)");
 }
 
 #[test]
-fn a_target_filter_file_holds_the_section_alone() {
-    let t = TargetFilterSection::from_toml_str("[target_filter]\nimage_noise_px = 0.75\n")
+fn the_old_places_of_the_tuning_name_the_new_one() {
+    assert_eq!(err(&with("method = \"ff\"\n")), "method: moved to [tracker] method");
+    assert_eq!(err(&with("[ga]\npopulation = 40\n")), "ga: moved to [tracker] ga.* (e.g. ga.population)");
+    assert!(err(&with("[target_filter]\nmax_gap_s = 0.3\n")).starts_with("target_filter: moved to [tracker] target.*"));
+    assert_eq!(err(&with("[tracker]\ndelay_s = 0.1\n")), "tracker.delay_s: moved to [start] delay_s");
+    assert_eq!(err(&with("[tracker]\ninitial = \"unknown\"\n")), "tracker.initial: moved to [start] initial");
+}
+
+#[test]
+fn a_configuration_file_holds_the_tracker_table_alone() {
+    let t = TrackerTable::from_toml_str("[tracker]\ntarget.image_noise_px = 0.75\n", Tuning::DEFAULT)
         .unwrap_or_else(|e| unreachable!("{e}"));
-    assert_eq!(t.0.image_noise_px, 0.75);
-    assert_eq!(t.0.max_speed_m_s, TargetFilterSection::default().0.max_speed_m_s);
-    let bad = |text: &str| TargetFilterSection::from_toml_str(text).err().map(|e| e.to_string()).unwrap_or_default();
-    assert!(bad("seed = 1\n[target_filter]\n").starts_with("seed: unknown key (expected one of: target_filter)"));
-    assert_eq!(
-        bad("[target_filter]\nmax_rate_rad_s = -1\n"),
-        "target_filter.max_rate_rad_s: finite and positive, got -1"
-    );
-    let missing = std::env::temp_dir().join("evorec-no-such-target-filter.toml");
-    let e = TargetFilterSection::load(&missing).err().map(|e| e.to_string()).unwrap_or_default();
-    assert!(e.contains("evorec-no-such-target-filter.toml"), "{e}");
+    assert_eq!(t.0.target.image_noise_px, 0.75);
+    assert_eq!(t.0.target.max_speed_m_s, Tuning::DEFAULT.target.max_speed_m_s);
+    let missing = std::env::temp_dir().join("evorec-no-such-config.toml");
+    let e = TrackerTable::load(&missing, Tuning::DEFAULT).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("evorec-no-such-config.toml"), "{e}");
+    let dir = std::env::temp_dir().join(format!("evorec-config-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| unreachable!("{e}"));
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "[tracker]\nga.mutaton_prob = 0.5\n").unwrap_or_else(|e| unreachable!("{e}"));
+    let e = TrackerTable::load(&bad, Tuning::DEFAULT).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("bad.toml") && e.contains("tracker.ga.mutaton_prob: unknown key"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

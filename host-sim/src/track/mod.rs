@@ -21,16 +21,14 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Result, anyhow, bail};
-use evorec_core::acquire::AcquireConfig;
-use evorec_core::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE};
+use evorec_core::config::DEFAULT_GRID;
 
 use crate::scenario::HOST_POPULATION_CAPACITY;
-use evorec_core::ga::{GaParams, SearchSpace};
+use evorec_core::ga::SearchSpace;
 use evorec_core::kinematics::Chain;
 use evorec_core::pose::Psi;
-use evorec_core::status::StatusConfig;
-use evorec_core::target_motion::TargetFilterParams;
-use evorec_core::tracker::{Feedforward, Tracker, TrackerConfig};
+use evorec_core::tracker::{Tracker, TrackerConfig};
+use evorec_core::tuning::Tuning;
 use image::RgbImage;
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::Isometry3;
@@ -45,13 +43,11 @@ use evorec_core::image::{Rgb565, Rgb888};
 /// What `evorec track` was asked to do.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TrackOptions {
-    /// Motion feedforward on or off.
-    pub feedforward: Feedforward,
+    /// The tracker's tuning (the method, the GA's population and every other field of
+    /// `evorec config`), checked against [`HOST_POPULATION_CAPACITY`] when the tracker is built.
+    pub tuning: Tuning,
     /// Seed of the GA.
     pub seed: u64,
-    /// GA population (default: [`GaParams::DEFAULT`]'s), up to the compiled capacity
-    /// [`HOST_POPULATION_CAPACITY`].
-    pub population: Option<usize>,
     /// Sample points per model row (default: the compiled one).
     pub points_per_row: Option<usize>,
     /// Track only the first N frames.
@@ -62,8 +58,6 @@ pub struct TrackOptions {
     pub progress: bool,
     /// The pixel format the tracker reads the PNGs in.
     pub pixels: Pixels,
-    /// The tuning of the target-velocity filter (`ff+target`; `--target-filter`).
-    pub target_filter: TargetFilterParams,
 }
 
 /// The pixel format `evorec track` hands the decoded PNGs to the tracker in.
@@ -90,15 +84,13 @@ impl Pixels {
 impl Default for TrackOptions {
     fn default() -> Self {
         Self {
-            feedforward: Feedforward::On,
+            tuning: Tuning::DEFAULT,
             seed: 1,
-            population: None,
             points_per_row: None,
             frames: None,
             overlay: BTreeSet::new(),
             progress: false,
             pixels: Pixels::default(),
-            target_filter: TargetFilterParams::DEFAULT,
         }
     }
 }
@@ -118,22 +110,8 @@ pub struct TrackOutput {
     pub options: TrackOptions,
 }
 
-/// The GA settings of the options: `--population` (checked against the compiled capacity).
-///
-/// # Errors
-/// A population the GA refuses, naming `--population` and the accepted range.
-pub fn ga_params(opts: &TrackOptions) -> Result<GaParams> {
-    let ga = GaParams::DEFAULT;
-    let Some(p) = opts.population else { return Ok(ga) };
-    let ga = ga.with_population(p);
-    let range = || format!("must be in [{}, {HOST_POPULATION_CAPACITY}]", crate::scenario::min_population());
-    ga.validate(HOST_POPULATION_CAPACITY).map_err(|e| anyhow!("--population {p}: {} ({e})", range()))?;
-    AcquireConfig::DEFAULT.validate(p).map_err(|e| anyhow!("--population {p}: {} ({e})", range()))?;
-    Ok(ga)
-}
-
 fn check_sizes(opts: &TrackOptions) -> Result<()> {
-    ga_params(opts)?;
+    opts.tuning.validate(HOST_POPULATION_CAPACITY)?;
     if let Some(g) = opts.points_per_row {
         crate::rows::check("--points-per-row", g)?;
     }
@@ -182,7 +160,7 @@ pub fn run_with(seq: &Sequence, source: Box<dyn FrameSource>, opts: &TrackOption
 /// The tracker configuration of a sequence.
 ///
 /// # Errors
-/// Invalid search box or `--population`.
+/// Invalid search box.
 pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, opts: &TrackOptions) -> Result<TrackerConfig<DOF>> {
     Ok(TrackerConfig {
         rig: seq.rig,
@@ -190,13 +168,8 @@ pub fn config<const DOF: usize>(seq: &Sequence, arm: Chain<DOF>, opts: &TrackOpt
         arm,
         flange_to_camera: seq.manifest.flange_to_right.cast(),
         search: search_of(seq)?,
-        ga: ga_params(opts)?,
-        hue_tolerance: DEFAULT_HUE_TOLERANCE,
         seed: opts.seed,
-        max_dt_s: 0.5,
-        acquire: AcquireConfig::DEFAULT,
-        status: StatusConfig::DEFAULT,
-        generations_per_frame: 1,
+        tuning: opts.tuning,
     })
 }
 
@@ -232,9 +205,8 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
         Some(pose) => Population::Around(Psi::from_isometry(&pose.cast::<f32>())),
         None => Population::Redrawn,
     };
-    let mut tracker: Tracker<DOF, HOST_POPULATION_CAPACITY, G> =
-        setup_tracker(config(seq, arm, opts)?, opts.target_filter, population).map_err(|e| match e {
-            SetupError::TargetFilter(e) => anyhow!("--target-filter: {e}"),
+    let mut tracker: Tracker<DOF, HOST_POPULATION_CAPACITY, G> = setup_tracker(config(seq, arm, opts)?, population)
+        .map_err(|e| match e {
             SetupError::InitialPose(e) => anyhow!("target.initial_pose: {e}"),
             e => anyhow!("{e}"),
         })?;
@@ -257,7 +229,7 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
     let n = F::BYTES_PER_PIXEL * usize::from(seq.rig.right.width()) * usize::from(seq.rig.right.height());
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let t0 = Instant::now();
-    let stats = evorec_core::board::run(&mut b, &mut tracker, opts.feedforward, &mut left, &mut right, u32::MAX);
+    let stats = evorec_core::board::run(&mut b, &mut tracker, &mut left, &mut right, u32::MAX);
     let seconds = t0.elapsed().as_secs_f64();
     let SequenceBoard { tracked, kept, .. } = b;
     reader.join().map_err(|_| anyhow!("the image reader thread panicked"))?;

@@ -95,9 +95,9 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
     let settled_frame = settled.map(|k| &seq.frames[out.tracked[k].i]);
     let summary = TrackSummary {
         sequence: seq.name(),
-        feedforward: out.options.feedforward != Feedforward::Off,
-        method: crate::scenario::Method::from(out.options.feedforward).as_str(),
-        population: super::ga_params(&out.options).map_or(0, |g| g.population),
+        feedforward: out.options.tuning.feedforward != Feedforward::Off,
+        method: crate::scenario::Method::from(out.options.tuning.feedforward).as_str(),
+        population: out.options.tuning.ga.population,
         pixels: out.options.pixels.as_str(),
         seed: out.options.seed,
         frames: out.tracked.len(),
@@ -205,5 +205,7 @@ pub fn write_all(seq: &Sequence, out: &TrackOutput, ev: &Evaluation, dir: &Path)
     let summary = dir.join("summary.json");
     crate::io::write_json(&summary, &ev.summary)?;
     written.push(summary);
+    crate::io::write_tracker_config(dir, &out.options.tuning)?;
+    written.push(dir.join("config.toml"));
     Ok(written)
 }

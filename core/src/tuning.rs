@@ -116,13 +116,14 @@ pub struct Tuning {
 
 impl Tuning {
     /// Every default: motion feedforward (`ff`), [`DEFAULT_HUE_TOLERANCE`], `max_dt_s` 0.5 s,
-    /// [`GaParams::DEFAULT`], [`AcquireConfig::DEFAULT`], [`StatusConfig::DEFAULT`],
+    /// two generations per frame (the most whose worst case fits a 33 ms frame on the
+    /// Cortex-M4: about 12 ms each with flash wait states), [`GaParams::DEFAULT`], [`AcquireConfig::DEFAULT`], [`StatusConfig::DEFAULT`],
     /// [`TargetFilterParams::DEFAULT`].
     pub const DEFAULT: Tuning = Tuning {
         feedforward: Feedforward::On,
         hue_tolerance: DEFAULT_HUE_TOLERANCE,
         max_dt_s: 0.5,
-        generations_per_frame: 1,
+        generations_per_frame: 2,
         ga: GaParams::DEFAULT,
         acquire: AcquireConfig::DEFAULT,
         status: StatusConfig::DEFAULT,

@@ -160,6 +160,9 @@ mod firmware {
     ) -> bool {
         let Ok(mut config) = selftest::tracker_config() else { return false };
         config.tuning.feedforward = feedforward;
+        // One generation per measured step: the counts are per generation, and a frame costs
+        // `generations_per_frame` of them.
+        config.tuning.generations_per_frame = 1;
         // The board profile's frame size (160×120 on the M4, 320×240 on the M7).
         let Ok(rig) = rig_for(FRAME_WIDTH, FRAME_HEIGHT) else { return false };
         config.rig = rig;

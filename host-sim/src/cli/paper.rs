@@ -86,11 +86,16 @@ impl PaperArgs {
         self.cells.iter().filter_map(|(m, w)| all.iter().find(|c| c.motion == *m && c.omega == *w).copied()).collect()
     }
 
-    /// `--base`, or the built-in defaults.
+    /// `--base`, or the built-in defaults with the paper's 1-step GA (one generation per
+    /// frame; a `--base` file sets its own `generations_per_frame`).
     fn base(&self) -> Result<Scenario> {
         match &self.base {
             Some(p) => load(p),
-            None => Ok(Scenario::new(1, paper::DURATION_S, Method::Ff)),
+            None => {
+                let mut s = Scenario::new(1, paper::DURATION_S, Method::Ff);
+                s.tracker.0.generations_per_frame = 1;
+                Ok(s)
+            }
         }
     }
 }

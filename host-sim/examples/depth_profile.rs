@@ -45,9 +45,8 @@ impl Acc {
         let lo = at_max.iter().copied().fold(f32::MAX, f32::min);
         let hi = at_max.iter().copied().fold(f32::MIN, f32::max);
         let centre = 0.5 * (lo + hi);
-        let at = |d: f32| {
-            s.iter().min_by(|a, b| (a.0 - d).abs().total_cmp(&(b.0 - d).abs())).map(|p| p.1).unwrap_or(0.0)
-        };
+        let at =
+            |d: f32| s.iter().min_by(|a, b| (a.0 - d).abs().total_cmp(&(b.0 - d).abs())).map(|p| p.1).unwrap_or(0.0);
         self.n += 1;
         self.centre.push(centre * 1e3);
         self.width.push((hi - lo) * 1e3);
@@ -119,7 +118,8 @@ fn main() -> anyhow::Result<()> {
         };
         let truth = world.truth();
         exact_frame(&rig, &s, &truth, &mut el, &mut er)?;
-        let eframe = StereoFrame { left: HueImage::new_checked(&el[..], w, h)?, right: HueImage::new_checked(&er[..], w, h)? };
+        let eframe =
+            StereoFrame { left: HueImage::new_checked(&el[..], w, h)?, right: HueImage::new_checked(&er[..], w, h)? };
         let moved = |axis: usize, d: f32| {
             if axis == 0 {
                 truth.scaled_along_ray(1.0 + d / truth.0[2])

@@ -25,14 +25,43 @@ pub const MAX_GENERATIONS_PER_FRAME: u8 = 4;
 pub const DEFAULT_GRID: usize = 8;
 
 /// Distances (metres) inside a face's edge of the rows of inner sample points `S_in,k`
-/// that run along that edge. Graded: the nearest row makes the fitness sharp (a few
-/// millimetres of error move it off the face), the deeper ones keep a slope towards the
-/// optimum over a wider range. Must be increasing and positive.
+/// that run along that edge. Graded: the nearest row makes the fitness sharp, the deeper ones
+/// keep a slope towards the optimum over a wider range. Must be increasing and positive.
+///
+/// The fitness places the **nearest** row in pixels instead ([`SILHOUETTE_INNER_PX`],
+/// [`FOLD_INNER_PX`]): at a fixed distance in metres it would sit 2.3 px inside the edge at
+/// 0.7 m, and the edge could move by pixels (several millimetres of depth) without moving any
+/// point across it. `INNER_INSETS_M[0]` remains the nearest row of the model's own point lists
+/// ([`crate::model::SurfaceStrips::inner_points`], the overlay) and sets how far inside the
+/// corners the rows start.
 pub const INNER_INSETS_M: [f32; 3] = [0.002, 0.008, 0.025];
 
 /// Distances (metres) outside a face's edge, in the face's plane, of the contour-strip rows
-/// `S_out` along that edge. Increasing and positive.
+/// `S_out` along that edge. Increasing and positive. The fitness places the nearest one in
+/// pixels instead ([`SILHOUETTE_OUTER_PX`]); `OUTER_OFFSETS_M[0]` remains that of the model's
+/// point lists.
 pub const OUTER_OFFSETS_M: [f32; 2] = [0.003, 0.010];
+
+/// Distance of the nearest inner row inside a **silhouette** edge (a visible face's edge whose
+/// neighbour across it is hidden), in pixel widths across the edge at the pose (see
+/// `fitness::metres_per_pixel`): it replaces `INNER_INSETS_M[0]` there. Half a width: the
+/// row's points lie in pixels whose centres are on the face, so a point-sampling camera sees
+/// the face in every one, and an area-sampling one whenever at most half a pixel of face makes
+/// a pixel read as the face (its mixed pixels along a silhouette are the face's hue diluted by
+/// the background, see `MIN_SATURATION`). With [`SILHOUETTE_OUTER_PX`] the two rows bound the
+/// edge to half a pixel at the true pose, whatever the block's distance and the face's slant.
+pub const SILHOUETTE_INNER_PX: f32 = 0.5;
+
+/// Distance of the nearest contour row outside a silhouette edge, in pixel widths across the
+/// edge: it replaces `OUTER_OFFSETS_M[0]` there. One width: the row's pixels hold no face at
+/// the true pose, however little face a camera needs to read a pixel as the face.
+pub const SILHOUETTE_OUTER_PX: f32 = 1.0;
+
+/// Distance of the nearest inner row inside a **fold** edge (between two faces that both face
+/// the camera), in pixel widths across the edge: it replaces `INNER_INSETS_M[0]` there. One
+/// width: the mixed pixels along a fold have a hue between the two faces' that matches neither,
+/// so the row keeps out of them.
+pub const FOLD_INNER_PX: f32 = 1.0;
 
 /// Rows per edge: inner then outer.
 pub const ROWS_PER_EDGE: usize = INNER_INSETS_M.len() + OUTER_OFFSETS_M.len();

@@ -19,6 +19,17 @@
 //! `docs/method.md`). A pose whose block is not entirely in front of a camera scores 0 in that
 //! camera.
 //!
+//! **The nearest rows are placed in pixels.** The model's rows lie at fixed distances in metres
+//! ([`INNER_INSETS_M`], [`OUTER_OFFSETS_M`]), but the nearest row of each edge is placed at a
+//! fixed number of pixel widths from the edge as the pose projects it (computed per face and
+//! camera at the face's centre, see `metres_per_pixel`): half a width inside a silhouette edge
+//! ([`SILHOUETTE_INNER_PX`]), one outside it ([`SILHOUETTE_OUTER_PX`]), one inside a fold
+//! ([`FOLD_INNER_PX`]). At 2 mm inside and 3 mm outside (2.3 and 3.4 px at 0.7 m) an edge could
+//! move by more than four pixels without moving a point across it: a dead band of several
+//! millimetres in depth, where 1 mm moves an edge by 0.1–0.25 px. Between rows half a pixel
+//! apart the dead band is half a pixel of edge motion. Same rows, same work: only their offsets
+//! change.
+//!
 //! **Bounded work.** Of each pair of opposite faces exactly one can face a camera, so each
 //! camera evaluates three faces (the one of each pair on the camera's side): on the board their inner rows
 //! always, whether or not a face is visible (the visibility only masks the counts), and the
@@ -53,8 +64,8 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::camera::{Pinhole, StereoRig};
 use crate::config::{
-    FACE_WEIGHT_ONE, FULL_FACE_PX, FULL_VISIBLE_COS, INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX, MIN_VISIBLE_COS, NO_HUE,
-    OUTER_OFFSETS_M,
+    FACE_WEIGHT_ONE, FOLD_INNER_PX, FULL_FACE_PX, FULL_VISIBLE_COS, INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX,
+    MIN_VISIBLE_COS, NO_HUE, OUTER_OFFSETS_M, SILHOUETTE_INNER_PX, SILHOUETTE_OUTER_PX,
 };
 use crate::hue::HueLut;
 use crate::image::{Image, PixelFormat};
@@ -527,7 +538,7 @@ fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat, const WALK_ALL
     if cam.distortion().is_none() {
         // K with the pixel coordinates in 16.16 fixed point (scaled by 2¹⁶, exactly).
         let proj = Projector::new([fx * FIX_ONE, fy * FIX_ONE, cam.cx() * FIX_ONE, cam.cy() * FIX_ONE], r, t);
-        count_faces::<G, WALK_ALL>(model, lut, &Affine { view: &view }, &proj, &faces)
+        count_faces::<G, WALK_ALL>(model, lut, &Affine { view: &view }, &proj, &faces, FIX_ONE)
     } else {
         // Normalised coordinates, then the lens, then K'. Beyond `r2_max` the plumb_bob
         // polynomial is outside the calibrated field (and may fold back into the image):
@@ -557,7 +568,9 @@ fn distorted_counts<const G: usize, F: PixelFormat, const WALK_ALL: bool>(
         let (xd, yd) = d.apply(xn, yn);
         if xn * xn + yn * yn <= r2_max { (fx * xd + cx1, fy * yd + cy1) } else { (-1.0, -1.0) }
     };
-    count_faces::<G, WALK_ALL>(model, lut, &Lens { view, to_pixel }, &proj, faces)
+    // One pixel is `1 / f` in normalised coordinates (the lens itself aside).
+    let px_unit = 1.0 / min_finite(fx, fy);
+    count_faces::<G, WALK_ALL>(model, lut, &Lens { view, to_pixel }, &proj, faces, px_unit)
 }
 
 /// The squared normalised radius within which a distorted camera's model is used: twice the
@@ -595,6 +608,7 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
     walk: &impl RowWalk,
     proj: &Projector,
     faces: &FacePlan,
+    px_unit: f32,
 ) -> Counts {
     // The block is axis-aligned in Σ_M, so every row vector is a multiple of one column of
     // `proj.m` (the projected axis): per axis, its half size, row start, step and row offsets.
@@ -617,25 +631,40 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
         let centre = if k < 3 { add(proj.c, ax.half) } else { sub(proj.c, ax.half) };
         let (mut inner, mut outer) = (0u32, 0u32);
         let scores = Scores { inner: lut.plane(k), outer: lut.any(visible_mask) };
+        // Metres of the face per pixel across each pair of edges, at the face's centre.
+        let mpp = metres_per_pixel(&bx.col, &cx.col, centre, px_unit);
         // Edges on the ±b sides run along c, those on the ±c sides along b (as `model::Edge`).
-        for (side, s, l) in [((a + 1) % 3, bx, cx), ((a + 2) % 3, cx, bx)] {
+        for ((side, s, l), mpp) in [((a + 1) % 3, bx, cx), ((a + 2) % 3, cx, bx)].into_iter().zip(mpp) {
+            // The nearest rows at fixed numbers of pixel widths from the edge (capped at the
+            // second row's distance: a face seen nearly edge-on).
+            let near = |px: f32| -> [f32; 3] {
+                let d = min_finite(px * mpp, NEAR_ROW_CAP_M);
+                s.col.map(|v| d * v)
+            };
+            let (sil_in, sil_out, fold_in) =
+                (near(SILHOUETTE_INNER_PX), near(SILHOUETTE_OUTER_PX), near(FOLD_INNER_PX));
             for positive in [true, false] {
                 let (base, neighbour) = if positive {
                     (add(add(centre, s.half), l.start), side)
                 } else {
                     (add(sub(centre, s.half), l.start), side + 3)
                 };
+                let silhouette = !faces.front.get(neighbour).copied().unwrap_or(false);
                 // The inward direction is −side on the + side, +side on the − side.
                 let at = |d: &[f32; 3]| if positive { sub(base, *d) } else { add(base, *d) };
                 // The inner rows of a hidden face do not count: only the board walks them.
                 if visible || WALK_ALL {
-                    let rows = EdgeRows { starts: s.inner.each_ref().map(at), step: l.step, span: l.span };
+                    let mut offsets = s.inner;
+                    offsets[0] = if silhouette { sil_in } else { fold_in };
+                    let rows = EdgeRows { starts: offsets.each_ref().map(at), step: l.step, span: l.span };
                     inner += walk.count_rows::<G, { INNER_INSETS_M.len() }>(&rows, scores.inner);
                 }
                 // Outer rows count only on silhouette edges (the face across is hidden) of
                 // visible faces: the others are not walked.
-                if visible && !faces.front.get(neighbour).copied().unwrap_or(false) {
-                    let rows = EdgeRows { starts: s.outer.each_ref().map(at), step: l.step, span: l.span };
+                if visible && silhouette {
+                    let mut offsets = s.outer;
+                    offsets[0] = sil_out.map(|v| -v);
+                    let rows = EdgeRows { starts: offsets.each_ref().map(at), step: l.step, span: l.span };
                     outer += walk.count_rows::<G, { OUTER_OFFSETS_M.len() }>(&rows, scores.outer);
                     outer_edges += 1;
                 }
@@ -666,6 +695,8 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
 /// The projection of the rows that run along, or are offset along, one model axis `x`:
 /// every vector is a multiple of `m·e_x`, the `x` column of the projector.
 struct AxisRows {
+    /// `m·e_x`, the projected axis.
+    col: [f32; 3],
     /// `h_x · m·e_x`: face centre offset and edge offset.
     half: [f32; 3],
     /// `−reach_x · m·e_x`: first point of a row along `x`, relative to its edge's midpoint.
@@ -686,6 +717,7 @@ impl AxisRows {
         let col = [proj.m[0][x], proj.m[1][x], proj.m[2][x]];
         let scale = |f: f32| col.map(|v| f * v);
         Self {
+            col,
             half: scale(half),
             start: scale(-reach),
             step: scale(step),
@@ -694,6 +726,33 @@ impl AxisRows {
             outer: OUTER_OFFSETS_M.map(|d| scale(-d)),
         }
     }
+}
+
+/// The largest distance of a nearest row from its edge: the second inner row's.
+const NEAR_ROW_CAP_M: f32 = INNER_INSETS_M[1];
+
+/// Metres of a face per pixel across its edges, at the point `centre` (homogeneous, `K'·p`)
+/// of the face whose in-plane axes project to `col_b` and `col_c`: `[across the ±b edges,
+/// across the ±c edges]`. The image moves by `j_x / w²` per metre along axis `x`, with
+/// `j_x = (m_x,u·w − u·m_x,w, m_x,v·w − v·m_x,w)`. A row offset along `b` by `d` lies
+/// `d·|j_b × j_c| / (w²·|j_c|)` from its edge (running along `c`), and a pixel is
+/// `|e_u| + |e_v| = |j_c|₁ / |j_c|` wide across that edge (`e` the edge's unit direction in the
+/// image): in pixel widths the row is `d·|j_b × j_c| / (w²·|j_c|₁)` from the edge (no square
+/// root). Whatever the edge's slope and the point's place in its pixel, a point half a pixel
+/// width inside an edge lies in a pixel whose centre is on the face (at least half of it
+/// covered), and a point one width inside (outside) in a pixel wholly on (off) the face;
+/// `px_unit` is one pixel in the projector's units (`FIX_ONE` for the pinhole kernel's 16.16
+/// fixed point, `1 / f` for the lens kernel's normalised coordinates). A face seen edge-on gives
+/// infinities, capped by the caller.
+#[inline(always)]
+fn metres_per_pixel(col_b: &[f32; 3], col_c: &[f32; 3], centre: [f32; 3], px_unit: f32) -> [f32; 2] {
+    let [u, v, w] = centre;
+    let j = |c: &[f32; 3]| [c[0] * w - u * c[2], c[1] * w - v * c[2]];
+    let (jb, jc) = (j(col_b), j(col_c));
+    let cross = (jb[0] * jc[1] - jb[1] * jc[0]).abs();
+    let q = w * w * px_unit / cross;
+    let width = |a: [f32; 2]| a[0].abs() + a[1].abs();
+    [q * width(jc), q * width(jb)]
 }
 
 /// Evaluates poses against a stereo pair: the model, its hue table and the rig, bundled.

@@ -25,7 +25,9 @@
 //!
 //! Only points near the edges tell a good pose from a slightly wrong one, so that is where
 //! all the points are; the graded distances give the fitness a slope over a useful range
-//! while the nearest rows keep it sharp. Outer rows lie in the plane of their face. When face
+//! while the nearest rows keep it sharp. The fitness moves the nearest inner and outer rows to
+//! fixed distances in pixels from the projected edge (`crate::fitness`); the point lists here
+//! keep them at [`INNER_INSETS_M`]`[0]` and [`OUTER_OFFSETS_M`]`[0]`. Outer rows lie in the plane of their face. When face
 //! `k` is visible and the face across the edge is not, the edge is on the silhouette and the
 //! outer rows project just outside it, whatever the viewpoint (the ray to such a point stays
 //! on the camera side of face `k`'s plane before it and on the far side of the hidden face's

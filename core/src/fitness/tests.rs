@@ -10,7 +10,7 @@ use crate::synth::test_scene::{H, W, rig, scene};
 use std::vec;
 
 #[test]
-fn true_pose_scores_exactly_one_and_perturbations_score_less() {
+fn true_pose_scores_one_and_perturbations_score_less() {
     let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
     let hues = model.faces().map(|f| f.hue);
     let lut = HueLut::new(&hues, DEFAULT_HUE_TOLERANCE);
@@ -24,7 +24,14 @@ fn true_pose_scores_exactly_one_and_perturbations_score_less() {
     let left = HueImage::new_checked(&l[..], W, H).unwrap();
     let right = HueImage::new_checked(&r[..], W, H).unwrap();
     let f = eval.evaluate_psi(&truth, &left, &right);
-    assert_eq!(f.total, 1.0, "{f:?}");
+    // The nearest rows of a silhouette edge lie half a pixel width inside it (at the scale of the
+    // face's centre), so on this point-sampled image their pixels' centres lie on the edge to
+    // within the perspective change of that scale across the face: a point may read the
+    // background. Every other point scores.
+    assert!(f.total >= 0.995, "{f:?}");
+    for c in [f.left, f.right] {
+        assert!(c.inner_total - c.inner_matched <= 2 && c.strip_matched == 0, "{f:?}");
+    }
     assert_eq!(f.right.visible.count_ones(), 3);
     assert_eq!(f.right.inner_total, 3 * SurfaceStrips::<8>::INNER_PER_FACE as u32);
     // Every perturbation of 8 mm or 0.03 in ε lowers F.
@@ -80,7 +87,9 @@ fn rgb565_frames_score_as_their_hue_frames() {
         p.0[i % 6] += if i < 6 { 0.004 } else { -0.02 };
         assert_eq!(eval.evaluate_psi(&p, &left, &right), eval.evaluate_psi(&p, &left5, &right5), "{i}");
     }
-    assert_eq!(eval.evaluate_psi(&truth, &left5, &right5).total, 1.0);
+    // As the hue frames (see `true_pose_scores_one_and_perturbations_score_less`).
+    assert_eq!(eval.evaluate_psi(&truth, &left5, &right5), eval.evaluate_psi(&truth, &left, &right));
+    assert!(eval.evaluate_psi(&truth, &left5, &right5).total >= 0.995);
 }
 
 #[test]

@@ -209,7 +209,7 @@ pub fn tracker_step(data: &[u8]) {
             Ok(est) => {
                 assert!(est.psi.validate().is_ok(), "estimate is not a valid pose: {est:?}");
                 assert!((0.0..=1.0).contains(&est.fitness), "fitness out of [0, 1]: {est:?}");
-                assert_eq!(est.generation, generation + 1);
+                assert_eq!(est.generation, generation + u32::from(tracker.config().tuning.generations_per_frame));
             }
             Err(_) => {
                 assert_eq!(population_bits(&tracker), before, "a refused step changed the population");

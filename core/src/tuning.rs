@@ -225,7 +225,7 @@ impl Rule {
 pub struct Field {
     /// Dotted name, e.g. `ga.mutation_prob` (the key in a `[tracker]` table).
     pub name: &'static str,
-    /// Unit (`1` for a plain number).
+    /// Unit (empty for a name).
     pub unit: &'static str,
     /// What the field does, in one line.
     pub meaning: &'static str,

@@ -2,7 +2,7 @@
 //! motion A at ω = [`ROBOT_OMEGA`] rad/s, for the base scenario's duration (72 s by default):
 //! a conveyor along world y at [`SPEEDS`] (with the
 //! paper's yaw oscillation `ω_o = 0.125` rad/s), and faster yaw oscillations `ω_o` ∈
-//! [`OMEGAS_O`] without conveyor; then (issue 31) a conveyor along the right camera's optical
+//! [`OMEGAS_O`] without conveyor; then a conveyor along the right camera's optical
 //! axis at [`DEPTH_SPEEDS`], "approach" (first run towards the cameras) and "recede" (away),
 //! started at full speed in the middle of its [`DEPTH_TRAVEL_M`] travel (the tracker starts on a
 //! moving block); each with "1-step GA + FF" and "1-step GA + FF + target". Per
@@ -44,7 +44,7 @@ pub const DEPTH_TRAVEL_M: f64 = 0.2;
 /// Which way a cell's conveyor runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Belt {
-    /// Along world y (across the view), from rest at its −y end (issue 12's cells).
+    /// Along world y (across the view), from rest at its −y end (the grid's first belts).
     AcrossY,
     /// Along the right camera's optical axis at `t = 0` (camera frame `[0, 0, −1]`), started
     /// at full speed in the middle of its travel towards the cameras.
@@ -350,7 +350,7 @@ mod tests {
     #[test]
     fn the_issue_s_cells_keep_their_slugs_and_scenarios() {
         let cells = grid();
-        // Issue 12's cells come first, as before, with their old names and scenarios.
+        // The belts across y come first, with their names and scenarios unchanged.
         let old: Vec<&Cell> = cells.iter().take(2 * (SPEEDS.len() + OMEGAS_O.len() - 1)).collect();
         assert!(old.iter().all(|c| c.belt == Belt::AcrossY));
         assert_eq!(old[6].slug(), "target_ff_v0.2_wo0.125");
@@ -435,7 +435,7 @@ mod tests {
     #[test]
     fn depth_belts_keep_the_block_in_view_as_the_belts_across_y_do() {
         // Motion A's ±0.1 m sway already takes a corner of the block out of an image now and
-        // then on issue 12's belts across y (about 90 px at 0.1 m/s and faster); the depth belts
+        // then on the belts across y (about 90 px at 0.1 m/s and faster); the depth belts
         // over 0.2 m keep the block centre well inside both images and lose less of the block.
         let base = Scenario::new(1, 72.0, Method::Ff);
         let across = Cell { belt: Belt::AcrossY, speed_m_s: 0.2, omega_o: PAPER_OMEGA_O, method: Method::Ff };

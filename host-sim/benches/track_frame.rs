@@ -43,7 +43,10 @@ fn benches(c: &mut Criterion) {
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
 
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).expect("space");
-    let config = TrackerConfig::pa10(rig, block, Isometry3::identity(), space).with_seed(1);
+    let mut config = TrackerConfig::pa10(rig, block, Isometry3::identity(), space).with_seed(1);
+    // One generation per step: the numbers are per generation (a frame runs
+    // `generations_per_frame` of them, 2 by default).
+    config.tuning.generations_per_frame = 1;
     let mut tracker: Tracker<7, POPULATION_CAPACITY, DEFAULT_GRID> = Tracker::new(config).expect("tracker");
     tracker.reset_around(&truth, &[0.002, 0.002, 0.002, 0.004, 0.004, 0.004]).expect("reset");
     let joints = JointSample { q: [0.1, 0.5, 0.0, 1.2, 0.0, 0.8, 0.0], qd: [0.0; 7], time_us: 0 };

@@ -452,7 +452,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         check(Side::Right, &frame.right, &self.config.rig.right)
     }
 
-    /// One generation on the newest frame pair (see [`Tracker::step_probed`]).
+    /// The frame's generations on the newest frame pair (see [`Tracker::step_probed`]).
     ///
     /// # Errors
     /// As [`Tracker::step_probed`].
@@ -465,12 +465,13 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.step_probed(frame, joints, dt_s, &mut NoProbe)
     }
 
-    /// One generation in the configured feedforward mode ([`Tuning::feedforward`]): with
-    /// [`Feedforward::On`] every individual is first moved by
+    /// The generations of one frame in the configured feedforward mode
+    /// ([`Tuning::feedforward`]): with [`Feedforward::On`] every individual is first moved by
     /// `J_m(q) q̇ · dt` (eq. 36), with [`Feedforward::OnWithTarget`] by
-    /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then the population is evaluated on `frame`,
-    /// the best is the estimate, its fitness updates the [`Status`], the next population is
-    /// bred, and the estimate, taken into the world at `joints.q`, updates the target filter.
+    /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then, [`Tuning::generations_per_frame`] times,
+    /// the population is evaluated on `frame` and the next one bred. The last generation's best
+    /// is the estimate, its fitness updates the [`Status`], and the estimate, taken into the
+    /// world at `joints.q`, updates the target filter.
     /// While the status is not [`Status::Tracking`], the last
     /// [`AcquireConfig::seed_immigrants`](crate::acquire::AcquireConfig::seed_immigrants) children are replaced by poses seeded from the
     /// colour blobs of the frame ([`crate::acquire`]). `dt_s` is the time since the previous
@@ -539,11 +540,10 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             }
         }
 
-        let mut last = self.generation_on(frame, feedforward, acquiring, probe);
         for _ in 1..self.config.tuning.generations_per_frame {
-            last = self.generation_on(frame, feedforward, acquiring, probe);
+            self.generation_on(frame, feedforward, acquiring, false, probe);
         }
-        let (best, target_measurement) = last;
+        let (best, target_measurement) = self.generation_on(frame, feedforward, acquiring, true, probe);
         let status = self.monitor.update(best.fitness, &self.config.tuning.status);
         if status == Status::Tracking && acquiring {
             self.acquisition.reset();
@@ -569,12 +569,14 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// One generation on `frame` (the population already moved by the feedforward): evaluate,
     /// breed (with the depth probes in [`Feedforward::OnWithTarget`] while tracking, with
     /// immigrants seeded from the colour blobs while `acquiring`). Returns the best of the
-    /// evaluated population and the target filter's measurement of it.
+    /// evaluated population and, on the frame's `last` generation in
+    /// [`Feedforward::OnWithTarget`], the target filter's measurement of it (else the best).
     fn generation_on<F: PixelFormat>(
         &mut self,
         frame: &StereoFrame<'_, F>,
         feedforward: Feedforward,
         acquiring: bool,
+        last: bool,
         probe: &mut impl PhaseProbe,
     ) -> (Best, Psi) {
         probe.mark(Phase::Evaluate);
@@ -584,7 +586,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             eval.evaluate_psi(psi, &frame.left, &frame.right).total
         });
         // The filter's measurement is taken from the evaluated population, before breeding.
-        let target_measurement = if feedforward == Feedforward::OnWithTarget {
+        let target_measurement = if last && feedforward == Feedforward::OnWithTarget {
             Psi::new(self.ga.mean_translation_near(&best, MEASUREMENT_FITNESS_MARGIN), best.psi.eps().into())
         } else {
             best.psi

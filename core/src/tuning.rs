@@ -394,6 +394,8 @@ impl Tuning {
             return err("hue_tolerance", "must be below 90 (half the hue circle)");
         }
         if !(1..=MAX_GENERATIONS_PER_FRAME).contains(&self.generations_per_frame) {
+            // The rule's text and the table's meaning state the bound as a literal.
+            const _: () = assert!(MAX_GENERATIONS_PER_FRAME == 4);
             return err("generations_per_frame", "must be 1 to 4 (MAX_GENERATIONS_PER_FRAME)");
         }
         if ga.population < 2 || ga.population > capacity {

@@ -464,6 +464,10 @@ impl<const P: usize> Ga<P> {
 
     /// Step 3: breeds the next population from the evaluated one; `best` is the result of
     /// [`Ga::evaluate`].
+    ///
+    /// Never inlined: it keeps a copy of the parents (the population it overwrites) on the
+    /// stack, which must not sit in its caller's frame under the fitness evaluation.
+    #[inline(never)]
     pub fn breed<R: Rng + ?Sized>(&mut self, best: &Best, params: &GaParams, space: &SearchSpace, rng: &mut R) {
         let parents = self.pop;
         let fit = self.fitness;

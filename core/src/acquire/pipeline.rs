@@ -95,43 +95,58 @@ impl Acquisition {
         half: &[f32; 3],
         config: &AcquireConfig,
     ) {
-        let m = Measured {
-            rig,
-            half,
-            left: &self.left,
-            right: &self.right,
-            stride: config.scan_stride,
-            min_hits: config.min_face_hits,
-        };
         match self.stage {
-            Stage::Scan(start) => {
-                let (stride, chunk) = (config.scan_stride, config.scan_chunk);
-                let next = scan_part(left, lut, stride, start, chunk, &mut self.left);
-                scan_part(right, lut, stride, start, chunk, &mut self.right);
-                let (gw, gh) = grid_size(right.width(), right.height(), stride);
-                self.stage = if next >= gw * gh { Stage::Solve } else { Stage::Scan(next) };
-                self.motion = Psi::IDENTITY;
-            }
-            Stage::Solve => {
-                let solve = |faces| seed_pose_from(rig, half, m.left, m.right, config.min_face_hits, faces);
-                let candidates = [solve(3), solve(2)].map(|s| s.map(|s| Refinement::start(&m, &s)));
-                self.candidates = candidates;
-                self.stage = if candidates.iter().any(Option::is_some) { Stage::Refine(0) } else { self.restart() };
-            }
-            Stage::Refine(i) => {
-                let mut candidates = self.candidates;
-                for c in candidates.iter_mut().flatten() {
-                    c.iterate(&m);
-                }
-                self.candidates = candidates;
-                self.stage = if usize::from(i) + 1 < REFINE_ITERATIONS {
-                    Stage::Refine(i + 1)
-                } else {
-                    self.finish();
-                    self.restart()
-                };
-            }
+            Stage::Scan(start) => self.scan(left, right, lut, config, start),
+            Stage::Solve => self.solve(rig, half, config),
+            Stage::Refine(i) => self.refine(rig, half, config, i),
         }
+    }
+
+    /// The [`Stage::Scan`] stage. Each stage is a function of its own, never inlined, so that
+    /// a generation's stack holds the locals of one stage only.
+    #[inline(never)]
+    fn scan<B: AsRef<[u8]>, F: PixelFormat>(
+        &mut self,
+        left: &Image<B, F>,
+        right: &Image<B, F>,
+        lut: &HueLut,
+        config: &AcquireConfig,
+        start: u32,
+    ) {
+        let (stride, chunk) = (config.scan_stride, config.scan_chunk);
+        let next = scan_part(left, lut, stride, start, chunk, &mut self.left);
+        scan_part(right, lut, stride, start, chunk, &mut self.right);
+        let (gw, gh) = grid_size(right.width(), right.height(), stride);
+        self.stage = if next >= gw * gh { Stage::Solve } else { Stage::Scan(next) };
+        self.motion = Psi::IDENTITY;
+    }
+
+    /// The [`Stage::Solve`] stage: the solutions from all seen faces and from the two with
+    /// most hits, each started as a refinement in its place.
+    #[inline(never)]
+    fn solve(&mut self, rig: &StereoRig, half: &[f32; 3], config: &AcquireConfig) {
+        let m = measured(rig, half, &self.left, &self.right, config);
+        for (candidate, faces) in self.candidates.iter_mut().zip([3, 2]) {
+            *candidate = seed_pose_from(rig, half, m.left, m.right, config.min_face_hits, faces)
+                .map(|s| Refinement::start(&m, &s));
+        }
+        self.stage = if self.candidates.iter().any(Option::is_some) { Stage::Refine(0) } else { self.restart() };
+    }
+
+    /// The [`Stage::Refine`] stage `i`: one iteration of both solutions in their places, and
+    /// after the last one the seed.
+    #[inline(never)]
+    fn refine(&mut self, rig: &StereoRig, half: &[f32; 3], config: &AcquireConfig, i: u8) {
+        let m = measured(rig, half, &self.left, &self.right, config);
+        for c in self.candidates.iter_mut().flatten() {
+            c.iterate(&m);
+        }
+        self.stage = if usize::from(i) + 1 < REFINE_ITERATIONS {
+            Stage::Refine(i + 1)
+        } else {
+            self.finish();
+            self.restart()
+        };
     }
 
     /// The best refined solution becomes the seed, moved from the scan's camera frame to the
@@ -158,4 +173,15 @@ impl Acquisition {
         self.candidates = [None, None];
         Stage::Scan(0)
     }
+}
+
+/// What the refinements are measured against: the scan's blobs `left` and `right`.
+fn measured<'a>(
+    rig: &'a StereoRig,
+    half: &'a [f32; 3],
+    left: &'a HueBlobs,
+    right: &'a HueBlobs,
+    config: &AcquireConfig,
+) -> Measured<'a> {
+    Measured { rig, half, left, right, stride: config.scan_stride, min_hits: config.min_face_hits }
 }

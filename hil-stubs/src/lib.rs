@@ -45,8 +45,9 @@
 //! | stack high-water mark                  | 5 316   | stack painting, 30-frame demo (`cargo run --release`) |
 //! | RAM total                              | 87 724  | of 128 KiB                            |
 //!
-//! The stack's deepest path is the demo's loop (`main` → demo → `board::run` →
-//! `Tracker::step_probed`); building the tracker needs less.
+//! The stack's deepest path is building the tracker in the demo (`main` → demo →
+//! `demo_tracker` → `Setup::build_tracker_in`); a generation (`main` → demo →
+//! `Tracker::step_probed`) needs less.
 //!
 //! ## Commands (run inside `hil-stubs/`, whose `.cargo/config.toml` selects the target)
 //! - build the firmware: `cargo build --release`

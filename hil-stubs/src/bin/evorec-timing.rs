@@ -148,6 +148,10 @@ mod firmware {
     /// Runs `frames` generations in mode `feedforward` of a fresh `Tracker<7, P, G>` built into
     /// its place in `slot`; false on any failure (printed). Never inlined, so that the runs'
     /// locals do not pile up in `main`'s frame, which is on the stack during every generation.
+    /// Its own frame is on the stack during every generation too, so everything it does besides
+    /// the generation is in never-inlined functions ([`start_run`], `CaseGen::frame`,
+    /// [`print_line`]): only the frame generator, the deadline record and one frame's inputs are
+    /// its locals.
     #[inline(never)]
     fn run_config<C: Timed<P, G>, const P: usize, const G: usize>(
         name: &str,
@@ -158,40 +162,7 @@ mod firmware {
         left: &mut [u8],
         right: &mut [u8],
     ) -> bool {
-        let Ok(mut config) = selftest::tracker_config() else { return false };
-        config.tuning.feedforward = feedforward;
-        // One generation per measured step: the counts are per generation, and a frame costs
-        // `generations_per_frame` of them.
-        config.tuning.generations_per_frame = 1;
-        // The board profile's frame size (160×120 on the M4, 320×240 on the M7).
-        let Ok(rig) = rig_for(FRAME_WIDTH, FRAME_HEIGHT) else { return false };
-        config.rig = rig;
-        let Ok(mut cases) = CaseGen::new(config.rig, config.flange_to_camera, FRAME_SEED) else { return false };
-        let start = cases.truth(0, false);
-        let Ok(mut setup) = Setup::from_tracker_config(&config, &start, &selftest::SPREAD) else {
-            return false;
-        };
-        // Every configuration runs at its full capacity (the worst case of that storage).
-        setup.tuning.ga.population = P;
-        let Some(slot) = C::slot(slot) else { return false };
-        let Ok(tracker) = setup.build_tracker_in(slot) else {
-            hprintln!("ERROR tracker {}x{} refused", P, G);
-            return false;
-        };
-        hprintln!(
-            "RUN name={} method={} p={} g={} frames={} points_per_camera={} walked_per_camera={} width={} height={} \
-             profile={}",
-            name,
-            method_name(feedforward),
-            P,
-            G,
-            frames,
-            SurfaceStrips::<G>::POINTS_PER_CAMERA,
-            SurfaceStrips::<G>::WALKED_PER_CAMERA,
-            FRAME_WIDTH,
-            FRAME_HEIGHT,
-            PROFILE.name
-        );
+        let Some((tracker, mut cases)) = start_run::<C, P, G>(name, feedforward, slot, frames) else { return false };
         let mut deadline = DeadlineReport::default();
         for k in 0..frames {
             let kind = schedule(k, frames);
@@ -223,7 +194,7 @@ mod firmware {
             if !deadline.check(call) {
                 hprintln!("DEADLINE-MISSED k={} call={}", k, call);
             }
-            let line = GenLine {
+            print_line(&GenLine {
                 population: P as u32,
                 grid: G as u32,
                 frame: k,
@@ -235,11 +206,61 @@ mod firmware {
                 phases,
                 stack,
                 fitness,
-            };
-            hprintln!("{}", line);
+            });
         }
         hprintln!("{}", deadline);
         true
+    }
+
+    /// The start of a [`run_config`]: the configuration, the frame generator and the tracker
+    /// built into its place in `slot`, and the `RUN` line; `None` on any failure (printed).
+    /// Never inlined: the configuration's copies are off the stack while generations run.
+    #[inline(never)]
+    fn start_run<'s, C: Timed<P, G>, const P: usize, const G: usize>(
+        name: &str,
+        feedforward: Feedforward,
+        slot: &'s mut Slot,
+        frames: u32,
+    ) -> Option<(&'s mut Tracker<7, P, G>, CaseGen)> {
+        let mut config = selftest::tracker_config().ok()?;
+        config.tuning.feedforward = feedforward;
+        // One generation per measured step: the counts are per generation, and a frame costs
+        // `generations_per_frame` of them.
+        config.tuning.generations_per_frame = 1;
+        // The board profile's frame size (160×120 on the M4, 320×240 on the M7).
+        config.rig = rig_for(FRAME_WIDTH, FRAME_HEIGHT).ok()?;
+        let cases = CaseGen::new(config.rig, config.flange_to_camera, FRAME_SEED).ok()?;
+        let start = cases.truth(0, false);
+        let mut setup = Setup::from_tracker_config(&config, &start, &selftest::SPREAD).ok()?;
+        // Every configuration runs at its full capacity (the worst case of that storage).
+        setup.tuning.ga.population = P;
+        let slot = C::slot(slot)?;
+        let Ok(tracker) = setup.build_tracker_in(slot) else {
+            hprintln!("ERROR tracker {}x{} refused", P, G);
+            return None;
+        };
+        hprintln!(
+            "RUN name={} method={} p={} g={} frames={} points_per_camera={} walked_per_camera={} width={} height={} \
+             profile={}",
+            name,
+            method_name(feedforward),
+            P,
+            G,
+            frames,
+            SurfaceStrips::<G>::POINTS_PER_CAMERA,
+            SurfaceStrips::<G>::WALKED_PER_CAMERA,
+            FRAME_WIDTH,
+            FRAME_HEIGHT,
+            PROFILE.name
+        );
+        Some((tracker, cases))
+    }
+
+    /// Prints one `GEN` line. Never inlined: the formatting's locals are not in
+    /// [`run_config`]'s frame.
+    #[inline(never)]
+    fn print_line(line: &GenLine) {
+        hprintln!("{}", line);
     }
 
     #[entry]

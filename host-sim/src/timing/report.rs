@@ -208,6 +208,9 @@ pub(super) fn json(r: &Results) -> Value {
             "static_generation_bytes": r.stack.generation.bytes,
             "static_callers_bytes": r.stack.callers.bytes,
             "static_total_bytes": r.stack.total(),
+            "static_path": r.stack.callers.frames.iter().chain(r.stack.generation.frames.iter())
+                .map(|(function, bytes)| json!({ "function": function, "bytes": bytes }))
+                .collect::<Vec<_>>(),
             "static_method": r.stack.method,
             "static_image": r.stack.image.display().to_string(),
             "static_prologue_total_bytes": r.stack_prologue.as_ref().map(StackAnalysis::total),

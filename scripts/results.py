@@ -27,6 +27,7 @@ import json
 import os
 import subprocess
 import sys
+import textwrap
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BEGIN, END = '<!-- results:paper:begin -->', '<!-- results:paper:end -->'
@@ -90,9 +91,9 @@ def worse_than_published(rows):
             o, p = float(ours), float(pub)
             if (o < p) if name == 'F̄' else (o > p):
                 worse.append(f'{name} in motion {cells[0]} at {cells[2]} rad/s ({ours} against {pub})')
-    if not worse:
-        return 'With feedforward every entry is at least as good as the published one.'
-    return 'With feedforward every entry is at least as good as the published one except ' + '; '.join(worse) + '.'
+    text = 'With feedforward every entry is at least as good as the published one'
+    text += (' except ' + '; '.join(worse) + '.') if worse else '.'
+    return textwrap.fill(text, width=100, break_long_words=False, break_on_hyphens=False)
 
 
 def track_section(track_dir):

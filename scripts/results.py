@@ -96,13 +96,21 @@ def worse_than_published(rows):
     return textwrap.fill(text, width=100, break_long_words=False, break_on_hyphens=False)
 
 
-def track_section(track_dir):
+def track_summaries(track_dir):
+    """(name, summary.json) of every tracked sequence, by name; None when none was tracked."""
     if not os.path.isdir(track_dir):
+        return None
+    return [(name, json.load(open(os.path.join(track_dir, name, 'summary.json'), encoding='utf-8')))
+            for name in sorted(os.listdir(track_dir))]
+
+
+def track_section(track_dir):
+    runs = track_summaries(track_dir)
+    if runs is None:
         return 'No sequences were tracked (none found).'
     lines = ['| sequence | over | frames | RMS x mm | RMS y mm | RMS z mm | RMS rotation ° | max rotation ° |',
              '|---|---|---|---|---|---|---|---|']
-    for name in sorted(os.listdir(track_dir)):
-        s = json.load(open(os.path.join(track_dir, name, 'summary.json'), encoding='utf-8'))
+    for name, s in runs:
         for key, label in (('all', 'all'), ('after_within', 'after acquisition')):
             r = s.get(key)
             if not r:
@@ -144,12 +152,12 @@ def replace_block(text, begin, end, table, stamp):
 def track_readme_table(track_dir):
     """The README's compact table of the recorded sequences: over all frames and after
     acquisition."""
-    if not os.path.isdir(track_dir):
+    runs = track_summaries(track_dir)
+    if runs is None:
         return 'No sequences were tracked (none found).'
     lines = ['| sequence | RMS x / y / z mm, all frames | rotation ° | after acquisition: x / y / z mm | rotation ° |',
              '|---|---|---|---|---|']
-    for name in sorted(os.listdir(track_dir)):
-        s = json.load(open(os.path.join(track_dir, name, 'summary.json'), encoding='utf-8'))
+    for name, s in runs:
         a, w = s.get('all'), s.get('after_within')
         xyz = lambda r: f"{r['rms_x_mm']:.2f} / {r['rms_y_mm']:.2f} / {r['rms_z_mm']:.2f}" if r else '—'
         rot = lambda r: f"{r['rms_rot_deg']:.2f}" if r else '—'

@@ -22,7 +22,7 @@ use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
 use crate::status::{Status, StatusMonitor};
 use crate::target_motion::{Optics, PredictError, Prediction, TargetFilter, TargetVelocity};
-use crate::tuning::Tuning;
+use crate::tuning::{POPULATION_ERROR, Tuning};
 
 /// The target filter is fed the mean position of the individuals whose fitness is within this
 /// of the best's ([`Ga::mean_translation_near`](crate::ga::Ga::mean_translation_near)), with
@@ -77,11 +77,6 @@ pub struct Estimate {
 }
 
 pub use crate::tuning::ConfigError;
-
-/// The error of a population size the GA's storage cannot take (checked by
-/// [`TrackerConfig::validate`] first, so never returned in practice).
-const POPULATION_ERROR: ConfigError =
-    ConfigError { field: "ga.population", rule: "must be at least 2 and at most the compiled capacity" };
 
 impl From<ModelError> for ConfigError {
     fn from(e: ModelError) -> Self {

@@ -154,6 +154,11 @@ impl core::fmt::Display for ConfigError {
 
 impl core::error::Error for ConfigError {}
 
+/// The error of a population the GA's storage cannot take: below 2 or above the tracker's
+/// compiled capacity (checked by [`Tuning::validate`]).
+pub(crate) const POPULATION_ERROR: ConfigError =
+    ConfigError { field: "ga.population", rule: "must be at least 2 and at most the compiled capacity" };
+
 /// A field's value.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Value {
@@ -399,7 +404,7 @@ impl Tuning {
             return err("generations_per_frame", "must be 1 to 4 (MAX_GENERATIONS_PER_FRAME)");
         }
         if ga.population < 2 || ga.population > capacity {
-            return err("ga.population", "must be at least 2 and at most the compiled capacity");
+            return Err(POPULATION_ERROR);
         }
         if ga.level_cdf[1] < ga.level_cdf[0] {
             return err("ga.level_cdf.medium", "must not be below ga.level_cdf.coarse");

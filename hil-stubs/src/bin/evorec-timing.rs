@@ -146,7 +146,7 @@ mod firmware {
     }
 
     /// Runs `frames` generations in mode `feedforward` of a fresh `Tracker<7, P, G>` built into
-    /// its place in `slot`; false on any failure (printed). Never inlined, so that the runs'
+    /// its place in `slot`; false on any failure (a refused tracker or generation is printed). Never inlined, so that the runs'
     /// locals do not pile up in `main`'s frame, which is on the stack during every generation.
     /// Its own frame is on the stack during every generation too, so everything it does besides
     /// the generation is in never-inlined functions ([`start_run`], `CaseGen::frame`,
@@ -213,7 +213,8 @@ mod firmware {
     }
 
     /// The start of a [`run_config`]: the configuration, the frame generator and the tracker
-    /// built into its place in `slot`, and the `RUN` line; `None` on any failure (printed).
+    /// built into its place in `slot`, and the `RUN` line; `None` on any failure (a refused
+    /// tracker is printed).
     /// Never inlined: the configuration's copies are off the stack while generations run.
     #[inline(never)]
     fn start_run<'s, C: Timed<P, G>, const P: usize, const G: usize>(

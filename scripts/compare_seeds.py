@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Compares two `evorec paper --seeds` tables (cells_FIRST_LAST.csv) cell by cell: the median
+"""Compares two `evorec paper --seeds` tables (cells_FIRST_LAST.csv) cell by cell, or two
+`scripts/target_seeds.sh` tables (seeds.csv: one scene, shown as motion "–"): the median
 over the seeds of each RMS entry in NEW against OLD, their ratio, and the entries whose ratio
 exceeds LIMIT (e.g. 1.10 for a tree against an older one, 1.05 for FF + target against FF).
 Prints markdown.
@@ -27,6 +28,9 @@ def load(paths):
     cells = {}
     for path in paths.split(','):
         for r in csv.DictReader(open(path)):
+            if 'motion' not in r:
+                # A target_seeds.sh table: one scene, its entries named rms_x_mm, rms_e1, ...
+                r = dict(r, motion='–', omega='0', **{k: r['rms_' + k] for k in KEYS})
             seeds = cells.setdefault((r['motion'], float(r['omega'])), {})
             seed = int(r['seed'])
             if seed in seeds:

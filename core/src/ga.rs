@@ -462,6 +462,32 @@ impl<const P: usize> Ga<P> {
         sum.map(|s| s / n)
     }
 
+    /// The mean pose of the individuals in use whose fitness at the last evaluation is within
+    /// `margin` of `best`'s, as [`Ga::mean_translation_near`]; the orientation is the
+    /// normalised sum of their quaternions, each taken on `best`'s side of the sphere
+    /// (`q` and `−q` are one rotation). `best`'s own pose when nothing else is near or the sum
+    /// vanishes.
+    pub fn mean_near(&self, best: &Best, margin: f32) -> Psi {
+        let t = self.mean_translation_near(best, margin);
+        let qb = best.psi.quaternion_unchecked().into_inner();
+        let mut sum = nalgebra::Quaternion::new(0.0f32, 0.0, 0.0, 0.0);
+        if !(margin.is_nan() || margin <= 0.0) {
+            let floor = best.fitness - margin;
+            for (ind, f) in self.individuals().iter().zip(self.fitness().iter()) {
+                if *f >= floor {
+                    let q = ind.quaternion_unchecked().into_inner();
+                    sum += if q.dot(&qb) < 0.0 { -q } else { q };
+                }
+            }
+        }
+        let n = crate::math::sqrt(sum.dot(&sum));
+        if !(n > 1e-6) {
+            return Psi::new(t, best.psi.eps().into());
+        }
+        let q = nalgebra::UnitQuaternion::new_unchecked(sum / n);
+        Psi::from_parts(&nalgebra::Vector3::from(t), &q)
+    }
+
     /// Step 3: breeds the next population from the evaluated one; `best` is the result of
     /// [`Ga::evaluate`].
     ///
@@ -539,6 +565,50 @@ mod tests {
             let d2: f32 = p.0.iter().zip(target.0.iter()).map(|(a, b)| (a - b) * (a - b)).sum();
             1.0 / (1.0 + 100.0 * d2)
         }
+    }
+
+    #[test]
+    fn mean_near_is_the_centre_of_the_individuals_near_the_best() {
+        let mut ga = Ga::<4>::new(Psi::IDENTITY);
+        let turn = |deg: f32| {
+            let half = 0.5 * deg.to_radians();
+            [0.0, 0.0, crate::math::sin(half)]
+        };
+        // Best at 0°, two within the margin at +4° and −2°, one far off below it.
+        let poses = [
+            Psi::new([0.0, 0.0, 0.7], turn(0.0)),
+            Psi::new([0.003, 0.0, 0.7], turn(4.0)),
+            Psi::new([0.0, 0.0, 0.703], turn(-2.0)),
+            Psi::new([0.1, 0.1, 0.9], turn(60.0)),
+        ];
+        let fit = [1.0f32, 0.995, 0.992, 0.5];
+        for (i, p) in poses.iter().enumerate() {
+            ga.set_individual(i, *p, &space());
+        }
+        let best = ga.evaluate(|p| fit[poses.iter().position(|q| q == p).unwrap()]);
+        let m = ga.mean_near(&best, 0.01);
+        let angle = 2.0 * libm::asinf(m.eps().z).to_degrees();
+        assert!((m.0[0] - 0.001).abs() < 1e-6 && (m.0[2] - 0.701).abs() < 1e-6, "{m:?}");
+        assert!((angle - 2.0 / 3.0).abs() < 0.01, "{angle}");
+        assert_eq!(ga.mean_near(&best, 0.0), best.psi);
+        assert_eq!(ga.mean_near(&best, f32::NAN), best.psi);
+    }
+
+    #[test]
+    fn mean_near_takes_a_quaternion_and_its_negative_as_one_rotation() {
+        let mut ga = Ga::<2>::new(Psi::IDENTITY);
+        // Half turns about z just either side of 180°: η has opposite signs, so ε flips sign.
+        let a = Psi::new([0.0, 0.0, 0.7], [0.0, 0.0, crate::math::sin(0.5 * 179f32.to_radians())]);
+        let b = Psi::from_parts(
+            &nalgebra::Vector3::new(0.0, 0.0, 0.7),
+            &nalgebra::UnitQuaternion::from_axis_angle(&nalgebra::Vector3::z_axis(), 181f32.to_radians()),
+        );
+        ga.set_individual(0, a, &space());
+        ga.set_individual(1, b, &space());
+        let best = ga.evaluate(|p| if *p == a { 1.0 } else { 0.999 });
+        let m = ga.mean_near(&best, 0.01);
+        // The mean is the half turn itself (|ε_z| = 1), not the identity that averaging ε gives.
+        assert!(m.eps().z.abs() > 0.9999, "{m:?}");
     }
 
     #[test]

@@ -24,11 +24,12 @@ use crate::status::{Status, StatusMonitor};
 use crate::target_motion::{Optics, PredictError, Prediction, TargetFilter, TargetVelocity};
 use crate::tuning::{POPULATION_ERROR, Tuning};
 
-/// The target filter is fed the mean position of the individuals whose fitness is within this
-/// of the best's ([`Ga::mean_translation_near`](crate::ga::Ga::mean_translation_near)), with
-/// the best's orientation: the best jumps between the individuals at the top of a flat fitness
-/// peak from frame to frame, the centre of those individuals much less. 0.01 is one sample
-/// point in a hundred.
+/// The estimate is the mean pose of the individuals whose fitness is within this of the best's
+/// ([`Ga::mean_near`](crate::ga::Ga::mean_near)), and the target filter is fed their mean
+/// position with the best's orientation: the best jumps between the individuals at the top of a
+/// flat fitness peak from frame to frame, and on a peak that moves it trails (ties go to the
+/// elite, which is not moved by the block's own motion); the centre of those individuals does
+/// both much less. 0.01 is one sample point in a hundred.
 pub const MEASUREMENT_FITNESS_MARGIN: f32 = 0.01;
 
 /// Depth probes per generation in [`Feedforward::OnWithTarget`] while tracking: the last
@@ -55,9 +56,10 @@ pub struct StereoFrame<'a, F: PixelFormat = Hue> {
 /// The tracker's output for one frame pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Estimate {
-    /// Best pose `^CR ψ_M` of this generation.
+    /// The pose `^CR ψ_M` of this frame: the mean pose of the individuals within
+    /// [`MEASUREMENT_FITNESS_MARGIN`] of the best fitness of its last generation.
     pub psi: Psi,
-    /// Its fitness `F` (0..=1).
+    /// The best individual's fitness `F` (0..=1).
     pub fitness: f32,
     /// Generation number (1 after the first frame).
     pub generation: u32,
@@ -68,8 +70,8 @@ pub struct Estimate {
     pub capture_time_us: u64,
     /// The pose the target filter was fed with this estimate
     /// ([`Feedforward::OnWithTarget`]): the mean position of the individuals within
-    /// [`MEASUREMENT_FITNESS_MARGIN`] of the best fitness, with the best's orientation; `psi`
-    /// itself in the other modes. A
+    /// [`MEASUREMENT_FITNESS_MARGIN`] of the best fitness, with the best's orientation; the best
+    /// individual's pose in the other modes. A
     /// consumer running its own copy of the filter
     /// ([`TargetFilter::update_from_estimate`](crate::target_motion::TargetFilter::update_from_estimate))
     /// feeds it this to get the tracker's numbers.
@@ -77,6 +79,13 @@ pub struct Estimate {
 }
 
 pub use crate::tuning::ConfigError;
+
+/// What one generation of [`Tracker::step_probed`] gives (see `generation_on`).
+struct Outcome {
+    best: Best,
+    estimate: Psi,
+    target_measurement: Psi,
+}
 
 impl From<ModelError> for ConfigError {
     fn from(e: ModelError) -> Self {
@@ -464,9 +473,11 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// ([`Tuning::feedforward`]): with [`Feedforward::On`] every individual is first moved by
     /// `J_m(q) q̇ · dt` (eq. 36), with [`Feedforward::OnWithTarget`] by
     /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then, [`Tuning::generations_per_frame`] times,
-    /// the population is evaluated on `frame` and the next one bred. The last generation's best
-    /// is the estimate, its fitness updates the [`Status`], and the estimate, taken into the
-    /// world at `joints.q`, updates the target filter.
+    /// the population is evaluated on `frame` and the next one bred. The estimate is the mean
+    /// pose of the last generation's individuals within [`MEASUREMENT_FITNESS_MARGIN`] of its
+    /// best, whose fitness updates the [`Status`]; the filter's measurement
+    /// ([`Estimate::target_measurement`]), taken into the world at `joints.q`, updates the
+    /// target filter.
     /// While the status is not [`Status::Tracking`], the last
     /// [`AcquireConfig::seed_immigrants`](crate::acquire::AcquireConfig::seed_immigrants) children are replaced by poses seeded from the
     /// colour blobs of the frame ([`crate::acquire`]). `dt_s` is the time since the previous
@@ -538,7 +549,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         for _ in 1..self.config.tuning.generations_per_frame {
             self.generation_on(frame, feedforward, acquiring, false, probe);
         }
-        let (best, target_measurement) = self.generation_on(frame, feedforward, acquiring, true, probe);
+        let Outcome { best, estimate, target_measurement } =
+            self.generation_on(frame, feedforward, acquiring, true, probe);
         let status = self.monitor.update(best.fitness, &self.config.tuning.status);
         if status == Status::Tracking && acquiring {
             self.acquisition.reset();
@@ -552,7 +564,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         probe.mark(Phase::Done);
 
         Ok(Estimate {
-            psi: best.psi,
+            psi: estimate,
             fitness: best.fitness,
             generation: self.generation,
             status,
@@ -564,8 +576,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// One generation on `frame` (the population already moved by the feedforward): evaluate,
     /// breed (with the depth probes in [`Feedforward::OnWithTarget`] while tracking, with
     /// immigrants seeded from the colour blobs while `acquiring`). Returns the best of the
-    /// evaluated population and, on the frame's `last` generation in
-    /// [`Feedforward::OnWithTarget`], the target filter's measurement of it (else the best).
+    /// evaluated population and, on the frame's `last` generation, the estimate and, in
+    /// [`Feedforward::OnWithTarget`], the target filter's measurement (else the best).
     fn generation_on<F: PixelFormat>(
         &mut self,
         frame: &StereoFrame<'_, F>,
@@ -573,14 +585,16 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         acquiring: bool,
         last: bool,
         probe: &mut impl PhaseProbe,
-    ) -> (Best, Psi) {
+    ) -> Outcome {
         probe.mark(Phase::Evaluate);
         let idle = if acquiring { self.config.tuning.acquire.idle_individuals } else { 0 };
         let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
         let best: Best = self.ga.evaluate_first(self.ga.len().saturating_sub(idle), |psi| {
             eval.evaluate_psi(psi, &frame.left, &frame.right).total
         });
-        // The filter's measurement is taken from the evaluated population, before breeding.
+        // The estimate and the filter's measurement are taken from the evaluated population,
+        // before breeding.
+        let estimate = if last { self.ga.mean_near(&best, MEASUREMENT_FITNESS_MARGIN) } else { best.psi };
         let target_measurement = if last && feedforward == Feedforward::OnWithTarget {
             Psi::new(self.ga.mean_translation_near(&best, MEASUREMENT_FITNESS_MARGIN), best.psi.eps().into())
         } else {
@@ -595,7 +609,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             self.acquire_step(frame);
         }
         self.generation = self.generation.wrapping_add(1);
-        (best, target_measurement)
+        Outcome { best, estimate, target_measurement }
     }
 
     /// Replaces the last [`DEPTH_PROBES`] bred children before the immigrants by the best

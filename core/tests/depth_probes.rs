@@ -37,9 +37,9 @@ fn block_at(z: f32) -> Psi {
     Psi::from_parts(&Vector3::new(0.01, -0.01, z), &q)
 }
 
-/// After a generation, the children just before the immigrants are the estimate moved along
-/// its viewing ray to the depths whose disparity differs by ±k px; in `Feedforward::On` (the
-/// paper's method) they are ordinary children.
+/// After a generation, the children just before the immigrants are the best pose (the elite,
+/// index 0 after breeding) moved along its viewing ray to the depths whose disparity differs
+/// by ±k px; in `Feedforward::On` (the paper's method) they are ordinary children.
 #[test]
 fn the_probes_line_the_best_poses_viewing_ray() {
     let truth = block_at(0.7);
@@ -53,18 +53,18 @@ fn the_probes_line_the_best_poses_viewing_ray() {
             let dt = if k == 0 { 0.0 } else { DT_US as f32 * 1e-6 };
             last = Some(t.step(&frame, &joints, dt).unwrap());
         }
-        let best = last.unwrap();
-        assert_eq!(best.status, Status::Tracking);
+        assert_eq!(last.unwrap().status, Status::Tracking);
+        let best = t.population()[0];
         let end = t.population().len() - t.config().tuning.ga.immigrants;
-        let z = best.psi.0[2];
+        let z = best.0[2];
         let unit = z * z / (FOCAL_PX * BASELINE_M);
         let mut probes = 0;
         for (j, k) in DEPTH_PROBE_DISPARITY_PX.iter().enumerate() {
             for (s, sign) in [1.0f32, -1.0].iter().enumerate() {
                 let ind = t.population()[end - DEPTH_PROBES + 2 * j + s];
                 let scale = 1.0 + sign * k * unit / z;
-                let on_ray = (0..3).all(|i| (ind.0[i] - best.psi.0[i] * scale).abs() < 1e-6);
-                let same_turn = (3..6).all(|i| ind.0[i] == best.psi.0[i]);
+                let on_ray = (0..3).all(|i| (ind.0[i] - best.0[i] * scale).abs() < 1e-6);
+                let same_turn = (3..6).all(|i| ind.0[i] == best.0[i]);
                 if on_ray && same_turn {
                     probes += 1;
                 }

@@ -462,30 +462,40 @@ impl<const P: usize> Ga<P> {
         sum.map(|s| s / n)
     }
 
-    /// The mean pose of the individuals in use whose fitness at the last evaluation is within
-    /// `margin` of `best`'s, as [`Ga::mean_translation_near`]; the orientation is the
-    /// normalised sum of their quaternions, each taken on `best`'s side of the sphere
-    /// (`q` and `−q` are one rotation). `best`'s own pose when nothing else is near or the sum
-    /// vanishes.
-    pub fn mean_near(&self, best: &Best, margin: f32) -> Psi {
-        let t = self.mean_translation_near(best, margin);
-        let qb = best.psi.quaternion_unchecked().into_inner();
-        let mut sum = nalgebra::Quaternion::new(0.0f32, 0.0, 0.0, 0.0);
-        if !(margin.is_nan() || margin <= 0.0) {
-            let floor = best.fitness - margin;
-            for (ind, f) in self.individuals().iter().zip(self.fitness().iter()) {
-                if *f >= floor {
-                    let q = ind.quaternion_unchecked().into_inner();
-                    sum += if q.dot(&qb) < 0.0 { -q } else { q };
+    /// The mean pose of the individuals in use on `best`'s peak: those whose fitness at the
+    /// last evaluation is within `margin` of `best`'s and whose pose is within `reach` of it
+    /// (per gene: the position's offset, and the vector part of the turn from `best`'s
+    /// orientation, as [`GaParams::mutation_scale`] measures a step). The orientation is the
+    /// normalised sum of their quaternions, each taken on `best`'s side of the sphere (`q` and
+    /// `−q` are one rotation). `best`'s own pose when the margin is not positive, nothing else is
+    /// near, or the sum vanishes.
+    pub fn mean_near(&self, best: &Best, margin: f32, reach: &[f32; 6]) -> Psi {
+        if margin.is_nan() || margin <= 0.0 {
+            return best.psi;
+        }
+        let floor = best.fitness - margin;
+        let qb = best.psi.quaternion_unchecked();
+        let (mut t, mut sum, mut n) = ([0.0f32; 3], nalgebra::Quaternion::new(0.0f32, 0.0, 0.0, 0.0), 0u32);
+        for (ind, f) in self.individuals().iter().zip(self.fitness().iter()) {
+            let q = ind.quaternion_unchecked();
+            let d = quat::canonical(&(q * qb.inverse())).imag();
+            let near_t = (0..3).all(|i| (ind.0[i] - best.psi.0[i]).abs() <= reach[i]);
+            let near_q = (0..3).all(|i| d[i].abs() <= reach[3 + i]);
+            if *f >= floor && near_t && near_q {
+                for (s, x) in t.iter_mut().zip(ind.0.iter()) {
+                    *s += x;
                 }
+                let q = q.into_inner();
+                sum += if q.dot(qb.as_ref()) < 0.0 { -q } else { q };
+                n += 1;
             }
         }
-        let n = crate::math::sqrt(sum.dot(&sum));
-        if !(n > 1e-6) {
-            return Psi::new(t, best.psi.eps().into());
+        let norm = crate::math::sqrt(sum.dot(&sum));
+        if n == 0 || !(norm > 1e-6) {
+            return best.psi;
         }
-        let q = nalgebra::UnitQuaternion::new_unchecked(sum / n);
-        Psi::from_parts(&nalgebra::Vector3::from(t), &q)
+        let t = nalgebra::Vector3::from(t) / n as f32;
+        Psi::from_parts(&t, &nalgebra::UnitQuaternion::new_unchecked(sum / norm))
     }
 
     /// Step 3: breeds the next population from the evaluated one; `best` is the result of
@@ -586,12 +596,15 @@ mod tests {
             ga.set_individual(i, *p, &space());
         }
         let best = ga.evaluate(|p| fit[poses.iter().position(|q| q == p).unwrap()]);
-        let m = ga.mean_near(&best, 0.01);
+        let reach = GaParams::DEFAULT.mutation_scale[0];
+        let m = ga.mean_near(&best, 0.01, &reach);
         let angle = 2.0 * libm::asinf(m.eps().z).to_degrees();
         assert!((m.0[0] - 0.001).abs() < 1e-6 && (m.0[2] - 0.701).abs() < 1e-6, "{m:?}");
         assert!((angle - 2.0 / 3.0).abs() < 0.01, "{angle}");
-        assert_eq!(ga.mean_near(&best, 0.0), best.psi);
-        assert_eq!(ga.mean_near(&best, f32::NAN), best.psi);
+        assert_eq!(ga.mean_near(&best, 0.0, &reach), best.psi);
+        assert_eq!(ga.mean_near(&best, f32::NAN, &reach), best.psi);
+        // Out of reach (2 mm against a reach of 1 mm), the others no longer count.
+        assert_eq!(ga.mean_near(&best, 0.01, &[0.001, 0.001, 0.001, 0.04, 0.04, 0.04]), best.psi);
     }
 
     #[test]
@@ -606,7 +619,7 @@ mod tests {
         ga.set_individual(0, a, &space());
         ga.set_individual(1, b, &space());
         let best = ga.evaluate(|p| if *p == a { 1.0 } else { 0.999 });
-        let m = ga.mean_near(&best, 0.01);
+        let m = ga.mean_near(&best, 0.01, &GaParams::DEFAULT.mutation_scale[0]);
         // The mean is the half turn itself (|ε_z| = 1), not the identity that averaging ε gives.
         assert!(m.eps().z.abs() > 0.9999, "{m:?}");
     }

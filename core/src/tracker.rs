@@ -56,8 +56,10 @@ pub struct StereoFrame<'a, F: PixelFormat = Hue> {
 /// The tracker's output for one frame pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Estimate {
-    /// The pose `^CR ψ_M` of this frame: the mean pose of the individuals within
-    /// [`MEASUREMENT_FITNESS_MARGIN`] of the best fitness of its last generation.
+    /// The pose `^CR ψ_M` of this frame: while [`Status::Tracking`], the mean pose of the
+    /// individuals within [`MEASUREMENT_FITNESS_MARGIN`] of the best fitness of its last
+    /// generation and within one coarse mutation step of the best
+    /// ([`Ga::mean_near`](crate::ga::Ga::mean_near)); otherwise the best individual's.
     pub psi: Psi,
     /// The best individual's fitness `F` (0..=1).
     pub fitness: f32,
@@ -473,9 +475,10 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// ([`Tuning::feedforward`]): with [`Feedforward::On`] every individual is first moved by
     /// `J_m(q) q̇ · dt` (eq. 36), with [`Feedforward::OnWithTarget`] by
     /// `(J_m q̇ + J_n ^W ψ̇_M) · dt` (eq. 23, 25); then, [`Tuning::generations_per_frame`] times,
-    /// the population is evaluated on `frame` and the next one bred. The estimate is the mean
-    /// pose of the last generation's individuals within [`MEASUREMENT_FITNESS_MARGIN`] of its
-    /// best, whose fitness updates the [`Status`]; the filter's measurement
+    /// the population is evaluated on `frame` and the next one bred. The best of the last
+    /// generation updates the [`Status`]; the estimate is, while tracking, the mean pose of the
+    /// last generation's individuals within [`MEASUREMENT_FITNESS_MARGIN`] of it (else the
+    /// best itself); the filter's measurement
     /// ([`Estimate::target_measurement`]), taken into the world at `joints.q`, updates the
     /// target filter.
     /// While the status is not [`Status::Tracking`], the last
@@ -563,8 +566,12 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
         probe.mark(Phase::Done);
 
+        // The centre of the near-best crowd is one peak's only while tracking: a searching
+        // population's near-best individuals may sit on different peaks (the colour symmetry's
+        // twins among them), whose mean is neither.
+        let psi = if status == Status::Tracking { estimate } else { best.psi };
         Ok(Estimate {
-            psi: estimate,
+            psi,
             fitness: best.fitness,
             generation: self.generation,
             status,
@@ -594,7 +601,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         });
         // The estimate and the filter's measurement are taken from the evaluated population,
         // before breeding.
-        let estimate = if last { self.ga.mean_near(&best, MEASUREMENT_FITNESS_MARGIN) } else { best.psi };
+        let reach = self.config.tuning.ga.mutation_scale.first().copied().unwrap_or([0.0; 6]);
+        let estimate = if last { self.ga.mean_near(&best, MEASUREMENT_FITNESS_MARGIN, &reach) } else { best.psi };
         let target_measurement = if last && feedforward == Feedforward::OnWithTarget {
             Psi::new(self.ga.mean_translation_near(&best, MEASUREMENT_FITNESS_MARGIN), best.psi.eps().into())
         } else {

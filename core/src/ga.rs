@@ -479,8 +479,9 @@ impl<const P: usize> Ga<P> {
         for (ind, f) in self.individuals().iter().zip(self.fitness().iter()) {
             let q = ind.quaternion_unchecked();
             let d = quat::canonical(&(q * qb.inverse())).imag();
-            let near_t = (0..3).all(|i| (ind.0[i] - best.psi.0[i]).abs() <= reach[i]);
-            let near_q = (0..3).all(|i| d[i].abs() <= reach[3 + i]);
+            let offsets = ind.0.iter().zip(best.psi.0.iter()).map(|(a, b)| a - b);
+            let near_t = offsets.zip(reach.iter()).take(3).all(|(x, r)| x.abs() <= *r);
+            let near_q = d.iter().zip(reach.iter().skip(3)).all(|(x, r)| x.abs() <= *r);
             if *f >= floor && near_t && near_q {
                 for (s, x) in t.iter_mut().zip(ind.0.iter()) {
                     *s += x;
@@ -491,7 +492,7 @@ impl<const P: usize> Ga<P> {
             }
         }
         let norm = crate::math::sqrt(sum.dot(&sum));
-        if n == 0 || !(norm > 1e-6) {
+        if n == 0 || norm.is_nan() || norm <= 1e-6 {
             return best.psi;
         }
         let t = nalgebra::Vector3::from(t) / n as f32;

@@ -32,8 +32,7 @@ pub(super) fn encode_payload<'m>(
             e.f32(est.fitness);
             e.u32(est.generation);
             e.u8(est.status.code());
-            let t = est.target_measurement.translation();
-            e.f32s(&[t.x, t.y, t.z]);
+            e.f32s(&est.target_measurement.0);
         }
         Message::End | Message::Rejected => {}
         Message::Ack(status) => e.u32(status),
@@ -156,9 +155,9 @@ pub(super) fn decode_small(kind: MsgType, payload: &[u8]) -> Result<Message<'sta
             let fitness = d.f32();
             let generation = d.u32();
             let status = Status::from_code(d.u8()).ok_or(DecodeError::BadValue)?;
-            // The filter's measurement travels as its position; its orientation is ψ's.
-            let [tx, ty, tz] = d.f32s();
-            let target_measurement = Psi::new([tx, ty, tz], psi.eps().into());
+            // The filter's measurement travels whole: its orientation is the best individual's,
+            // which differs from ψ's (the mean of the best's neighbours).
+            let target_measurement = Psi(d.f32s());
             // The capture time is not in the payload; the host fills it in from its frame.
             Message::Estimate(Estimate { psi, fitness, generation, capture_time_us: 0, status, target_measurement })
         }

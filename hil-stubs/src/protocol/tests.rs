@@ -170,7 +170,7 @@ fn payload_sizes_match_the_constants() {
     assert_eq!(unframe(&encode(&config)).len(), HEADER_LEN + CONFIG_LEN + CRC_LEN);
     assert_eq!(raw_len(&config.message), HEADER_LEN + CONFIG_LEN + CRC_LEN);
     assert_eq!(FRAME_FIXED_LEN, 68);
-    assert_eq!(ESTIMATE_LEN, 45);
+    assert_eq!(ESTIMATE_LEN, 57);
 }
 
 #[test]
@@ -357,7 +357,7 @@ mod prop {
         #[test]
         fn estimate_round_trips_bit_exactly(
             psi in proptest::array::uniform6(any_f32()),
-            measured in proptest::array::uniform3(any_f32()),
+            measured in proptest::array::uniform6(any_f32()),
             fitness in any_f32(),
             generation in any::<u32>(),
             sequence in any::<u32>(),
@@ -372,7 +372,7 @@ mod prop {
                     generation,
                     capture_time_us: 0,
                     status: evorec_core::status::Status::Tracking,
-                    target_measurement: Psi::new(measured, [psi[3], psi[4], psi[5]]),
+                    target_measurement: Psi(measured),
                 }),
             };
             let bytes = encode(&env);
@@ -380,7 +380,7 @@ mod prop {
             let Message::Estimate(e) = back.message else { panic!("not an estimate") };
             prop_assert_eq!(e.psi.0.map(f32::to_bits), psi.map(f32::to_bits));
             prop_assert_eq!(e.fitness.to_bits(), fitness.to_bits());
-            prop_assert_eq!(e.target_measurement.0.map(f32::to_bits), Psi::new(measured, [psi[3], psi[4], psi[5]]).0.map(f32::to_bits));
+            prop_assert_eq!(e.target_measurement.0.map(f32::to_bits), measured.map(f32::to_bits));
             prop_assert_eq!(e.generation, generation);
             prop_assert_eq!((back.sequence, back.capture_time_us), (sequence, time));
         }

@@ -104,20 +104,24 @@ def track_summaries(track_dir):
             for name in sorted(os.listdir(track_dir))]
 
 
-def track_section(track_dir):
+def track_table(track_dir, header, rows):
+    """A markdown table of the tracked sequences: `header` (its two lines), then the lines
+    `rows(name, summary)` gives for each sequence; a sentence when none was tracked."""
     runs = track_summaries(track_dir)
     if runs is None:
         return 'No sequences were tracked (none found).'
-    lines = ['| sequence | over | frames | RMS x mm | RMS y mm | RMS z mm | RMS rotation ° | max rotation ° |',
-             '|---|---|---|---|---|---|---|---|']
-    for name, s in runs:
+    return '\n'.join(header + [line for name, s in runs for line in rows(name, s)])
+
+
+def track_section(track_dir):
+    def rows(name, s):
         for key, label in (('all', 'all'), ('after_within', 'after acquisition')):
             r = s.get(key)
-            if not r:
-                continue
-            lines.append(f"| `{name}` | {label} | {r['frames']} | {r['rms_x_mm']:.2f} | {r['rms_y_mm']:.2f} | "
-                         f"{r['rms_z_mm']:.2f} | {r['rms_rot_deg']:.2f} | {r['max_rot_deg']:.2f} |")
-    return '\n'.join(lines)
+            if r:
+                yield (f"| `{name}` | {label} | {r['frames']} | {r['rms_x_mm']:.2f} | {r['rms_y_mm']:.2f} | "
+                       f"{r['rms_z_mm']:.2f} | {r['rms_rot_deg']:.2f} | {r['max_rot_deg']:.2f} |")
+    return track_table(track_dir, ['| sequence | over | frames | RMS x mm | RMS y mm | RMS z mm | RMS rotation ° | max rotation ° |',
+                                   '|---|---|---|---|---|---|---|---|'], rows)
 
 
 def acquire_section(acq_dir):
@@ -152,17 +156,14 @@ def replace_block(text, begin, end, table, stamp):
 def track_readme_table(track_dir):
     """The README's compact table of the recorded sequences: over all frames and after
     acquisition."""
-    runs = track_summaries(track_dir)
-    if runs is None:
-        return 'No sequences were tracked (none found).'
-    lines = ['| sequence | RMS x / y / z mm, all frames | rotation ° | after acquisition: x / y / z mm | rotation ° |',
-             '|---|---|---|---|---|']
-    for name, s in runs:
+    xyz = lambda r: f"{r['rms_x_mm']:.2f} / {r['rms_y_mm']:.2f} / {r['rms_z_mm']:.2f}" if r else '—'
+    rot = lambda r: f"{r['rms_rot_deg']:.2f}" if r else '—'
+
+    def rows(name, s):
         a, w = s.get('all'), s.get('after_within')
-        xyz = lambda r: f"{r['rms_x_mm']:.2f} / {r['rms_y_mm']:.2f} / {r['rms_z_mm']:.2f}" if r else '—'
-        rot = lambda r: f"{r['rms_rot_deg']:.2f}" if r else '—'
-        lines.append(f'| `{name}` | {xyz(a)} | {rot(a)} | {xyz(w)} | {rot(w)} |')
-    return '\n'.join(lines)
+        yield f'| `{name}` | {xyz(a)} | {rot(a)} | {xyz(w)} | {rot(w)} |'
+    return track_table(track_dir, ['| sequence | RMS x / y / z mm, all frames | rotation ° | after acquisition: x / y / z mm | rotation ° |',
+                                   '|---|---|---|---|---|'], rows)
 
 
 def main():

@@ -306,6 +306,19 @@ pub struct Best {
     pub fitness: f32,
 }
 
+/// The crowd at the top of the best's fitness peak ([`Ga::crowd`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Crowd {
+    /// The mean pose of the crowd's members within the reach of the best (the position's
+    /// offset, and the vector part of the turn from the best's orientation, per gene, as
+    /// [`GaParams::mutation_scale`] measures a step). The orientation is the normalised sum of
+    /// their quaternions, each taken on the best's side of the sphere (`q` and `−q` are one
+    /// rotation). The best's own pose when nothing else is near or the sum vanishes.
+    pub centre: Psi,
+    /// The mean position of the whole crowd, reach or not.
+    pub translation: [f32; 3],
+}
+
 impl<const P: usize> Ga<P> {
     /// A full population (`P` individuals) with every individual at `psi`.
     pub fn new(psi: Psi) -> Self {
@@ -435,68 +448,46 @@ impl<const P: usize> Ga<P> {
         best
     }
 
-    /// The mean position of the individuals in use whose fitness at the last evaluation is
-    /// within `margin` of `best`'s (`best` itself always counts): the centre of the crowd at
-    /// the top of the fitness peak, which wanders less from frame to frame than the single
-    /// best individual does. One pass over the population; a `margin` that is not positive
-    /// (0, or NaN) gives `best`'s own position, not the mean of the individuals tied with it.
-    pub fn mean_translation_near(&self, best: &Best, margin: f32) -> [f32; 3] {
+    /// The crowd at the top of `best`'s fitness peak, in one pass over the individuals in use
+    /// whose fitness at the last evaluation is within `margin` of `best`'s (`best` itself always
+    /// counts). Their centre wanders less from frame to frame than the single best individual
+    /// does. A `margin` that is not positive (0, or NaN) gives `best`'s own pose for both, not
+    /// the mean of the individuals tied with it.
+    pub fn crowd(&self, best: &Best, margin: f32, reach: &[f32; 6]) -> Crowd {
         let t = best.psi.translation();
+        let alone = Crowd { centre: best.psi, translation: [t.x, t.y, t.z] };
         if margin.is_nan() || margin <= 0.0 {
-            return [t.x, t.y, t.z];
-        }
-        let floor = best.fitness - margin;
-        let (mut sum, mut n) = ([0.0f32; 3], 0u32);
-        for (ind, f) in self.individuals().iter().zip(self.fitness().iter()) {
-            if *f >= floor {
-                for (s, x) in sum.iter_mut().zip(ind.0.iter()) {
-                    *s += x;
-                }
-                n += 1;
-            }
-        }
-        if n == 0 {
-            return [t.x, t.y, t.z];
-        }
-        let n = n as f32;
-        sum.map(|s| s / n)
-    }
-
-    /// The mean pose of the individuals in use on `best`'s peak: those whose fitness at the
-    /// last evaluation is within `margin` of `best`'s and whose pose is within `reach` of it
-    /// (per gene: the position's offset, and the vector part of the turn from `best`'s
-    /// orientation, as [`GaParams::mutation_scale`] measures a step). The orientation is the
-    /// normalised sum of their quaternions, each taken on `best`'s side of the sphere (`q` and
-    /// `−q` are one rotation). `best`'s own pose when the margin is not positive, nothing else is
-    /// near, or the sum vanishes.
-    pub fn mean_near(&self, best: &Best, margin: f32, reach: &[f32; 6]) -> Psi {
-        if margin.is_nan() || margin <= 0.0 {
-            return best.psi;
+            return alone;
         }
         let floor = best.fitness - margin;
         let qb = best.psi.quaternion_unchecked();
+        let qb_inv = qb.inverse();
+        let (mut all, mut n_all) = ([0.0f32; 3], 0u32);
         let (mut t, mut sum, mut n) = ([0.0f32; 3], nalgebra::Quaternion::new(0.0f32, 0.0, 0.0, 0.0), 0u32);
-        for (ind, f) in self.individuals().iter().zip(self.fitness().iter()) {
+        for (ind, _) in self.individuals().iter().zip(self.fitness().iter()).filter(|(_, f)| **f >= floor) {
+            add_to(&mut all, &ind.0);
+            n_all += 1;
             let q = ind.quaternion_unchecked();
-            let d = quat::canonical(&(q * qb.inverse())).imag();
+            let d = quat::canonical(&(q * qb_inv)).imag();
             let offsets = ind.0.iter().zip(best.psi.0.iter()).map(|(a, b)| a - b);
             let near_t = offsets.zip(reach.iter()).take(3).all(|(x, r)| x.abs() <= *r);
             let near_q = d.iter().zip(reach.iter().skip(3)).all(|(x, r)| x.abs() <= *r);
-            if *f >= floor && near_t && near_q {
-                for (s, x) in t.iter_mut().zip(ind.0.iter()) {
-                    *s += x;
-                }
+            if near_t && near_q {
+                add_to(&mut t, &ind.0);
                 let q = q.into_inner();
                 sum += if q.dot(qb.as_ref()) < 0.0 { -q } else { q };
                 n += 1;
             }
         }
+        let translation = if n_all == 0 { alone.translation } else { all.map(|s| s / n_all as f32) };
         let norm = crate::math::sqrt(sum.dot(&sum));
-        if n == 0 || norm.is_nan() || norm <= 1e-6 {
-            return best.psi;
-        }
-        let t = nalgebra::Vector3::from(t) / n as f32;
-        Psi::from_parts(&t, &nalgebra::UnitQuaternion::new_unchecked(sum / norm))
+        let centre = if n == 0 || norm.is_nan() || norm <= 1e-6 {
+            best.psi
+        } else {
+            let t = nalgebra::Vector3::from(t) / n as f32;
+            Psi::from_parts(&t, &nalgebra::UnitQuaternion::new_unchecked(sum / norm))
+        };
+        Crowd { centre, translation }
     }
 
     /// Step 3: breeds the next population from the evaluated one; `best` is the result of
@@ -560,6 +551,13 @@ impl<const P: usize> Ga<P> {
     }
 }
 
+/// `sum += x` over the three position genes of `x`.
+fn add_to(sum: &mut [f32; 3], x: &[f32; 6]) {
+    for (s, v) in sum.iter_mut().zip(x.iter()) {
+        *s += v;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -579,7 +577,7 @@ mod tests {
     }
 
     #[test]
-    fn mean_near_is_the_centre_of_the_individuals_near_the_best() {
+    fn crowd_centre_is_the_mean_of_the_individuals_near_the_best() {
         let mut ga = Ga::<4>::new(Psi::IDENTITY);
         let turn = |deg: f32| {
             let half = 0.5 * deg.to_radians();
@@ -598,18 +596,21 @@ mod tests {
         }
         let best = ga.evaluate(|p| fit[poses.iter().position(|q| q == p).unwrap()]);
         let reach = GaParams::DEFAULT.mutation_scale[0];
-        let m = ga.mean_near(&best, 0.01, &reach);
+        let m = ga.crowd(&best, 0.01, &reach).centre;
         let angle = 2.0 * libm::asinf(m.eps().z).to_degrees();
         assert!((m.0[0] - 0.001).abs() < 1e-6 && (m.0[2] - 0.701).abs() < 1e-6, "{m:?}");
         assert!((angle - 2.0 / 3.0).abs() < 0.01, "{angle}");
-        assert_eq!(ga.mean_near(&best, 0.0, &reach), best.psi);
-        assert_eq!(ga.mean_near(&best, f32::NAN, &reach), best.psi);
-        // Out of reach (2 mm against a reach of 1 mm), the others no longer count.
-        assert_eq!(ga.mean_near(&best, 0.01, &[0.001, 0.001, 0.001, 0.04, 0.04, 0.04]), best.psi);
+        assert_eq!(ga.crowd(&best, 0.0, &reach).centre, best.psi);
+        assert_eq!(ga.crowd(&best, f32::NAN, &reach).centre, best.psi);
+        // Out of reach (2 mm against a reach of 1 mm), the others no longer count in the
+        // centre; the crowd's mean position still takes all three within the margin.
+        let far = ga.crowd(&best, 0.01, &[0.001, 0.001, 0.001, 0.04, 0.04, 0.04]);
+        assert_eq!(far.centre, best.psi);
+        assert!((far.translation[0] - 0.001).abs() < 1e-6 && (far.translation[2] - 0.701).abs() < 1e-6, "{far:?}");
     }
 
     #[test]
-    fn mean_near_takes_a_quaternion_and_its_negative_as_one_rotation() {
+    fn crowd_centre_takes_a_quaternion_and_its_negative_as_one_rotation() {
         let mut ga = Ga::<2>::new(Psi::IDENTITY);
         // Half turns about z just either side of 180°: η has opposite signs, so ε flips sign.
         let a = Psi::new([0.0, 0.0, 0.7], [0.0, 0.0, crate::math::sin(0.5 * 179f32.to_radians())]);
@@ -620,7 +621,7 @@ mod tests {
         ga.set_individual(0, a, &space());
         ga.set_individual(1, b, &space());
         let best = ga.evaluate(|p| if *p == a { 1.0 } else { 0.999 });
-        let m = ga.mean_near(&best, 0.01, &GaParams::DEFAULT.mutation_scale[0]);
+        let m = ga.crowd(&best, 0.01, &GaParams::DEFAULT.mutation_scale[0]).centre;
         // The mean is the half turn itself (|ε_z| = 1), not the identity that averaging ε gives.
         assert!(m.eps().z.abs() > 0.9999, "{m:?}");
     }

@@ -25,7 +25,7 @@ use crate::target_motion::{Optics, PredictError, Prediction, TargetFilter, Targe
 use crate::tuning::{POPULATION_ERROR, Tuning};
 
 /// The estimate is the mean pose of the individuals whose fitness is within this of the best's
-/// ([`Ga::mean_near`](crate::ga::Ga::mean_near)), and the target filter is fed their mean
+/// ([`Ga::crowd`](crate::ga::Ga::crowd)), and the target filter is fed their mean
 /// position with the best's orientation: the best jumps between the individuals at the top of a
 /// flat fitness peak from frame to frame, and on a peak that moves it trails (ties go to the
 /// elite, which is not moved by the block's own motion); the centre of those individuals does
@@ -59,7 +59,7 @@ pub struct Estimate {
     /// The pose `^CR ψ_M` of this frame: while [`Status::Tracking`], the mean pose of the
     /// individuals within [`MEASUREMENT_FITNESS_MARGIN`] of the best fitness of its last
     /// generation and within one coarse mutation step of the best
-    /// ([`Ga::mean_near`](crate::ga::Ga::mean_near)); otherwise the best individual's.
+    /// ([`Ga::crowd`](crate::ga::Ga::crowd)); otherwise the best individual's.
     pub psi: Psi,
     /// The best individual's fitness `F` (0..=1).
     pub fitness: f32,
@@ -602,11 +602,16 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // The estimate and the filter's measurement are taken from the evaluated population,
         // before breeding.
         let reach = self.config.tuning.ga.mutation_scale.first().copied().unwrap_or([0.0; 6]);
-        let estimate = if last { self.ga.mean_near(&best, MEASUREMENT_FITNESS_MARGIN, &reach) } else { best.psi };
-        let target_measurement = if last && feedforward == Feedforward::OnWithTarget {
-            Psi::new(self.ga.mean_translation_near(&best, MEASUREMENT_FITNESS_MARGIN), best.psi.eps().into())
+        let (estimate, target_measurement) = if last {
+            let crowd = self.ga.crowd(&best, MEASUREMENT_FITNESS_MARGIN, &reach);
+            let measured = if feedforward == Feedforward::OnWithTarget {
+                Psi::new(crowd.translation, best.psi.eps().into())
+            } else {
+                best.psi
+            };
+            (crowd.centre, measured)
         } else {
-            best.psi
+            (best.psi, best.psi)
         };
         probe.mark(Phase::Breed);
         self.ga.breed(&best, &self.config.tuning.ga, &self.config.search, &mut self.rng);

@@ -522,31 +522,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
                     self.acquisition.shift(shift);
                 }
             }
-            Feedforward::OnWithTarget => {
-                let motion =
-                    feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
-                let velocity = self.target.feedforward_velocity();
-                let target = feedforward::TargetTwist::from_world(&motion.r_wc.transpose(), &velocity);
-                let shift = |psi: &mut Psi| {
-                    let rate = feedforward::psi_rate_moving(&motion.twist, &target, psi);
-                    feedforward::shift(psi, &rate, dt_s);
-                };
-                // The elite (index 0) is moved by the camera's motion alone: the hypothesis that
-                // the block stands still, which the fitness weighs against the children moved
-                // by the model's velocity as well.
-                let mut index = 0usize;
-                self.ga.shift_all(&self.config.search, |psi| {
-                    if index == 0 {
-                        feedforward::shift(psi, &feedforward::psi_rate(&motion.twist, psi), dt_s);
-                    } else {
-                        shift(psi);
-                    }
-                    index += 1;
-                });
-                if acquiring {
-                    self.acquisition.shift(shift);
-                }
-            }
+            Feedforward::OnWithTarget => self.shift_with_target(joints, dt_s, acquiring),
         }
 
         for _ in 1..self.config.tuning.generations_per_frame {
@@ -578,6 +554,50 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             capture_time_us: joints.time_us,
             target_measurement,
         })
+    }
+
+    /// The feedforward of [`Feedforward::OnWithTarget`]: every individual is moved by the
+    /// camera's motion and the target model's velocity, except three that let the fitness
+    /// weigh the model. The elite (index 0) is moved by the camera's motion alone, the
+    /// hypothesis that the block stands still. While tracking, children 1 and 2 are copies of
+    /// the elite, moved by the model's translation alone and by its whole motion: a paired test
+    /// of the turn. The GA trades a small turn for a small shift across the view, and a model
+    /// that reads that as a turn would feed it to every child; with the copies the turn is kept
+    /// only where it fits better, as ties go to the lower index.
+    fn shift_with_target(&mut self, joints: &JointSample<DOF>, dt_s: f32, acquiring: bool) {
+        let motion = feedforward::camera_motion(&self.config.arm, &joints.q, &joints.qd, &self.config.flange_to_camera);
+        let velocity = self.target.feedforward_velocity();
+        let r_cw = motion.r_wc.transpose();
+        let whole = feedforward::TargetTwist::from_world(&r_cw, &velocity);
+        let sliding = TargetVelocity { w: nalgebra::Vector3::zeros(), ..velocity };
+        let sliding = feedforward::TargetTwist::from_world(&r_cw, &sliding);
+        let moved = |psi: &mut Psi, target: Option<&feedforward::TargetTwist>| {
+            let rate = match target {
+                Some(t) => feedforward::psi_rate_moving(&motion.twist, t, psi),
+                None => feedforward::psi_rate(&motion.twist, psi),
+            };
+            feedforward::shift(psi, &rate, dt_s);
+        };
+        let elite = self.ga.individuals().first().copied().filter(|_| !acquiring);
+        let mut index = 0usize;
+        self.ga.shift_all(&self.config.search, |psi| {
+            match (index, elite) {
+                (0, _) => moved(psi, None),
+                (1, Some(e)) => {
+                    *psi = e;
+                    moved(psi, Some(&sliding));
+                }
+                (2, Some(e)) => {
+                    *psi = e;
+                    moved(psi, Some(&whole));
+                }
+                _ => moved(psi, Some(&whole)),
+            }
+            index += 1;
+        });
+        if acquiring {
+            self.acquisition.shift(|psi| moved(psi, Some(&whole)));
+        }
     }
 
     /// One generation on `frame` (the population already moved by the feedforward): evaluate,

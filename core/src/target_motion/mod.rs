@@ -24,8 +24,9 @@
 //! followed from its first estimates). The velocity fed forward is the filter's estimate; there
 //! is no trust threshold, dead band or switch. Whether it is real is left to the fitness: the
 //! tracker moves its elite by the camera's motion alone (the hypothesis that the block stands
-//! still) and every other individual by the filter's velocity as well, and the selection keeps
-//! whichever fits the next frame better ([`crate::tracker::Tracker::step`]). Without that, a
+//! still) and every other individual by the filter's velocity as well, two copies of the elite
+//! with and without the filter's turn among them, and the selection keeps whichever fits the
+//! next frame better ([`crate::tracker::Tracker::step`]). Without that, a
 //! noisy velocity fed forward to every individual drags the estimate along its own noise where
 //! the fitness is flat (depth above all), and the filter reads that back as motion.
 //!

@@ -76,7 +76,8 @@ pub const DOF: usize = PA10_DOF;
 
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
-/// Protocol version carried in every header (10: `CONFIG` carries the whole tuning as the
+/// Protocol version carried in every header (11: `ESTIMATE` carries the target filter's whole
+/// measurement ψ\[6\]; 10: `CONFIG` carries the whole tuning as the
 /// core's field table, [`evorec_core::tuning::FIELDS`], acquisition and status included; 9:
 /// `CONFIG` carries the six parameters of the target motion model; 8: `CONFIG` carries the target filter's
 /// parameters; 7: `ESTIMATE` carries the target filter's
@@ -103,7 +104,7 @@ pub const TUNING_LEN: usize = 4 + 4 + 4 * FIELDS.len();
 pub const CONFIG_LEN: usize = 4 * 4 + 2 * 2 + 4 + 4 * 9 + 4 * 7 + 4 * 6 + 8 + TUNING_LEN + 4 * 12;
 /// `FRAME` payload size before the two images.
 pub const FRAME_FIXED_LEN: usize = 2 + 2 + 8 + 4 * DOF * 2;
-/// `ESTIMATE` payload size: ψ, fitness, generation, status code, the filter's measured position.
+/// `ESTIMATE` payload size: ψ, fitness, generation, status code, the filter's measurement ψ.
 pub const ESTIMATE_LEN: usize = 4 * 6 + 4 + 4 + 1 + 4 * 6;
 /// `ACK` payload size.
 pub const ACK_LEN: usize = 4;

@@ -14,6 +14,10 @@ use crate::config::{HUE_UNITS, MIN_SATURATION, MIN_VALUE, NO_HUE};
 /// Pixels with `max(r,g,b) < MIN_VALUE` or saturation `(max−min)/max < MIN_SATURATION/255`
 /// get [`NO_HUE`]. Otherwise the HSV hue, rounded to the nearest 2° unit, in `0..HUE_UNITS`.
 ///
+/// The host's tracker reads every sample of an 8-bit RGB frame through this function, so it
+/// has no division: the one by `2·(max − min)` is a multiplication by a reciprocal from a
+/// table (`HALF_RECIPROCALS`), exact for every pixel.
+///
 /// # Examples
 /// ```
 /// use evorec_core::{hue::rgb_to_hue, config::NO_HUE};
@@ -24,17 +28,20 @@ use crate::config::{HUE_UNITS, MIN_SATURATION, MIN_VALUE, NO_HUE};
 /// assert_eq!(rgb_to_hue(128, 128, 128), NO_HUE);
 /// assert_eq!(rgb_to_hue(10, 0, 0), NO_HUE); // too dark
 /// ```
+#[inline]
 pub const fn rgb_to_hue(r: u8, g: u8, b: u8) -> u8 {
     // `const`: the RGB565 table of `crate::image` is built from this at compile time.
     let max = if r > g { r } else { g };
     let max = if max > b { max } else { b };
     let min = if r < g { r } else { g };
     let min = if min < b { min } else { b };
-    let delta = max as i32 - min as i32;
-    if max < MIN_VALUE || delta * 255 < MIN_SATURATION as i32 * max as i32 || delta == 0 {
+    let delta = max - min;
+    // One test for both (with `MIN_SATURATION > 0` a grey pixel, `delta = 0`, fails the
+    // second): `|`, not `||`, so that it is one branch.
+    if (max < MIN_VALUE) | ((delta as u32) * 255 < MIN_SATURATION as u32 * max as u32) {
         return NO_HUE;
     }
-    let (r, g, b) = (r as i32, g as i32, b as i32);
+    let (r, g, b, d) = (r as i32, g as i32, b as i32, delta as i32);
     // Sector offset (in 2° units) and signed position inside it, in [-delta, delta].
     let (offset, diff) = if r >= g && r >= b {
         (0, g - b)
@@ -43,11 +50,31 @@ pub const fn rgb_to_hue(r: u8, g: u8, b: u8) -> u8 {
     } else {
         (120, r - g)
     };
-    // 30·diff/delta units = 60°·diff/delta, rounded half up; then wrapped into 0..180.
-    let h = offset + (60 * diff + delta).div_euclid(2 * delta);
-    // In 0..HUE_UNITS after the wrap, so the cast is exact.
-    h.rem_euclid(HUE_UNITS as i32) as u8
+    // 30·diff/delta units = 60°·diff/delta, rounded half up: ⌊(60·diff + delta) / (2·delta)⌋,
+    // with 60 units added to the quotient to keep the numerator positive (below 181·255).
+    let numerator = (60 * diff + 121 * d) as u64;
+    let units = ((numerator * HALF_RECIPROCALS[delta as usize] as u64) >> 32) as i32 - 60;
+    // In −30..=150, wrapped into 0..HUE_UNITS.
+    let h = offset + units;
+    (if h < 0 { h + HUE_UNITS as i32 } else { h }) as u8
 }
+
+const _: () = assert!(MIN_SATURATION > 0, "rgb_to_hue relies on the saturation test to reject grey");
+
+/// `⌈2³² / (2·d)⌉` for `d = 1..=255` (0 for `d = 0`, never used): for every numerator
+/// `n < 2¹⁶`, `(n · HALF_RECIPROCALS[d]) >> 32 = ⌊n / (2·d)⌋`. The reciprocal is too large by
+/// less than `2d / 2³²`, which adds less than `n · 2d / 2³² < 2⁻⁶` to the exact quotient, and
+/// the exact quotient is at least `1 / (2d) ≥ 2⁻⁹` below the next integer. The test
+/// `rgb_to_hue_matches_the_division_everywhere` checks every pixel.
+const HALF_RECIPROCALS: [u32; 256] = {
+    let mut table = [0u32; 256];
+    let mut d = 1;
+    while d < 256 {
+        table[d] = (1u64 << 32).div_ceil(2 * d as u64) as u32;
+        d += 1;
+    }
+    table
+};
 
 /// Converts hue degrees to the nearest hue unit (any real angle, wrapped into `0..HUE_UNITS`).
 pub fn degrees_to_units(deg: f32) -> u8 {
@@ -202,6 +229,37 @@ mod tests {
         assert_eq!(rgb_to_hue(255, 128, 0), 15); // orange 30.1°
         // Brightness does not change hue.
         assert_eq!(rgb_to_hue(100, 50, 0), rgb_to_hue(200, 100, 0));
+    }
+
+    /// The definition, with divisions: the sector of the largest channel, then
+    /// `⌊(60·diff + delta) / (2·delta)⌋` wrapped into `0..HUE_UNITS`.
+    fn rgb_to_hue_by_division(r: u8, g: u8, b: u8) -> u8 {
+        let (max, min) = (r.max(g).max(b), r.min(g).min(b));
+        let delta = i32::from(max) - i32::from(min);
+        if max < MIN_VALUE || delta * 255 < i32::from(MIN_SATURATION) * i32::from(max) || delta == 0 {
+            return NO_HUE;
+        }
+        let (r, g, b) = (i32::from(r), i32::from(g), i32::from(b));
+        let (offset, diff) = if r >= g && r >= b {
+            (0, g - b)
+        } else if g >= b {
+            (60, b - r)
+        } else {
+            (120, r - g)
+        };
+        let h = offset + (60 * diff + delta).div_euclid(2 * delta);
+        h.rem_euclid(i32::from(HUE_UNITS)) as u8
+    }
+
+    #[test]
+    fn rgb_to_hue_matches_the_division_everywhere() {
+        for r in 0..=255u8 {
+            for g in 0..=255u8 {
+                for b in 0..=255u8 {
+                    assert_eq!(rgb_to_hue(r, g, b), rgb_to_hue_by_division(r, g, b), "rgb {r},{g},{b}");
+                }
+            }
+        }
     }
 
     #[test]

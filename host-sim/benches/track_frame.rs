@@ -3,9 +3,10 @@
 //! pixel) plus one generation of the sequence tracker (`Tracker<7, POPULATION_CAPACITY,
 //! DEFAULT_GRID>`, the default population, arm feedforward), on one core.
 //!
-//! `frame/rgb888-generation` is what `evorec track` does per frame today: one generation on the
-//! decoded 8-bit RGB images themselves, the hue computed only at the pixels the sample points
-//! hit (`evorec_core::image::Rgb888`).
+//! `frame/rgb888-generation` is one generation on the decoded 8-bit RGB images themselves, the
+//! hue computed only at the pixels the sample points hit (`evorec_core::image::Rgb888`);
+//! `frame/rgb888-frame` is what `evorec track` does per frame: the default tuning's
+//! `generations_per_frame` generations of it.
 //!
 //! `cargo bench -p evorec-sim --bench track_frame`. Target: ≤ 1 ms per frame.
 //! The frames are rendered by the simulator's renderer (shaded faces, anti-aliased edges,
@@ -44,11 +45,16 @@ fn benches(c: &mut Criterion) {
 
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).expect("space");
     let mut config = TrackerConfig::pa10(rig, block, Isometry3::identity(), space).with_seed(1);
+    let whole_frames_config = config;
     // One generation per step: the numbers are per generation (a frame runs
     // `generations_per_frame` of them, 2 by default).
     config.tuning.generations_per_frame = 1;
+    let mut whole_frames: Tracker<7, POPULATION_CAPACITY, DEFAULT_GRID> =
+        Tracker::new(whole_frames_config).expect("tracker");
     let mut tracker: Tracker<7, POPULATION_CAPACITY, DEFAULT_GRID> = Tracker::new(config).expect("tracker");
-    tracker.reset_around(&truth, &[0.002, 0.002, 0.002, 0.004, 0.004, 0.004]).expect("reset");
+    let spread = [0.002, 0.002, 0.002, 0.004, 0.004, 0.004];
+    whole_frames.reset_around(&truth, &spread).expect("reset");
+    tracker.reset_around(&truth, &spread).expect("reset");
     let joints = JointSample { q: [0.1, 0.5, 0.0, 1.2, 0.0, 0.8, 0.0], qd: [0.0; 7], time_us: 0 };
 
     let mut group = c.benchmark_group("frame");
@@ -87,6 +93,15 @@ fn benches(c: &mut Criterion) {
                 right: Rgb888Image::new_checked(images.right.as_raw().as_slice(), W, H).expect("image"),
             };
             tracker.step(black_box(&frame), &joints, 0.033).expect("step")
+        })
+    });
+    group.bench_function("rgb888-frame", |b| {
+        b.iter(|| {
+            let frame = StereoFrame {
+                left: Rgb888Image::new_checked(images.left.as_raw().as_slice(), W, H).expect("image"),
+                right: Rgb888Image::new_checked(images.right.as_raw().as_slice(), W, H).expect("image"),
+            };
+            whole_frames.step(black_box(&frame), &joints, 0.033).expect("step")
         })
     });
     group.finish();

@@ -240,12 +240,12 @@ mod tests {
             return NO_HUE;
         }
         let (r, g, b) = (i32::from(r), i32::from(g), i32::from(b));
-        let (offset, diff) = if r >= g && r >= b {
-            (0, g - b)
-        } else if g >= b {
-            (60, b - r)
-        } else {
-            (120, r - g)
+        let max = i32::from(max);
+        // The first channel equal to the largest names the sector.
+        let (offset, diff) = match max {
+            m if m == r => (0, g - b),
+            m if m == g => (60, b - r),
+            _ => (120, r - g),
         };
         let h = offset + (60 * diff + delta).div_euclid(2 * delta);
         h.rem_euclid(i32::from(HUE_UNITS)) as u8

@@ -1,12 +1,16 @@
-//! Tracker time per frame of `evorec track` at 640×480, decoding excluded: the reader's hue
-//! conversion of both decoded RGB images (`render::hue_into`, the core's `rgb_to_hue` per
-//! pixel) plus one generation of the sequence tracker (`Tracker<7, POPULATION_CAPACITY,
-//! DEFAULT_GRID>`, the default population, arm feedforward), on one core.
+//! Tracker time per frame of `evorec track` at 640×480, decoding excluded, on one core: the
+//! sequence tracker (`Tracker<7, POPULATION_CAPACITY, DEFAULT_GRID>`, the default population,
+//! arm feedforward).
 //!
+//! `frame/hue` converts both decoded RGB images to hue images (`render::hue_into`, the core's
+//! `rgb_to_hue` per pixel), `frame/generation` is one generation on those, `frame/hue+generation`
+//! both.
 //! `frame/rgb888-generation` is one generation on the decoded 8-bit RGB images themselves, the
-//! hue computed only at the pixels the sample points hit (`evorec_core::image::Rgb888`);
-//! `frame/rgb888-frame` is what `evorec track` does per frame: the default tuning's
-//! `generations_per_frame` generations of it.
+//! hue computed only at the pixels the sample points hit (`evorec_core::image::Rgb888`), and
+//! `frame/rgb888-frame` the default tuning's `generations_per_frame` generations of it.
+//! `frame/table-generation` and `frame/table-frame` are the same with the hue of a sample read
+//! from the table of every colour (`evorec_sim::track::hue_table::Rgb888Table`, the same hue
+//! bytes): `frame/table-frame` is what `evorec track` does per frame.
 //!
 //! `cargo bench -p evorec-sim --bench track_frame`. Target: ≤ 1 ms per frame.
 //! The frames are rendered by the simulator's renderer (shaded faces, anti-aliased edges,
@@ -17,12 +21,13 @@ use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::config::{DEFAULT_GRID, POPULATION_CAPACITY};
 use evorec_core::ga::SearchSpace;
 use evorec_core::image::HueImage;
-use evorec_core::image::Rgb888Image;
+use evorec_core::image::{Image, Rgb888Image};
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
 use evorec_core::tracker::{JointSample, StereoFrame, Tracker, TrackerConfig};
 use evorec_sim::render::{self, RenderOptions};
+use evorec_sim::track::hue_table::{self, Rgb888Table};
 use nalgebra::{Isometry3, Vector3};
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
@@ -95,6 +100,17 @@ fn benches(c: &mut Criterion) {
     });
     group.bench_function("rgb888-frame", |b| {
         b.iter(|| whole_frames.step(black_box(&rgb), &joints, 0.033).expect("step"))
+    });
+    hue_table::build();
+    let table = StereoFrame {
+        left: Image::<_, Rgb888Table>::new_checked(images.left.as_raw().as_slice(), W, H).expect("image"),
+        right: Image::<_, Rgb888Table>::new_checked(images.right.as_raw().as_slice(), W, H).expect("image"),
+    };
+    group.bench_function("table-generation", |b| {
+        b.iter(|| tracker.step(black_box(&table), &joints, 0.033).expect("step"))
+    });
+    group.bench_function("table-frame", |b| {
+        b.iter(|| whole_frames.step(black_box(&table), &joints, 0.033).expect("step"))
     });
     group.finish();
 }

@@ -12,13 +12,14 @@ use std::thread::JoinHandle;
 
 use evorec_core::board::{CameraController, Error as BoardError, ErrorKind, ErrorType, FrameInfo};
 use evorec_core::camera::Pinhole;
-use evorec_core::image::{PixelFormat, Rgb565, Rgb888};
+use evorec_core::image::{PixelFormat, Rgb565};
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 use evorec_core::tracker::{Estimate, JointSample};
 use image::RgbImage;
 use indicatif::ProgressBar;
 
+use super::hue_table::Rgb888Table;
 use crate::render;
 use crate::sequence::{self, FrameRow, JointTable, SequenceError};
 
@@ -29,13 +30,20 @@ pub const READ_AHEAD: usize = 8;
 pub trait SensorPixels: PixelFormat {
     /// The bytes of `img` in this format, row-major, no padding.
     fn pixels(img: &RgbImage) -> Vec<u8>;
+
+    /// Whatever the format builds before its first pixel is read (nothing by default).
+    fn prepare() {}
 }
 
-/// The PNG's own 8-bit colour: the hue of a sampled pixel is exact (the default of
-/// `evorec track`).
-impl SensorPixels for Rgb888 {
+/// The PNG's own 8-bit colour: the hue of a sampled pixel is exact, looked up in the table of
+/// every colour (the default of `evorec track`).
+impl SensorPixels for Rgb888Table {
     fn pixels(img: &RgbImage) -> Vec<u8> {
         img.as_raw().clone()
+    }
+
+    fn prepare() {
+        super::hue_table::build();
     }
 }
 

@@ -14,6 +14,7 @@
 
 pub mod board;
 pub mod eval;
+pub mod hue_table;
 pub mod output;
 
 use std::collections::BTreeSet;
@@ -38,7 +39,8 @@ use crate::sequence::Sequence;
 use crate::sim::search_space;
 pub use board::FrameSource;
 use board::{SensorPixels, SequenceBoard, TrackedFrame};
-use evorec_core::image::{Rgb565, Rgb888};
+use evorec_core::image::Rgb565;
+use hue_table::Rgb888Table;
 
 /// What `evorec track` was asked to do.
 #[derive(Debug, Clone, PartialEq)]
@@ -183,7 +185,7 @@ fn run_dof<const DOF: usize>(
     let rows = opts.points_per_row.unwrap_or(DEFAULT_GRID);
     match opts.pixels {
         Pixels::Rgb888 => {
-            crate::with_rows!("--points-per-row", rows, G => run_format::<DOF, Rgb888, G>(seq, source, opts, arm))
+            crate::with_rows!("--points-per-row", rows, G => run_format::<DOF, Rgb888Table, G>(seq, source, opts, arm))
         }
         Pixels::Rgb565 => {
             crate::with_rows!("--points-per-row", rows, G => run_format::<DOF, Rgb565, G>(seq, source, opts, arm))
@@ -226,6 +228,7 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
     };
     let progress = opts.progress.then(|| progress_bar(end as u64));
     let mut b = SequenceBoard::<F>::new(seq, first, rx, end, progress.clone());
+    F::prepare();
     let n = F::BYTES_PER_PIXEL * usize::from(seq.rig.right.width()) * usize::from(seq.rig.right.height());
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let t0 = Instant::now();

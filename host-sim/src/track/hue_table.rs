@@ -1,13 +1,13 @@
 //! The hue of every 8-bit RGB colour in one table (16 MiB, built once per process): the
 //! sequence tracker reads a recorded frame's sample points through it ([`Rgb888Table`]). Each
 //! entry is the core's [`rgb_to_hue`] of its colour, so the tracker sees the same hue bytes as
-//! through [`evorec_core::image::Rgb888`], with one load per sample point instead of the
+//! through [`Rgb888`], with one load per sample point instead of the
 //! arithmetic (`cargo bench -p evorec-sim --bench track_frame`, `docs/timing.md`).
 
 use std::sync::LazyLock;
 
 use evorec_core::hue::rgb_to_hue;
-use evorec_core::image::PixelFormat;
+use evorec_core::image::{PixelFormat, Rgb888};
 
 /// Colours in the table: 2⁸ per channel.
 const COLOURS: usize = 1 << 24;
@@ -27,24 +27,25 @@ pub fn build() {
     LazyLock::force(&TABLE);
 }
 
-/// 8-bit RGB pixels, 3 bytes `r, g, b`, as [`evorec_core::image::Rgb888`], whose hue is read
+/// 8-bit RGB pixels, 3 bytes `r, g, b`, as [`Rgb888`], whose hue is read
 /// from the table of every colour.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Rgb888Table;
 
+/// Everything but the hue is [`Rgb888`]'s.
 impl PixelFormat for Rgb888Table {
-    const BYTES_PER_PIXEL: usize = 3;
-    const NAME: &'static str = "RGB888";
-    type Pixel = [u8; 3];
-    const NONE: [u8; 3] = evorec_core::image::Rgb888::NONE;
+    const BYTES_PER_PIXEL: usize = Rgb888::BYTES_PER_PIXEL;
+    const NAME: &'static str = Rgb888::NAME;
+    type Pixel = <Rgb888 as PixelFormat>::Pixel;
+    const NONE: Self::Pixel = Rgb888::NONE;
 
     #[inline(always)]
-    fn split(bytes: &[u8]) -> &[[u8; 3]] {
-        bytes.as_chunks::<3>().0
+    fn split(bytes: &[u8]) -> &[Self::Pixel] {
+        Rgb888::split(bytes)
     }
 
     #[inline(always)]
-    fn hue(px: [u8; 3]) -> u8 {
+    fn hue(px: Self::Pixel) -> u8 {
         let [r, g, b] = px.map(usize::from);
         TABLE[r << 16 | g << 8 | b]
     }
@@ -53,7 +54,6 @@ impl PixelFormat for Rgb888Table {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use evorec_core::image::Rgb888;
 
     #[test]
     fn every_colour_reads_the_cores_hue() {

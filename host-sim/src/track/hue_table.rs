@@ -22,7 +22,7 @@ static TABLE: LazyLock<Box<[u8; COLOURS]>> = LazyLock::new(|| {
 });
 
 /// Builds the table now, if no one has yet (it is otherwise built at the first pixel read:
-/// about 40 ms, which the first frame would pay).
+/// about 60 ms in a release build, which the first frame would pay).
 pub fn build() {
     LazyLock::force(&TABLE);
 }

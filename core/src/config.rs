@@ -106,6 +106,21 @@ pub const NO_HUE: u8 = 255;
 /// Default half-width of the hue match band, in hue units (±5 units = ±10°).
 pub const DEFAULT_HUE_TOLERANCE: u8 = 5;
 
+/// How far (hue units) the colour model may move a face's hue from the configured one, and
+/// how much wider than the configured band the search band is ([`crate::colour`]): 13 units =
+/// 26°, so a face whose colour the camera moves by up to ±25° is still found.
+pub const MAX_HUE_SHIFT: u8 = 13;
+
+/// Frames over which the colour model averages what it learns ([`crate::colour`]): a frame's
+/// census moves a face's learnt hue by `1/n` of its offset, `n` the frames the face was seen,
+/// at most this many.
+pub const COLOUR_FRAMES: u16 = 8;
+
+/// Census points of a face within its search band that a frame needs for the colour model to
+/// learn from it ([`crate::colour`]): a quarter of one camera's census of a face with the
+/// default grid.
+pub const COLOUR_MIN_SAMPLES: u32 = 16;
+
 /// Minimum `max(r, g, b)` for a pixel to have a hue (darker pixels get [`NO_HUE`]).
 pub const MIN_VALUE: u8 = 40;
 

@@ -119,6 +119,26 @@ const fn face_set(faces: u8) -> usize {
     set
 }
 
+/// [`set_faces`] of every face set.
+const SET_FACES: [u8; FACE_SETS] = {
+    let mut t = [0u8; FACE_SETS];
+    let mut s = 0usize;
+    while s < FACE_SETS {
+        t[s] = set_faces(s);
+        s += 1;
+    }
+    t
+};
+
+/// One face's hue band: hues within `half` units of `centre` (circularly) match it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Band {
+    /// Centre, in hue units (`0..HUE_UNITS`).
+    pub centre: u8,
+    /// Half-width, in hue units.
+    pub half: u8,
+}
+
 /// [`face_set`] of every 6-bit face mask.
 const FACE_SET: [u8; 64] = {
     let mut t = [0u8; 64];
@@ -184,8 +204,40 @@ impl HueLut {
                 }
             }
             self.table[usize::from(h)] = mask;
-            for (set, plane) in self.sets.iter_mut().enumerate() {
-                plane[usize::from(h)] = u8::from(mask & set_faces(set) != 0);
+        }
+        self.fill_sets();
+    }
+
+    /// Rebuilds this table in place from one band per face (up to 8; a half-width of 90 or
+    /// more matches every hue): the same table as [`HueLut::fill`] where every band has the same
+    /// half-width. Bounded work: the bands' entries, then the planes a word at a time.
+    pub fn fill_bands(&mut self, bands: &[Band]) {
+        self.table = [0; 256];
+        let units = i32::from(HUE_UNITS);
+        for (k, band) in bands.iter().take(8).enumerate() {
+            let half = i32::from(band.half.min(HUE_UNITS / 2));
+            let centre = i32::from(band.centre % HUE_UNITS);
+            // A band of 90 or more wraps onto itself: its last entry would be its first.
+            let last = if 2 * half >= units { centre - half + units - 1 } else { centre + half };
+            for h in centre - half..=last {
+                if let Some(entry) = self.table.get_mut(h.rem_euclid(units) as usize) {
+                    *entry |= 1 << k;
+                }
+            }
+        }
+        self.fill_sets();
+    }
+
+    /// The face-set planes from the bitmask table, four entries per word operation: for a byte
+    /// `m ≤ 0x3F` of the masks of one face set, `(m + 0x7F) & 0x80` is `0x80` exactly when
+    /// `m ≠ 0` (no carry leaves the byte), shifted down to 1.
+    fn fill_sets(&mut self) {
+        for (plane, set) in self.sets.iter_mut().zip(SET_FACES) {
+            let faces = u32::from(set) * 0x0101_0101;
+            for (out, masks) in plane.chunks_exact_mut(4).zip(self.table.chunks_exact(4)) {
+                let m = u32::from_le_bytes([masks[0], masks[1], masks[2], masks[3]]) & faces & 0x3F3F_3F3F;
+                let hit = ((m + 0x7F7F_7F7F) & 0x8080_8080) >> 7;
+                out.copy_from_slice(&hit.to_le_bytes());
             }
         }
     }
@@ -321,6 +373,24 @@ mod tests {
         let mut refilled = HueLut::new(&[90], 30);
         refilled.fill(&[0, 60, 120, 0, 60, 120], 5);
         assert_eq!(refilled, lut);
+    }
+
+    #[test]
+    fn bands_of_one_width_are_the_table_of_that_tolerance() {
+        let hues = [0, 60, 120, 0, 60, 120];
+        for tolerance in [0, 5, 18, 44, 89, 90, 120] {
+            let bands = hues.map(|centre| Band { centre, half: tolerance });
+            let mut lut = HueLut::EMPTY;
+            lut.fill_bands(&bands);
+            assert_eq!(lut, HueLut::new(&hues, tolerance), "tolerance {tolerance}");
+        }
+        // Bands of different widths, wrapping round red.
+        let mut lut = HueLut::EMPTY;
+        lut.fill_bands(&[Band { centre: 2, half: 10 }, Band { centre: 50, half: 3 }]);
+        assert_eq!((lut.mask(172), lut.mask(171), lut.mask(12), lut.mask(13)), (1, 0, 1, 0));
+        assert_eq!((lut.mask(47), lut.mask(46), lut.mask(53), lut.mask(54)), (2, 0, 2, 0));
+        assert_eq!(lut.any(0b11)[50], 1);
+        assert_eq!(lut.any(0b100)[50], 0);
     }
 
     #[test]

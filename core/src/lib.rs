@@ -88,6 +88,8 @@ pub mod acquire;
 pub mod board;
 pub mod camera;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
+pub mod colour;
+#[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod config;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod feedforward;

@@ -10,11 +10,11 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 
 use crate::acquire::{self, Acquisition, HueBlobs};
 use crate::camera::{Pinhole, StereoRig};
+use crate::colour::{ColourModel, Colours};
 use crate::config::{DEFAULT_GRID, MIN_DEPTH_M, PA10_DOF, POPULATION_CAPACITY};
 use crate::feedforward;
 use crate::fitness::{Evaluator, Fitness};
 use crate::ga::{Best, Ga, GaParams, SearchSpace};
-use crate::hue::HueLut;
 use crate::image::{Hue, Image, PixelFormat};
 pub use crate::kinematics::JointSample;
 use crate::kinematics::{Chain, PA10};
@@ -249,7 +249,7 @@ impl<const DOF: usize> TrackerConfig<DOF> {
 pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = POPULATION_CAPACITY, const G: usize = DEFAULT_GRID> {
     config: TrackerConfig<DOF>,
     model: SurfaceStrips<G>,
-    lut: HueLut,
+    colours: Colours,
     ga: Ga<P>,
     rng: Xoshiro128PlusPlus,
     generation: u32,
@@ -264,7 +264,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// # Errors
     /// [`ConfigError`] for an invalid block, GA parameters, tolerance or `max_dt_s`.
     pub fn new(config: TrackerConfig<DOF>) -> Result<Self, ConfigError> {
-        let (model, lut) = Self::checked_parts(&config)?;
+        let (model, colours) = Self::checked_parts(&config)?;
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
         let mut ga = Ga::new(Psi::IDENTITY);
         ga.set_len(config.tuning.ga.population).map_err(|_| POPULATION_ERROR)?;
@@ -272,7 +272,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         Ok(Self {
             config,
             model,
-            lut,
+            colours,
             ga,
             rng,
             generation: 0,
@@ -302,7 +302,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         t.model.rebuild(&config.block)?;
         t.config = config;
         let hues: [u8; FACES] = t.model.faces().map(|f| f.hue);
-        t.lut.fill(&hues, t.config.tuning.hue_tolerance);
+        t.colours.configure(hues, t.config.tuning.hue_tolerance);
         t.rng = Xoshiro128PlusPlus::seed_from_u64(t.config.seed);
         t.generation = 0;
         t.monitor = StatusMonitor::new(Status::Searching);
@@ -322,7 +322,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         slot.insert(Self {
             config: *config,
             model: SurfaceStrips::EMPTY,
-            lut: HueLut::EMPTY,
+            colours: Colours::EMPTY,
             ga: Ga::new(Psi::IDENTITY),
             rng: Xoshiro128PlusPlus::seed_from_u64(config.seed),
             generation: 0,
@@ -333,12 +333,11 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     }
 
     /// Validates `config` and builds its model and hue table.
-    fn checked_parts(config: &TrackerConfig<DOF>) -> Result<(SurfaceStrips<G>, HueLut), ConfigError> {
+    fn checked_parts(config: &TrackerConfig<DOF>) -> Result<(SurfaceStrips<G>, Colours), ConfigError> {
         Self::check_config(config)?;
         let model = SurfaceStrips::<G>::new(&config.block)?;
         let hues: [u8; FACES] = model.faces().map(|f| f.hue);
-        let lut = HueLut::new(&hues, config.tuning.hue_tolerance);
-        Ok((model, lut))
+        Ok((model, Colours::new(hues, config.tuning.hue_tolerance)))
     }
 
     /// Validates `config` (everything [`Tracker::new`] can refuse).
@@ -435,7 +434,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     pub fn blobs_of<F: PixelFormat>(&self, frame: &StereoFrame<'_, F>) -> Result<(HueBlobs, HueBlobs), StepError> {
         self.check_frame(frame)?;
         let stride = self.config.tuning.acquire.scan_stride;
-        Ok((acquire::scan(&frame.left, &self.lut, stride), acquire::scan(&frame.right, &self.lut, stride)))
+        let lut = self.colours.lut(false);
+        Ok((acquire::scan(&frame.left, lut, stride), acquire::scan(&frame.right, lut, stride)))
     }
 
     /// `F(ψ)` of any pose on a frame pair (diagnostics; no state change).
@@ -445,7 +445,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     pub fn fitness_of<F: PixelFormat>(&self, psi: &Psi, frame: &StereoFrame<'_, F>) -> Result<Fitness, StepError> {
         self.check_frame(frame)?;
         psi.validate().map_err(StepError::Pose)?;
-        let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
+        let lut = self.colours.lut(self.status() == Status::Tracking);
+        let eval = Evaluator::new(&self.model, lut, &self.config.rig);
         Ok(eval.evaluate_psi(psi, &frame.left, &frame.right))
     }
 
@@ -530,9 +531,15 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
         let Outcome { best, estimate, target_measurement } =
             self.generation_on(frame, feedforward, acquiring, true, probe);
-        let status = self.monitor.update(best.fitness, &self.config.tuning.status);
+        // The status is decided on the fitness relative to what the true pose can score under
+        // the current light (`crate::colour`), so that its thresholds mean the same in every light.
+        let relative = best.fitness / self.colours.model().expected_fitness();
+        let status = self.monitor.update(relative, &self.config.tuning.status);
         if status == Status::Tracking && acquiring {
             self.acquisition.reset();
+        }
+        if status == Status::Tracking || relative >= self.config.tuning.status.acquire_fitness {
+            self.learn_colours(frame, &best);
         }
         // The target filter (one forward kinematics and a data-dependent update) runs only in the
         // mode that uses it, so the other modes keep the paper's constant work per generation.
@@ -554,6 +561,21 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             capture_time_us: joints.time_us,
             target_measurement,
         })
+    }
+
+    /// Learns the face colours from the census of the frame's best pose (see
+    /// [`crate::colour`]): called when it is tracked or scores at least the acquisition threshold.
+    fn learn_colours<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>, best: &Best) {
+        let eval = Evaluator::new(&self.model, self.colours.lut(true), &self.config.rig);
+        let mut tally = self.colours.model().tally();
+        let (r, t) = (best.psi.rotation_unchecked(), best.psi.translation());
+        eval.census(&r, &t, &frame.left, &frame.right, &mut |k, h| tally.add(k, h));
+        self.colours.learn(&tally);
+    }
+
+    /// The colour model of the block's faces, as learnt so far.
+    pub fn colours(&self) -> &ColourModel {
+        self.colours.model()
     }
 
     /// The feedforward of [`Feedforward::OnWithTarget`]: every individual is moved by the
@@ -615,7 +637,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     ) -> Outcome {
         probe.mark(Phase::Evaluate);
         let idle = if acquiring { self.config.tuning.acquire.idle_individuals } else { 0 };
-        let eval = Evaluator::new(&self.model, &self.lut, &self.config.rig);
+        let eval = Evaluator::new(&self.model, self.colours.lut(!acquiring), &self.config.rig);
         let best: Best = self.ga.evaluate_first(self.ga.len().saturating_sub(idle), |psi| {
             eval.evaluate_psi(psi, &frame.left, &frame.right).total
         });
@@ -675,7 +697,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let cfg = &self.config.tuning.acquire;
         let half = self.model.half_size();
         let half = [half.x, half.y, half.z];
-        self.acquisition.step(&frame.left, &frame.right, &self.lut, &self.config.rig, &half, cfg);
+        self.acquisition.step(&frame.left, &frame.right, self.colours.lut(false), &self.config.rig, &half, cfg);
         let Some(seed) = self.acquisition.seed().copied() else { return };
         let used = self.ga.len();
         let end = used - cfg.idle_individuals.min(used - 1);

@@ -1,0 +1,310 @@
+//! The block's face colours as the cameras see them, learnt from the images (an addition to
+//! §4.2, whose eq. 34 matches every face's configured hue `b_k` within a fixed band).
+//!
+//! A real camera does not deliver the configured hues: its white balance and tone curve move
+//! them (a saturated blue by −15° to −20° through a filmic curve), sky reflections make a face
+//! pale, highlights wash part of it out and shadows darken it. The configured hues are
+//! therefore only the prior of a colour model that the tracker learns from the pixels its own
+//! pose says belong to each face.
+//!
+//! **Two hue tables.** While the tracker is not tracking (searching, lost), every face matches
+//! its configured hue within `tolerance + MAX_HUE_SHIFT` (the *search band*, ±36° with the
+//! defaults), so that a block whose colours are off by up to ±25° is still found. While
+//! tracking, every face matches its learnt band: a centre within `MAX_HUE_SHIFT` of the
+//! configured hue and a half-width from the face's measured spread, never narrower than
+//! `tolerance` and never wider than the search band. On a flat image whose faces have their
+//! configured hues the learnt band is the configured one, so the fitness is the paper's.
+//!
+//! **Learning** ([`ColourModel::learn`]). After a frame's generations, when the best pose is
+//! tracked or scores at least the acquisition threshold, the colour census of that pose
+//! (`Evaluator::census`: the hue under the two deeper inner rows of every face it shows each
+//! camera, 64·G points per visible face and camera, away from the anti-aliased edges) is
+//! tallied per face ([`Tally`]). Only hues within the search band around the face's current
+//! centre count (a highlight has no hue, a shadow no hue, and a neighbour's colour at a
+//! partly occluded face lies outside the band). Their mean offset from the current centre moves
+//! the centre (one mean-shift step per frame); their standard deviation is the face's spread,
+//! and the learnt band holds 1.65 of them each side (nine in ten of the face's hues). Both are averaged over frames with weight `1 / min(n, COLOUR_FRAMES)`, `n` the
+//! frames the face was seen: the first sighting sets the model, later ones refine it. A face
+//! needs [`COLOUR_MIN_SAMPLES`] counted points in a frame to be learnt from.
+//!
+//! **The scale of the fitness** ([`ColourModel::expected_fitness`]): the fraction of the census
+//! points that match their face's learnt band, averaged over the frames it was learnt from. It
+//! is what the true pose can score under the current light (about 1 on a flat image, less
+//! where highlights and shadows take pixels' hues away); the status thresholds are relative to
+//! it (see [`crate::status`]).
+//!
+//! **Bounded work.** A census walks at most three faces per camera (the census of
+//! `Evaluator::census`); the tally is a few integer operations per point, the update a few
+//! per face, and rebuilding the tracking table ([`crate::hue::HueLut::fill_bands`]) a fixed
+//! number of word operations. All integer: host and board agree bit for bit.
+
+use crate::config::{COLOUR_FRAMES, COLOUR_MIN_SAMPLES, HUE_UNITS, MAX_HUE_SHIFT};
+use crate::hue::{Band, HueLut};
+use crate::model::FACES;
+
+/// Fixed-point scale of the learnt offsets and spreads: 1/256 hue unit.
+const Q: i32 = 256;
+
+/// Half-width of a learnt band in standard deviations of the face's hues, in 1/256: 1.65.
+const SPREAD_BAND_Q8: i32 = 422;
+
+/// Frames over which [`ColourModel::expected_fitness`] is averaged, at most: about a second at
+/// 30 frames/s, four times the colours' own average, so that a few frames of a wrong pose move
+/// the scale of the status little.
+const EXPECTED_FITNESS_FRAMES: u16 = 32;
+
+/// Lower bound of [`ColourModel::expected_fitness`]: a light that leaves fewer than half of a
+/// face's census points its hue is not one the status can be trusted in.
+pub const MIN_EXPECTED_FITNESS: f32 = 0.5;
+
+/// The learnt colour of one face.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+struct FaceColour {
+    /// Learnt centre minus the configured hue, in 1/256 hue units (within ±`MAX_HUE_SHIFT`).
+    offset: i32,
+    /// Standard deviation of the face's hues, in 1/256 hue units.
+    spread: i32,
+    /// Frames the face was learnt from (saturating).
+    frames: u16,
+}
+
+/// What the census of one pose saw on one face.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FaceTally {
+    /// Census points on the face.
+    pub points: u32,
+    /// Points whose hue lies within the search band around the face's current centre.
+    pub near: u32,
+    /// `Σ` signed offsets of those hues from the current centre (hue units).
+    pub sum: i32,
+    /// `Σ offset²` of those hues.
+    pub square_sum: u32,
+    /// Points whose hue lies within the face's current learnt band.
+    pub in_band: u32,
+}
+
+/// The census of one pose, per face, against the bands it was taken with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Tally {
+    faces: [FaceTally; FACES],
+    bands: [Band; FACES],
+    window: u8,
+}
+
+impl Tally {
+    /// Counts hue byte `h` seen on face `k` (faces `≥ FACES` are ignored).
+    #[inline(always)]
+    pub fn add(&mut self, k: usize, h: u8) {
+        let (Some(face), Some(band)) = (self.faces.get_mut(k), self.bands.get(k)) else { return };
+        face.points += 1;
+        if h >= HUE_UNITS {
+            return;
+        }
+        let d = signed_offset(h, band.centre);
+        let dist = d.unsigned_abs();
+        if dist <= u32::from(self.window) {
+            face.near += 1;
+            face.sum += d;
+            face.square_sum += dist * dist;
+        }
+        if dist <= u32::from(band.half) {
+            face.in_band += 1;
+        }
+    }
+
+    /// The tally of face `k`.
+    pub fn face(&self, k: usize) -> Option<&FaceTally> {
+        self.faces.get(k)
+    }
+}
+
+/// `h − centre` wrapped into `−90..90` hue units.
+#[inline(always)]
+fn signed_offset(h: u8, centre: u8) -> i32 {
+    let units = i32::from(HUE_UNITS);
+    let d = (i32::from(h) - i32::from(centre)).rem_euclid(units);
+    if d >= units / 2 { d - units } else { d }
+}
+
+/// The colour model of the block's faces: the configured hues (the prior) and what was learnt.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ColourModel {
+    prior: [u8; FACES],
+    tolerance: u8,
+    faces: [FaceColour; FACES],
+    /// Averaged fraction of census points within their face's band, in 1/256.
+    coverage: i32,
+    /// Frames the coverage was averaged over (saturating).
+    coverage_frames: u16,
+}
+
+impl ColourModel {
+    /// The model that has learnt nothing: every face at its configured hue `prior[k]` (hue
+    /// units) with half-width `tolerance` (units, below 90).
+    pub const fn new(prior: [u8; FACES], tolerance: u8) -> Self {
+        let none = FaceColour { offset: 0, spread: 0, frames: 0 };
+        Self { prior, tolerance, faces: [none; FACES], coverage: Q, coverage_frames: 0 }
+    }
+
+    /// Forgets everything learnt (the configured hues again).
+    pub fn reset(&mut self) {
+        *self = Self::new(self.prior, self.tolerance);
+    }
+
+    /// Half-width of the search band: `tolerance + MAX_HUE_SHIFT`, below 90 units.
+    pub fn search_half_width(&self) -> u8 {
+        self.tolerance.saturating_add(MAX_HUE_SHIFT).min(HUE_UNITS / 2 - 1)
+    }
+
+    /// The search bands: every face's configured hue ± [`ColourModel::search_half_width`].
+    pub fn search_bands(&self) -> [Band; FACES] {
+        let half = self.search_half_width();
+        self.prior.map(|centre| Band { centre: centre % HUE_UNITS, half })
+    }
+
+    /// The learnt band of every face (the configured one for a face not seen yet).
+    pub fn bands(&self) -> [Band; FACES] {
+        core::array::from_fn(|k| self.band(k))
+    }
+
+    fn band(&self, k: usize) -> Band {
+        let (Some(&prior), Some(face)) = (self.prior.get(k), self.faces.get(k)) else {
+            return Band { centre: 0, half: self.tolerance };
+        };
+        let units = i32::from(HUE_UNITS);
+        let centre = (i32::from(prior) + round_q(face.offset)).rem_euclid(units);
+        // 1.65 standard deviations each side hold about nine in ten of a face's hues.
+        let spread = (SPREAD_BAND_Q8 * face.spread / Q + Q - 1) / Q;
+        let half = spread.clamp(i32::from(self.tolerance), i32::from(self.search_half_width()));
+        Band { centre: u8::try_from(centre).unwrap_or(0), half: u8::try_from(half).unwrap_or(self.tolerance) }
+    }
+
+    /// An empty tally against the current bands.
+    pub fn tally(&self) -> Tally {
+        Tally { faces: [FaceTally::default(); FACES], bands: self.bands(), window: self.search_half_width() }
+    }
+
+    /// Learns from the census of a pose (see the module docs). Returns whether any band changed.
+    pub fn learn(&mut self, tally: &Tally) -> bool {
+        let before = self.bands();
+        let (mut points, mut in_band) = (0u32, 0u32);
+        for (k, (face, seen)) in self.faces.iter_mut().zip(tally.faces.iter()).enumerate() {
+            if seen.near < COLOUR_MIN_SAMPLES {
+                continue;
+            }
+            points += seen.points;
+            in_band += seen.in_band;
+            let near = i64::from(seen.near);
+            let centre = tally.bands.get(k).map_or(0, |b| b.centre);
+            let prior = self.prior.get(k).copied().unwrap_or(0);
+            // The measured centre relative to the prior, and the spread about it.
+            let mean = i64::from(Q) * i64::from(seen.sum) / near;
+            let measured = Q * signed_offset(centre, prior) + mean as i32;
+            let variance = (i64::from(Q * Q) * i64::from(seen.square_sum) / near - mean * mean).max(0);
+            let spread = crate::math::sqrt(variance as f32) as i32;
+            face.frames = face.frames.saturating_add(1);
+            let weight = i32::from(face.frames.min(COLOUR_FRAMES));
+            let limit = Q * i32::from(MAX_HUE_SHIFT);
+            face.offset = (face.offset + (measured - face.offset) / weight).clamp(-limit, limit);
+            face.spread += (spread - face.spread) / weight;
+        }
+        if points > 0 {
+            self.coverage_frames = self.coverage_frames.saturating_add(1);
+            let weight = i32::from(self.coverage_frames.min(EXPECTED_FITNESS_FRAMES));
+            let measured = (i64::from(Q) * i64::from(in_band) / i64::from(points)) as i32;
+            self.coverage += (measured - self.coverage) / weight;
+        }
+        self.bands() != before
+    }
+
+    /// What the true pose is expected to score under the current light: the averaged fraction
+    /// of census points within their face's band, at least [`MIN_EXPECTED_FITNESS`] (1 before
+    /// anything is learnt).
+    pub fn expected_fitness(&self) -> f32 {
+        let f = self.coverage as f32 / Q as f32;
+        if f > 1.0 {
+            1.0
+        } else if f > MIN_EXPECTED_FITNESS {
+            f
+        } else {
+            MIN_EXPECTED_FITNESS
+        }
+    }
+
+    /// The learnt hue of face `k` in degrees (the configured one before it was seen).
+    pub fn hue_deg(&self, k: usize) -> f32 {
+        let (prior, offset) = (self.prior.get(k).copied().unwrap_or(0), self.faces.get(k).map_or(0, |f| f.offset));
+        let deg = 2.0 * (f32::from(prior) + offset as f32 / Q as f32);
+        if deg < 0.0 {
+            deg + 360.0
+        } else if deg >= 360.0 {
+            deg - 360.0
+        } else {
+            deg
+        }
+    }
+
+    /// Frames face `k` was learnt from (0: never seen).
+    pub fn frames_seen(&self, k: usize) -> u16 {
+        self.faces.get(k).map_or(0, |f| f.frames)
+    }
+}
+
+/// The colour model with its two hue tables, as the tracker holds it: the search table (every
+/// face's configured hue ± the search band) and the tracking table (the learnt bands).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Colours {
+    model: ColourModel,
+    search: HueLut,
+    track: HueLut,
+}
+
+impl Colours {
+    /// Nothing learnt, and both tables empty: [`Colours::configure`] builds them in place.
+    pub const EMPTY: Self =
+        Self { model: ColourModel::new([0; FACES], 0), search: HueLut::EMPTY, track: HueLut::EMPTY };
+
+    /// The model of `prior` (hue units per face) and `tolerance` with nothing learnt, and its
+    /// two tables.
+    pub fn new(prior: [u8; FACES], tolerance: u8) -> Self {
+        let mut colours = Self::EMPTY;
+        colours.configure(prior, tolerance);
+        colours
+    }
+
+    /// Rebuilds everything in place for `prior` and `tolerance`: nothing learnt.
+    pub fn configure(&mut self, prior: [u8; FACES], tolerance: u8) {
+        self.model = ColourModel::new(prior, tolerance);
+        self.search.fill_bands(&self.model.search_bands());
+        self.track.fill_bands(&self.model.bands());
+    }
+
+    /// The table the fitness and the acquisition use: the learnt bands while `tracking`, the
+    /// search bands otherwise.
+    pub fn lut(&self, tracking: bool) -> &HueLut {
+        if tracking { &self.track } else { &self.search }
+    }
+
+    /// The colour model.
+    pub fn model(&self) -> &ColourModel {
+        &self.model
+    }
+
+    /// Learns from a census tally ([`ColourModel::learn`]) and rebuilds the tracking table:
+    /// on the board every time (constant work, so the measured worst case is every case), on
+    /// a host only when a band changed.
+    pub fn learn(&mut self, tally: &Tally) {
+        let changed = self.model.learn(tally);
+        if changed || cfg!(target_arch = "arm") {
+            self.track.fill_bands(&self.model.bands());
+        }
+    }
+}
+
+/// `x / Q` rounded to the nearest integer, halves away from zero.
+fn round_q(x: i32) -> i32 {
+    if x >= 0 { (x + Q / 2) / Q } else { -((-x + Q / 2) / Q) }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,112 @@
+use super::*;
+use crate::config::DEFAULT_HUE_TOLERANCE;
+
+const PRIOR: [u8; FACES] = [0, 60, 120, 0, 60, 120];
+
+/// A tally of `n` points of face `k` at each of `hues`.
+fn tally_of(model: &ColourModel, k: usize, hues: &[u8], n: usize) -> Tally {
+    let mut tally = model.tally();
+    for _ in 0..n {
+        for &h in hues {
+            tally.add(k, h);
+        }
+    }
+    tally
+}
+
+#[test]
+fn nothing_learnt_is_the_configured_band() {
+    let model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
+    for (k, band) in model.bands().iter().enumerate() {
+        assert_eq!(*band, Band { centre: PRIOR[k], half: DEFAULT_HUE_TOLERANCE });
+    }
+    let wide = DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT;
+    assert!(model.search_bands().iter().all(|b| b.half == wide));
+    assert_eq!(model.expected_fitness(), 1.0);
+    assert_eq!(model.hue_deg(2), 240.0);
+}
+
+#[test]
+fn the_first_sighting_sets_the_hue_and_later_ones_refine_it() {
+    let mut model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
+    // Blue seen at 224° (112 units), eight units below the prior, with a spread of one unit.
+    assert!(model.learn(&tally_of(&model, 2, &[111, 112, 113], 10)));
+    assert_eq!(model.bands()[2].centre, 112);
+    assert_eq!(model.bands()[2].half, DEFAULT_HUE_TOLERANCE, "a narrow spread keeps the configured width");
+    assert_eq!(model.frames_seen(2), 1);
+    assert_eq!(model.frames_seen(5), 0, "the opposite face is learnt separately");
+    assert!((model.hue_deg(2) - 224.0).abs() < 0.01);
+    // A wide spread (±12 units, standard deviation 12) widens the band, within the search band.
+    for _ in 0..20 {
+        model.learn(&tally_of(&model, 2, &[100, 124], 10));
+    }
+    let band = model.bands()[2];
+    assert_eq!(band.centre, 112);
+    assert_eq!(band.half, model.search_half_width(), "{band:?}");
+}
+
+#[test]
+fn hues_outside_the_search_band_and_without_hue_are_not_learnt() {
+    let mut model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
+    // Green (60 units) seen as yellow-green 45 and as red 0 (another face's colour) and NO_HUE.
+    let tally = tally_of(&model, 1, &[48, 0, crate::config::NO_HUE], 20);
+    let face = *tally.face(1).unwrap();
+    assert_eq!((face.points, face.near, face.in_band), (60, 20, 0));
+    model.learn(&tally);
+    assert_eq!(model.bands()[1].centre, 48);
+    // Too few points: nothing learnt.
+    let before = model;
+    assert!(!model.learn(&tally_of(&model, 1, &[50], COLOUR_MIN_SAMPLES as usize - 1)));
+    assert_eq!(model, before);
+}
+
+#[test]
+fn the_learnt_hue_stays_within_the_largest_shift() {
+    let mut model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
+    // Red pulled ever further towards magenta: each frame sees it at the edge of its window.
+    for _ in 0..100 {
+        let band = model.bands()[0];
+        let edge = (i32::from(band.centre) - i32::from(model.search_half_width())).rem_euclid(180) as u8;
+        model.learn(&tally_of(&model, 0, &[edge], 20));
+    }
+    assert_eq!(model.bands()[0].centre, 180 - MAX_HUE_SHIFT);
+    assert!((model.hue_deg(0) - (360.0 - 2.0 * f32::from(MAX_HUE_SHIFT))).abs() < 0.01);
+}
+
+#[test]
+fn the_expected_fitness_is_the_share_of_points_in_band() {
+    let mut model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
+    // Three of four points of red in band, the fourth a highlight without hue.
+    for _ in 0..50 {
+        model.learn(&tally_of(&model, 0, &[0, 1, 179, crate::config::NO_HUE], 10));
+    }
+    assert!((model.expected_fitness() - 0.75).abs() < 0.01, "{}", model.expected_fitness());
+    // Never below the floor.
+    for _ in 0..50 {
+        model.learn(&tally_of(
+            &model,
+            0,
+            &[0, crate::config::NO_HUE, crate::config::NO_HUE, crate::config::NO_HUE],
+            20,
+        ));
+    }
+    assert_eq!(model.expected_fitness(), MIN_EXPECTED_FITNESS);
+    model.reset();
+    assert_eq!(model, ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE));
+}
+
+#[test]
+fn the_tables_follow_the_model() {
+    let mut colours = Colours::new(PRIOR, DEFAULT_HUE_TOLERANCE);
+    assert_eq!(*colours.lut(true), HueLut::new(&PRIOR, DEFAULT_HUE_TOLERANCE));
+    assert_eq!(*colours.lut(false), HueLut::new(&PRIOR, DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT));
+    let tally = tally_of(colours.model(), 2, &[112], 20);
+    colours.learn(&tally);
+    assert_eq!(colours.lut(true).mask(112 - DEFAULT_HUE_TOLERANCE), 1 << 2);
+    assert_eq!(colours.lut(true).mask(112 + DEFAULT_HUE_TOLERANCE + 1) & 1 << 2, 0);
+    assert_eq!(
+        *colours.lut(false),
+        HueLut::new(&PRIOR, DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT),
+        "the search table stays"
+    );
+}

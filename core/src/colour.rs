@@ -92,23 +92,24 @@ pub struct Tally {
 }
 
 impl Tally {
-    /// Counts hue byte `h` seen on face `k` (faces `≥ FACES` are ignored).
-    #[inline(always)]
-    pub fn add(&mut self, k: usize, h: u8) {
+    /// Counts the hue bytes `hues` seen on face `k` (faces `≥ FACES` are ignored).
+    pub fn add(&mut self, k: usize, hues: &[u8]) {
         let (Some(face), Some(band)) = (self.faces.get_mut(k), self.bands.get(k)) else { return };
-        face.points += 1;
-        if h >= HUE_UNITS {
-            return;
-        }
-        let d = signed_offset(h, band.centre);
-        let dist = d.unsigned_abs();
-        if dist <= u32::from(self.window) {
-            face.near += 1;
-            face.sum += d;
-            face.square_sum += dist * dist;
-        }
-        if dist <= u32::from(band.half) {
-            face.in_band += 1;
+        for &h in hues {
+            face.points += 1;
+            if h >= HUE_UNITS {
+                continue;
+            }
+            let d = signed_offset(h, band.centre);
+            let dist = d.unsigned_abs();
+            if dist <= u32::from(self.window) {
+                face.near += 1;
+                face.sum += d;
+                face.square_sum += dist * dist;
+            }
+            if dist <= u32::from(band.half) {
+                face.in_band += 1;
+            }
         }
     }
 
@@ -250,39 +251,65 @@ impl ColourModel {
     }
 }
 
-/// The colour model with its two hue tables, as the tracker holds it: the search table (every
-/// face's configured hue ± the search band) and the tracking table (the learnt bands).
+/// The colour model with the hue table the tracker uses: the search table (every face's
+/// configured hue ± the search band) while it is not tracking, the tracking table (the learnt
+/// bands) while it is. One table, rebuilt when the tracker changes between the two
+/// ([`Colours::select`]) and when the learnt bands change.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Colours {
     model: ColourModel,
-    search: HueLut,
-    track: HueLut,
+    lut: HueLut,
+    tracking: bool,
 }
 
 impl Colours {
-    /// Nothing learnt, and both tables empty: [`Colours::configure`] builds them in place.
-    pub const EMPTY: Self =
-        Self { model: ColourModel::new([0; FACES], 0), search: HueLut::EMPTY, track: HueLut::EMPTY };
+    /// Nothing learnt, and an empty table: [`Colours::configure`] builds it in place. Every
+    /// byte is zero, so a board writes it without a copy of it in flash.
+    pub const EMPTY: Self = Self {
+        model: ColourModel {
+            prior: [0; FACES],
+            tolerance: 0,
+            faces: [FaceColour { offset: 0, spread: 0, frames: 0 }; FACES],
+            coverage: 0,
+            coverage_frames: 0,
+        },
+        lut: HueLut::EMPTY,
+        tracking: false,
+    };
 
-    /// The model of `prior` (hue units per face) and `tolerance` with nothing learnt, and its
-    /// two tables.
+    /// The model of `prior` (hue units per face) and `tolerance` with nothing learnt, and the
+    /// search table.
     pub fn new(prior: [u8; FACES], tolerance: u8) -> Self {
         let mut colours = Self::EMPTY;
         colours.configure(prior, tolerance);
         colours
     }
 
-    /// Rebuilds everything in place for `prior` and `tolerance`: nothing learnt.
+    /// Rebuilds everything in place for `prior` and `tolerance`: nothing learnt, the search
+    /// table.
     pub fn configure(&mut self, prior: [u8; FACES], tolerance: u8) {
         self.model = ColourModel::new(prior, tolerance);
-        self.search.fill_bands(&self.model.search_bands());
-        self.track.fill_bands(&self.model.bands());
+        self.tracking = false;
+        self.rebuild();
     }
 
-    /// The table the fitness and the acquisition use: the learnt bands while `tracking`, the
-    /// search bands otherwise.
-    pub fn lut(&self, tracking: bool) -> &HueLut {
-        if tracking { &self.track } else { &self.search }
+    /// The table the fitness and the acquisition use.
+    pub fn lut(&self) -> &HueLut {
+        &self.lut
+    }
+
+    /// Whether [`Colours::lut`] is the tracking table.
+    pub fn is_tracking(&self) -> bool {
+        self.tracking
+    }
+
+    /// Makes [`Colours::lut`] the tracking table (`tracking`) or the search table, rebuilding
+    /// it if it is not that one already.
+    pub fn select(&mut self, tracking: bool) {
+        if tracking != self.tracking {
+            self.tracking = tracking;
+            self.rebuild();
+        }
     }
 
     /// The colour model.
@@ -290,14 +317,19 @@ impl Colours {
         &self.model
     }
 
-    /// Learns from a census tally ([`ColourModel::learn`]) and rebuilds the tracking table:
-    /// on the board every time (constant work, so the measured worst case is every case), on
-    /// a host only when a band changed.
+    /// Learns from a census tally ([`ColourModel::learn`]) and rebuilds the tracking table if
+    /// it is in use: on the board every time (constant work, so the measured worst case is
+    /// every case), on a host only when a band changed.
     pub fn learn(&mut self, tally: &Tally) {
         let changed = self.model.learn(tally);
-        if changed || cfg!(target_arch = "arm") {
-            self.track.fill_bands(&self.model.bands());
+        if self.tracking && (changed || cfg!(target_arch = "arm")) {
+            self.rebuild();
         }
+    }
+
+    fn rebuild(&mut self) {
+        let bands = if self.tracking { self.model.bands() } else { self.model.search_bands() };
+        self.lut.fill_bands(&bands);
     }
 }
 

@@ -265,10 +265,6 @@ struct Scores<'l> {
 trait RowWalk {
     /// `Σ plane[hue]` over the `G` points of each of the `N` rows of `edge`.
     fn count_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, plane: &[u8; 256]) -> u32;
-
-    /// Hands the hue byte of each of the `G` points of each of the `N` rows of `edge` to
-    /// `visit` ([`NO_HUE`] outside the image): the colour census ([`census`]).
-    fn visit_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, visit: &mut impl FnMut(u8));
 }
 
 /// One row of the pinhole kernel in 16.16 fixed point: its first point (pixel coordinates,
@@ -284,6 +280,7 @@ struct FixedRow {
 impl FixedRow {
     /// One row from `start` to `start + span`, as [`FixedRow::edge`] makes each (the
     /// board's code: per row, its two divisions).
+    #[cfg_attr(not(any(target_arch = "arm", test)), allow(dead_code))]
     #[inline(always)]
     fn new<const G: usize>(start: [f32; 3], span: [f32; 3]) -> Self {
         let end = add(start, span);
@@ -350,19 +347,6 @@ impl<F: PixelFormat> RowWalk for Affine<'_, '_, F> {
         #[cfg(not(target_arch = "arm"))]
         host_edge::<G, N, F>(self.view, &edge.starts, edge.span, plane)
     }
-
-    fn visit_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, visit: &mut impl FnMut(u8)) {
-        for start in &edge.starts {
-            let row = FixedRow::new::<G>(*start, edge.span);
-            let (mut u, mut v) = (row.u, row.v);
-            for _ in 0..G {
-                let index = self.view.index(u, v);
-                visit(F::hue(self.view.pixels.get(index as usize).copied().unwrap_or(F::NONE)));
-                u = u.wrapping_add(row.du);
-                v = v.wrapping_add(row.dv);
-            }
-        }
-    }
 }
 
 /// The host's edge: its rows ([`FixedRow::edge`]) and their walk, out of line (its registers
@@ -419,19 +403,6 @@ impl<F: PixelFormat, P: Fn(f32, f32, f32) -> (f32, f32)> RowWalk for Lens<'_, '_
             }
         }
         hits
-    }
-
-    fn visit_rows<const G: usize, const N: usize>(&self, edge: &EdgeRows<N>, visit: &mut impl FnMut(u8)) {
-        for start in &edge.starts {
-            let ([mut x, mut y, mut w], step) = (*start, edge.step);
-            for _ in 0..G {
-                let (u1, v1) = (self.to_pixel)(x, y, w);
-                visit(self.view.hue(u1, v1));
-                x += step[0];
-                y += step[1];
-                w += step[2];
-            }
-        }
     }
 }
 
@@ -597,26 +568,18 @@ fn distorted_counts<const G: usize, F: PixelFormat, const WALK_ALL: bool>(
     t: &Vector3<f32>,
     faces: &FacePlan,
 ) -> Counts {
-    let proj = Projector::new([1.0, 1.0, 0.0, 0.0], r, t);
-    // One pixel is `1 / f` in normalised coordinates (the lens itself aside).
-    let px_unit = 1.0 / min_finite(cam.fx(), cam.fy());
-    count_faces::<G, WALK_ALL>(model, lut, &Lens { view, to_pixel: lens_to_pixel(cam) }, &proj, faces, px_unit)
-}
-
-/// The lens kernel's projection of a point in normalised homogeneous coordinates to pixel
-/// coordinates plus one (as [`View::hue`] reads them): the plumb_bob polynomial and `K`.
-/// Beyond `r2_max` the polynomial is outside the calibrated field (and may fold back into the
-/// image): such points read as outside.
-#[inline(always)]
-fn lens_to_pixel(cam: &Pinhole) -> impl Fn(f32, f32, f32) -> (f32, f32) {
     let (fx, fy, cx1, cy1) = (cam.fx(), cam.fy(), cam.cx() + 1.0, cam.cy() + 1.0);
     let (d, r2_max) = (*cam.distortion(), distortion_field_r2(cam));
-    move |x: f32, y: f32, w: f32| {
+    let proj = Projector::new([1.0, 1.0, 0.0, 0.0], r, t);
+    let to_pixel = move |x: f32, y: f32, w: f32| {
         let inv = 1.0 / w;
         let (xn, yn) = (x * inv, y * inv);
         let (xd, yd) = d.apply(xn, yn);
         if xn * xn + yn * yn <= r2_max { (fx * xd + cx1, fy * yd + cy1) } else { (-1.0, -1.0) }
-    }
+    };
+    // One pixel is `1 / f` in normalised coordinates (the lens itself aside).
+    let px_unit = 1.0 / min_finite(fx, fy);
+    count_faces::<G, WALK_ALL>(model, lut, &Lens { view, to_pixel }, &proj, faces, px_unit)
 }
 
 /// The squared normalised radius within which a distorted camera's model is used: twice the
@@ -668,7 +631,13 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
         let visible = visible_mask & (1u8 << k) != 0;
         // The face's axis `a` and the two others in cyclic order, `b = a + 1`, `c = a + 2`
         // (matched, not indexed: no bounds check).
-        let (a, bx, cx, centre) = face_axes(&axes, proj, k);
+        let [x, y, z] = &axes;
+        let (a, (ax, bx, cx)) = match k % 3 {
+            0 => (0, (x, y, z)),
+            1 => (1, (y, z, x)),
+            _ => (2, (z, x, y)),
+        };
+        let centre = if k < 3 { add(proj.c, ax.half) } else { sub(proj.c, ax.half) };
         let (mut inner, mut outer) = (0u32, 0u32);
         let scores = Scores { inner: lut.plane(k), outer: lut.any(visible_mask) };
         // Metres of the face per pixel across each pair of edges, at the face's centre.
@@ -684,14 +653,19 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
             let (sil_in, sil_out, fold_in) =
                 (near(SILHOUETTE_INNER_PX), near(SILHOUETTE_OUTER_PX), near(FOLD_INNER_PX));
             for positive in [true, false] {
-                let neighbour = if positive { side } else { side + 3 };
+                let (base, neighbour) = if positive {
+                    (add(add(centre, s.half), l.start), side)
+                } else {
+                    (add(sub(centre, s.half), l.start), side + 3)
+                };
                 let silhouette = !faces.front.get(neighbour).copied().unwrap_or(false);
-                let at = edge_rows_at(centre, s, l, positive);
+                // The inward direction is −side on the + side, +side on the − side.
+                let at = |d: &[f32; 3]| if positive { sub(base, *d) } else { add(base, *d) };
                 // The inner rows of a hidden face do not count: only the board walks them.
                 if visible || WALK_ALL {
                     let mut offsets = s.inner;
                     offsets[0] = if silhouette { sil_in } else { fold_in };
-                    let rows = EdgeRows { starts: offsets.each_ref().map(&at), step: l.step, span: l.span };
+                    let rows = EdgeRows { starts: offsets.each_ref().map(at), step: l.step, span: l.span };
                     inner += walk.count_rows::<G, { INNER_INSETS_M.len() }>(&rows, scores.inner);
                 }
                 // Outer rows count only on silhouette edges (the face across is hidden) of
@@ -699,7 +673,7 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
                 if visible && silhouette {
                     let mut offsets = s.outer;
                     offsets[0] = sil_out.map(|v| -v);
-                    let rows = EdgeRows { starts: offsets.each_ref().map(&at), step: l.step, span: l.span };
+                    let rows = EdgeRows { starts: offsets.each_ref().map(at), step: l.step, span: l.span };
                     outer += walk.count_rows::<G, { OUTER_OFFSETS_M.len() }>(&rows, scores.outer);
                     outer_edges += 1;
                 }
@@ -725,29 +699,6 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
         }
     }
     counts
-}
-
-/// The axis `a` of face `k`'s normal, the axis rows of the two others in cyclic order
-/// (`b = a + 1`, `c = a + 2`; matched, not indexed: no bounds check) and the face's centre.
-#[inline(always)]
-fn face_axes<'a>(axes: &'a [AxisRows; 3], proj: &Projector, k: usize) -> (usize, &'a AxisRows, &'a AxisRows, [f32; 3]) {
-    let [x, y, z] = axes;
-    let (a, (ax, bx, cx)) = match k % 3 {
-        0 => (0, (x, y, z)),
-        1 => (1, (y, z, x)),
-        _ => (2, (z, x, y)),
-    };
-    let centre = if k < 3 { add(proj.c, ax.half) } else { sub(proj.c, ax.half) };
-    (a, bx, cx, centre)
-}
-
-/// The start of a row at distance `d` (a row offset, as [`AxisRows::inner`]) inside the edge
-/// on the `+s` (`positive`) or `−s` side of the face centred at `centre`, running along `l`.
-/// The inward direction is −s on the + side, +s on the − side.
-#[inline(always)]
-fn edge_rows_at(centre: [f32; 3], s: &AxisRows, l: &AxisRows, positive: bool) -> impl Fn(&[f32; 3]) -> [f32; 3] {
-    let base = if positive { add(add(centre, s.half), l.start) } else { add(sub(centre, s.half), l.start) };
-    move |d: &[f32; 3]| if positive { sub(base, *d) } else { add(base, *d) }
 }
 
 /// The projection of the rows that run along, or are offset along, one model axis `x`:
@@ -845,15 +796,15 @@ impl<'m, const G: usize> Evaluator<'m, G> {
     }
 
     /// The colour census of a pose given as rotation `r` and translation `t` in `Σ_CR` in
-    /// both cameras: `visit(k, h)` for the hue byte `h` under every point of the two deeper
-    /// inner rows of every visible face `k` (see [`census`]).
+    /// both cameras: `visit(k, hues)` with the hue bytes under the census points of each row
+    /// of every visible face `k` (see [`census`]).
     pub fn census<B: AsRef<[u8]>, F: PixelFormat>(
         &self,
         r: &Matrix3<f32>,
         t: &Vector3<f32>,
         left: &Image<B, F>,
         right: &Image<B, F>,
-        visit: &mut impl FnMut(usize, u8),
+        visit: &mut dyn FnMut(usize, &[u8]),
     ) {
         census::camera_census(self.model, &self.rig.right, right, r, t, visit);
         let (r_left, t_left) = (self.left_r * r, self.left_r * t + self.left_t);

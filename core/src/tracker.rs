@@ -427,26 +427,27 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.target.reset();
     }
 
-    /// The colour blobs of a frame pair as the acquisition scan sees them (left, right).
+    /// The colour blobs of a frame pair as the acquisition scan sees them (left, right),
+    /// through the current hue table (the search table unless the last frame was tracked).
     ///
     /// # Errors
     /// [`StepError::ImageSize`].
     pub fn blobs_of<F: PixelFormat>(&self, frame: &StereoFrame<'_, F>) -> Result<(HueBlobs, HueBlobs), StepError> {
         self.check_frame(frame)?;
         let stride = self.config.tuning.acquire.scan_stride;
-        let lut = self.colours.lut(false);
+        let lut = self.colours.lut();
         Ok((acquire::scan(&frame.left, lut, stride), acquire::scan(&frame.right, lut, stride)))
     }
 
-    /// `F(ψ)` of any pose on a frame pair (diagnostics; no state change).
+    /// `F(ψ)` of any pose on a frame pair through the current hue table (diagnostics; no state
+    /// change).
     ///
     /// # Errors
     /// [`StepError::ImageSize`] or [`StepError::Pose`].
     pub fn fitness_of<F: PixelFormat>(&self, psi: &Psi, frame: &StereoFrame<'_, F>) -> Result<Fitness, StepError> {
         self.check_frame(frame)?;
         psi.validate().map_err(StepError::Pose)?;
-        let lut = self.colours.lut(self.status() == Status::Tracking);
-        let eval = Evaluator::new(&self.model, lut, &self.config.rig);
+        let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
         Ok(eval.evaluate_psi(psi, &frame.left, &frame.right))
     }
 
@@ -506,8 +507,10 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             return Err(StepError::BadDt(dt_s));
         }
 
-        // The work of this generation is decided by the status it starts in.
+        // The work of this generation is decided by the status it starts in, and so is the
+        // hue table: the learnt one while tracking, the search one otherwise.
         let acquiring = self.monitor.status() != Status::Tracking;
+        self.colours.select(!acquiring);
         probe.mark(Phase::Feedforward);
         match feedforward {
             Feedforward::Off => {}
@@ -566,10 +569,10 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// Learns the face colours from the census of the frame's best pose (see
     /// [`crate::colour`]): called when it is tracked or scores at least the acquisition threshold.
     fn learn_colours<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>, best: &Best) {
-        let eval = Evaluator::new(&self.model, self.colours.lut(true), &self.config.rig);
+        let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
         let mut tally = self.colours.model().tally();
         let (r, t) = (best.psi.rotation_unchecked(), best.psi.translation());
-        eval.census(&r, &t, &frame.left, &frame.right, &mut |k, h| tally.add(k, h));
+        eval.census(&r, &t, &frame.left, &frame.right, &mut |k, row| tally.add(k, row));
         self.colours.learn(&tally);
     }
 
@@ -637,7 +640,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     ) -> Outcome {
         probe.mark(Phase::Evaluate);
         let idle = if acquiring { self.config.tuning.acquire.idle_individuals } else { 0 };
-        let eval = Evaluator::new(&self.model, self.colours.lut(!acquiring), &self.config.rig);
+        let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
         let best: Best = self.ga.evaluate_first(self.ga.len().saturating_sub(idle), |psi| {
             eval.evaluate_psi(psi, &frame.left, &frame.right).total
         });
@@ -697,7 +700,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let cfg = &self.config.tuning.acquire;
         let half = self.model.half_size();
         let half = [half.x, half.y, half.z];
-        self.acquisition.step(&frame.left, &frame.right, self.colours.lut(false), &self.config.rig, &half, cfg);
+        self.acquisition.step(&frame.left, &frame.right, self.colours.lut(), &self.config.rig, &half, cfg);
         let Some(seed) = self.acquisition.seed().copied() else { return };
         let used = self.ga.len();
         let end = used - cfg.idle_individuals.min(used - 1);

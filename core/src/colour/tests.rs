@@ -7,9 +7,7 @@ const PRIOR: [u8; FACES] = [0, 60, 120, 0, 60, 120];
 fn tally_of(model: &ColourModel, k: usize, hues: &[u8], n: usize) -> Tally {
     let mut tally = model.tally();
     for _ in 0..n {
-        for &h in hues {
-            tally.add(k, h);
-        }
+        tally.add(k, hues);
     }
     tally
 }
@@ -96,17 +94,21 @@ fn the_expected_fitness_is_the_share_of_points_in_band() {
 }
 
 #[test]
-fn the_tables_follow_the_model() {
+fn the_table_follows_the_status_and_the_model() {
     let mut colours = Colours::new(PRIOR, DEFAULT_HUE_TOLERANCE);
-    assert_eq!(*colours.lut(true), HueLut::new(&PRIOR, DEFAULT_HUE_TOLERANCE));
-    assert_eq!(*colours.lut(false), HueLut::new(&PRIOR, DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT));
+    let search = HueLut::new(&PRIOR, DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT);
+    assert_eq!((*colours.lut(), colours.is_tracking()), (search, false));
+    colours.select(true);
+    assert_eq!(*colours.lut(), HueLut::new(&PRIOR, DEFAULT_HUE_TOLERANCE));
     let tally = tally_of(colours.model(), 2, &[112], 20);
     colours.learn(&tally);
-    assert_eq!(colours.lut(true).mask(112 - DEFAULT_HUE_TOLERANCE), 1 << 2);
-    assert_eq!(colours.lut(true).mask(112 + DEFAULT_HUE_TOLERANCE + 1) & 1 << 2, 0);
-    assert_eq!(
-        *colours.lut(false),
-        HueLut::new(&PRIOR, DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT),
-        "the search table stays"
-    );
+    assert_eq!(colours.lut().mask(112 - DEFAULT_HUE_TOLERANCE), 1 << 2);
+    assert_eq!(colours.lut().mask(112 + DEFAULT_HUE_TOLERANCE + 1) & 1 << 2, 0);
+    colours.select(false);
+    assert_eq!(*colours.lut(), search, "the search table ignores what was learnt");
+    // Learning while searching changes the model, not the table.
+    colours.learn(&tally_of(colours.model(), 1, &[50], 20));
+    assert_eq!(*colours.lut(), search);
+    colours.select(true);
+    assert_eq!(colours.lut().mask(50), 1 << 1);
 }

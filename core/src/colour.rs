@@ -45,6 +45,10 @@ use crate::model::FACES;
 /// Fixed-point scale of the learnt offsets and spreads: 1/256 hue unit.
 const Q: i32 = 256;
 
+/// Fixed-point one of the averaged coverage (fine enough that a `1/32` step of a difference of
+/// a thousandth is not lost to the truncation).
+const COVERAGE_ONE: i32 = 1 << 16;
+
 /// Half-width of a learnt band in standard deviations of the face's hues, in 1/256: 1.65.
 const SPREAD_BAND_Q8: i32 = 422;
 
@@ -68,55 +72,62 @@ struct FaceColour {
     frames: u16,
 }
 
-/// What the census of one pose saw on one face.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct FaceTally {
-    /// Census points on the face.
-    pub points: u32,
-    /// Points whose hue lies within the search band around the face's current centre.
-    pub near: u32,
-    /// `Σ` signed offsets of those hues from the current centre (hue units).
-    pub sum: i32,
-    /// `Σ offset²` of those hues.
-    pub square_sum: u32,
-    /// Points whose hue lies within the face's current learnt band.
-    pub in_band: u32,
-}
-
-/// The census of one pose, per face, against the bands it was taken with.
+/// The census of one pose: per face, how many points it had and how many of them saw each hue.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Tally {
-    faces: [FaceTally; FACES],
-    bands: [Band; FACES],
-    window: u8,
+    /// Census points per face (with and without a hue).
+    points: [u16; FACES],
+    /// Per face, the points that saw each hue unit (saturating: a frame's census of a face
+    /// has 64 points with the default grid).
+    hues: [[u8; HUE_UNITS as usize]; FACES],
 }
 
 impl Tally {
+    /// Nothing counted.
+    pub const EMPTY: Self = Self { points: [0; FACES], hues: [[0; HUE_UNITS as usize]; FACES] };
+
     /// Counts the hue bytes `hues` seen on face `k` (faces `≥ FACES` are ignored).
     pub fn add(&mut self, k: usize, hues: &[u8]) {
-        let (Some(face), Some(band)) = (self.faces.get_mut(k), self.bands.get(k)) else { return };
+        let (Some(points), Some(counts)) = (self.points.get_mut(k), self.hues.get_mut(k)) else { return };
         for &h in hues {
-            face.points += 1;
-            if h >= HUE_UNITS {
-                continue;
-            }
-            let d = signed_offset(h, band.centre);
-            let dist = d.unsigned_abs();
-            if dist <= u32::from(self.window) {
-                face.near += 1;
-                face.sum += d;
-                face.square_sum += dist * dist;
-            }
-            if dist <= u32::from(band.half) {
-                face.in_band += 1;
+            *points = points.saturating_add(1);
+            if let Some(c) = counts.get_mut(usize::from(h)) {
+                *c = c.saturating_add(1);
             }
         }
     }
 
-    /// The tally of face `k`.
-    pub fn face(&self, k: usize) -> Option<&FaceTally> {
-        self.faces.get(k)
+    /// Census points of face `k` (with and without a hue).
+    pub fn points(&self, k: usize) -> u32 {
+        self.points.get(k).map_or(0, |&n| u32::from(n))
     }
+
+    /// The points of face `k` whose hue is within `half` units of `centre`, with the sum of
+    /// their offsets from `centre` and of their squares.
+    pub fn within(&self, k: usize, centre: u8, half: u8) -> Moments {
+        let mut m = Moments::default();
+        let Some(counts) = self.hues.get(k) else { return m };
+        let half = i32::from(half.min(HUE_UNITS / 2 - 1));
+        for d in -half..=half {
+            let h = (i32::from(centre) + d).rem_euclid(i32::from(HUE_UNITS));
+            let n = counts.get(h as usize).map_or(0, |&c| u32::from(c));
+            m.count += n;
+            m.sum += d * n as i32;
+            m.square_sum += d.unsigned_abs() * d.unsigned_abs() * n;
+        }
+        m
+    }
+}
+
+/// Counts and moments of the hues of a face's census points within a band ([`Tally::within`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Moments {
+    /// Points within the band.
+    pub count: u32,
+    /// `Σ` their signed offsets from the band's centre (hue units).
+    pub sum: i32,
+    /// `Σ` their squared offsets.
+    pub square_sum: u32,
 }
 
 /// `h − centre` wrapped into `−90..90` hue units.
@@ -133,7 +144,7 @@ pub struct ColourModel {
     prior: [u8; FACES],
     tolerance: u8,
     faces: [FaceColour; FACES],
-    /// Averaged fraction of census points within their face's band, in 1/256.
+    /// Averaged fraction of census points within their face's band, in 1/[`COVERAGE_ONE`].
     coverage: i32,
     /// Frames the coverage was averaged over (saturating).
     coverage_frames: u16,
@@ -144,7 +155,7 @@ impl ColourModel {
     /// units) with half-width `tolerance` (units, below 90).
     pub const fn new(prior: [u8; FACES], tolerance: u8) -> Self {
         let none = FaceColour { offset: 0, spread: 0, frames: 0 };
-        Self { prior, tolerance, faces: [none; FACES], coverage: Q, coverage_frames: 0 }
+        Self { prior, tolerance, faces: [none; FACES], coverage: COVERAGE_ONE, coverage_frames: 0 }
     }
 
     /// Forgets everything learnt (the configured hues again).
@@ -180,49 +191,55 @@ impl ColourModel {
         Band { centre: u8::try_from(centre).unwrap_or(0), half: u8::try_from(half).unwrap_or(self.tolerance) }
     }
 
-    /// An empty tally against the current bands.
-    pub fn tally(&self) -> Tally {
-        Tally { faces: [FaceTally::default(); FACES], bands: self.bands(), window: self.search_half_width() }
-    }
-
     /// Learns from the census of a pose (see the module docs). Returns whether any band changed.
     pub fn learn(&mut self, tally: &Tally) -> bool {
         let before = self.bands();
-        let (mut points, mut in_band) = (0u32, 0u32);
-        for (k, (face, seen)) in self.faces.iter_mut().zip(tally.faces.iter()).enumerate() {
-            if seen.near < COLOUR_MIN_SAMPLES {
-                continue;
+        let window = self.search_half_width();
+        let mut learnt = [false; FACES];
+        for (k, seen) in learnt.iter_mut().enumerate() {
+            let Some(band) = before.get(k) else { continue };
+            let near = tally.within(k, band.centre, window);
+            if near.count >= COLOUR_MIN_SAMPLES {
+                self.learn_face(k, band.centre, &near);
+                *seen = true;
             }
-            points += seen.points;
-            in_band += seen.in_band;
-            let near = i64::from(seen.near);
-            let centre = tally.bands.get(k).map_or(0, |b| b.centre);
-            let prior = self.prior.get(k).copied().unwrap_or(0);
-            // The measured centre relative to the prior, and the spread about it.
-            let mean = i64::from(Q) * i64::from(seen.sum) / near;
-            let measured = Q * signed_offset(centre, prior) + mean as i32;
-            let variance = (i64::from(Q * Q) * i64::from(seen.square_sum) / near - mean * mean).max(0);
-            let spread = crate::math::sqrt(variance as f32) as i32;
-            face.frames = face.frames.saturating_add(1);
-            let weight = i32::from(face.frames.min(COLOUR_FRAMES));
-            let limit = Q * i32::from(MAX_HUE_SHIFT);
-            face.offset = (face.offset + (measured - face.offset) / weight).clamp(-limit, limit);
-            face.spread += (spread - face.spread) / weight;
+        }
+        // The share of the census points within their face's band, as now learnt.
+        let (mut points, mut in_band) = (0u32, 0u32);
+        for (k, band) in self.bands().iter().enumerate().filter(|(k, _)| learnt.get(*k) == Some(&true)) {
+            points += tally.points(k);
+            in_band += tally.within(k, band.centre, band.half).count;
         }
         if points > 0 {
             self.coverage_frames = self.coverage_frames.saturating_add(1);
             let weight = i32::from(self.coverage_frames.min(EXPECTED_FITNESS_FRAMES));
-            let measured = (i64::from(Q) * i64::from(in_band) / i64::from(points)) as i32;
+            let measured = (i64::from(COVERAGE_ONE) * i64::from(in_band) / i64::from(points)) as i32;
             self.coverage += (measured - self.coverage) / weight;
         }
         self.bands() != before
+    }
+
+    /// One frame's step of face `k` from the `near` hues of its census around `centre`: the
+    /// measured centre relative to the prior, and the spread about it.
+    fn learn_face(&mut self, k: usize, centre: u8, near: &Moments) {
+        let (Some(face), Some(&prior)) = (self.faces.get_mut(k), self.prior.get(k)) else { return };
+        let count = i64::from(near.count.max(1));
+        let mean = i64::from(Q) * i64::from(near.sum) / count;
+        let measured = Q * signed_offset(centre, prior) + mean as i32;
+        let variance = (i64::from(Q * Q) * i64::from(near.square_sum) / count - mean * mean).max(0);
+        let spread = crate::math::sqrt(variance as f32) as i32;
+        face.frames = face.frames.saturating_add(1);
+        let weight = i32::from(face.frames.min(COLOUR_FRAMES));
+        let limit = Q * i32::from(MAX_HUE_SHIFT);
+        face.offset = (face.offset + (measured - face.offset) / weight).clamp(-limit, limit);
+        face.spread += (spread - face.spread) / weight;
     }
 
     /// What the true pose is expected to score under the current light: the averaged fraction
     /// of census points within their face's band, at least [`MIN_EXPECTED_FITNESS`] (1 before
     /// anything is learnt).
     pub fn expected_fitness(&self) -> f32 {
-        let f = self.coverage as f32 / Q as f32;
+        let f = self.coverage as f32 / COVERAGE_ONE as f32;
         if f > 1.0 {
             1.0
         } else if f > MIN_EXPECTED_FITNESS {

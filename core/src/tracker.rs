@@ -10,7 +10,7 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 
 use crate::acquire::{self, Acquisition, HueBlobs};
 use crate::camera::{Pinhole, StereoRig};
-use crate::colour::{ColourModel, Colours};
+use crate::colour::{ColourModel, Colours, Tally};
 use crate::config::{DEFAULT_GRID, MIN_DEPTH_M, PA10_DOF, POPULATION_CAPACITY};
 use crate::feedforward;
 use crate::fitness::{Evaluator, Fitness};
@@ -570,7 +570,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// [`crate::colour`]): called when it is tracked or scores at least the acquisition threshold.
     fn learn_colours<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>, best: &Best) {
         let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
-        let mut tally = self.colours.model().tally();
+        let mut tally = Tally::EMPTY;
         let (r, t) = (best.psi.rotation_unchecked(), best.psi.translation());
         eval.census(&r, &t, &frame.left, &frame.right, &mut |k, row| tally.add(k, row));
         self.colours.learn(&tally);

@@ -8,14 +8,21 @@ use evorec_core::pose::Psi;
 use evorec_core::synth;
 use evorec_core::tracker::StereoFrame;
 
+#[allow(dead_code)]
 /// The left and right hue images of [`Block::PAPER`] at `truth` (right camera frame), the size
 /// of the rig's cameras, rendered exactly ([`synth::render_block`]).
 pub fn render(rig: &StereoRig, truth: &Psi) -> (Vec<u8>, Vec<u8>) {
+    render_block(rig, &Block::PAPER, truth)
+}
+
+/// As [`render`], for any block (e.g. the paper's with other face hues: the block as a camera
+/// with another white balance sees it).
+pub fn render_block(rig: &StereoRig, block: &Block, truth: &Psi) -> (Vec<u8>, Vec<u8>) {
     let (w, h) = (usize::from(rig.right.width()), usize::from(rig.right.height()));
     let iso = truth.try_to_isometry().unwrap();
     let (mut l, mut r) = (vec![NO_HUE; w * h], vec![NO_HUE; w * h]);
-    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
-    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
+    synth::render_block(block, &rig.right, &iso, &mut r).unwrap();
+    synth::render_block(block, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
     (l, r)
 }
 

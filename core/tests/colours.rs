@@ -1,0 +1,95 @@
+//! The colour model on synthetic frames whose faces do not have the configured hues: the
+//! block is found, its colours are learnt, and the status scale follows the light.
+
+use evorec_core::camera::{Pinhole, StereoRig};
+use evorec_core::config::{DEFAULT_HUE_TOLERANCE, MAX_HUE_SHIFT};
+use evorec_core::ga::SearchSpace;
+use evorec_core::model::Block;
+use evorec_core::pose::Psi;
+use evorec_core::quat;
+use evorec_core::status::Status;
+use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
+use nalgebra::{Isometry3, Vector3};
+
+mod common;
+use common::{frame, render_block};
+
+const W: u16 = 320;
+const H: u16 = 240;
+const STILL: JointSample<7> = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
+
+fn tracker(seed: u64) -> Tracker<7, 40, 8> {
+    let rig = StereoRig::parallel(Pinhole::new_checked(400.0, 400.0, 160.0, 120.0, W, H).unwrap(), 0.1).unwrap();
+    let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space);
+    Tracker::new(config.with_seed(seed).with_feedforward(Feedforward::Off)).unwrap()
+}
+
+/// The paper's block as a camera sees it whose colours are off: red at +22°, green at −24°,
+/// blue at −16° (within the ±25° the search band allows for).
+fn shifted_block() -> Block {
+    Block { face_hues_deg: [22.0, 96.0, 224.0, 22.0, 96.0, 224.0], ..Block::PAPER }
+}
+
+#[test]
+fn a_block_whose_hues_are_off_is_found_and_its_colours_learnt() {
+    let truth = Psi::from_parts(
+        &Vector3::new(0.03, -0.02, 0.75),
+        &quat::from_angle_axis(2.2, &Vector3::new(0.4, -1.0, 0.3)).unwrap(),
+    );
+    let block = shifted_block();
+    for seed in [1, 2, 3] {
+        let mut t = tracker(seed);
+        let rig = t.config().rig;
+        let (l, r) = render_block(&rig, &block, &truth);
+        let mut first = None;
+        let mut last = None;
+        for i in 0..60 {
+            let e = t.step(&frame(&l, &r, W, H), &STILL, 0.033).unwrap();
+            if e.status == Status::Tracking && first.is_none() {
+                first = Some(i);
+            }
+            last = Some(e);
+        }
+        let e = last.unwrap();
+        assert!(first.is_some_and(|i| i <= 20), "seed {seed}: first tracking {first:?}");
+        assert_eq!(e.status, Status::Tracking, "seed {seed}");
+        let err = (e.psi.translation() - truth.translation()).norm();
+        assert!(err < 0.01, "seed {seed}: {err} m off");
+        // The faces the cameras see were learnt, each within a hue unit (2°) of its colour.
+        let colours = t.colours();
+        let mut learnt = 0;
+        for k in 0..6 {
+            if colours.frames_seen(k) > 0 {
+                let d = (colours.hue_deg(k) - block.face_hues_deg[k] + 540.0) % 360.0 - 180.0;
+                assert!(
+                    d.abs() <= 2.0,
+                    "seed {seed}, face {k}: learnt {} for {}",
+                    colours.hue_deg(k),
+                    block.face_hues_deg[k]
+                );
+                learnt += 1;
+            }
+        }
+        assert!(learnt >= 2, "seed {seed}: {learnt} faces learnt");
+        // A flat image: every census point is in its band, so the status scale is 1.
+        assert!(colours.expected_fitness() > 0.95, "seed {seed}: {}", colours.expected_fitness());
+        assert!(e.fitness > 0.85, "seed {seed}: F {}", e.fitness);
+    }
+}
+
+#[test]
+fn a_block_whose_hues_are_beyond_the_search_band_is_not_taken_for_the_block() {
+    // Every face 30° beyond its configured hue (beyond the ±(10 + 26)° search band): the
+    // tracker must not report it, whatever it finds.
+    let half = f32::from(DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT) * 2.0;
+    let block = Block { face_hues_deg: Block::PAPER.face_hues_deg.map(|h| h + half + 30.0), ..Block::PAPER };
+    let truth = Psi::new([0.0, 0.0, 0.75], [0.1, 0.3, 0.1]);
+    let mut t = tracker(1);
+    let rig = t.config().rig;
+    let (l, r) = render_block(&rig, &block, &truth);
+    for _ in 0..40 {
+        let e = t.step(&frame(&l, &r, W, H), &STILL, 0.033).unwrap();
+        assert_ne!(e.status, Status::Tracking);
+    }
+}

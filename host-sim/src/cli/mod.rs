@@ -1,6 +1,7 @@
 //! The command line: one [`clap::Args`] struct per subcommand, each with its `run`, and the
 //! arguments they share.
 
+mod colours;
 mod misc;
 mod paper;
 mod run;
@@ -72,6 +73,12 @@ pub enum Command {
     /// Render one frame of a scenario: left/right PNGs, the same with the projected search
     /// model at the true pose drawn over them, and frame.json with the geometry.
     Render(misc::RenderArgs),
+    /// The block's face colours as the cameras of a recorded sequence or a ROS 2 bag see them:
+    /// tracks from the first frame to `--frames` past `--frame` (a frame showing the block),
+    /// prints each face's measured hue and band, and writes them as a `[target]` table
+    /// (`--out`, default colours.toml) for sequence.toml or the rig file. Tracking does not
+    /// need it: the tracker learns the colours by itself.
+    Colours(colours::ColoursArgs),
     /// Print the tracker's tuning as a `[tracker]` TOML table, every field with its unit and
     /// meaning: the defaults, or a scenario's (and a `--config` file's) effective values. Give
     /// the file to `run`, `hil`, `track`, `servo` or `acquire` with `--config FILE`.
@@ -93,6 +100,7 @@ impl Command {
             Self::Acquire(a) => a.run(progress),
             Self::Render(a) => a.run(),
             Self::Config(a) => a.run(),
+            Self::Colours(a) => a.run(progress),
         }
     }
 }

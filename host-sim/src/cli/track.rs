@@ -105,11 +105,16 @@ impl TrackArgs {
         })
     }
 
+    /// The options of a run with every default but the tuning's `config` file and the seed
+    /// (`evorec colours`).
+    pub fn default_options(config: Option<&Path>, seed: u64, progress: bool) -> Result<track::TrackOptions> {
+        Ok(track::TrackOptions { tuning: base_tuning(config)?, seed, progress, ..track::TrackOptions::default() })
+    }
+
     /// The tuning: `ff+target` over the defaults, then the `--config` file, then `--method`
     /// (or `--no-ff`) and `--population`.
     fn tuning(&self) -> Result<Tuning> {
-        let base = Tuning { feedforward: Method::FfTarget.into(), ..Tuning::DEFAULT };
-        let mut t = with_config_file(base, self.config.as_deref())?;
+        let mut t = base_tuning(self.config.as_deref())?;
         if let Some(m) = if self.no_ff { Some(Method::Ga) } else { self.method } {
             t.feedforward = m.into();
         }
@@ -121,6 +126,12 @@ impl TrackArgs {
         }
         Ok(t)
     }
+}
+
+/// `ff+target` over the defaults, then the `config` file's keys.
+fn base_tuning(config: Option<&Path>) -> Result<Tuning> {
+    let base = Tuning { feedforward: Method::FfTarget.into(), ..Tuning::DEFAULT };
+    Ok(with_config_file(base, config)?)
 }
 
 fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<()> {

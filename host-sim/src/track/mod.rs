@@ -13,6 +13,7 @@
 //! a bad PNG found later fails with an error naming it and leaves no output file behind.
 
 pub mod board;
+pub mod colours;
 pub mod eval;
 pub mod hue_table;
 pub mod output;
@@ -22,6 +23,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Result, anyhow, bail};
+use evorec_core::colour::ColourModel;
 use evorec_core::config::DEFAULT_GRID;
 
 use crate::scenario::HOST_POPULATION_CAPACITY;
@@ -110,6 +112,8 @@ pub struct TrackOutput {
     pub seconds: f64,
     /// The options used.
     pub options: TrackOptions,
+    /// The colour model of the block's faces as the tracker learnt it by the last frame.
+    pub colours: ColourModel,
 }
 
 fn check_sizes(opts: &TrackOptions) -> Result<()> {
@@ -240,7 +244,8 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
         p.finish_and_clear();
     }
     let stats = stats.map_err(|e| anyhow!("tracking stopped: {e}"))?;
-    Ok(TrackOutput { tracked, rejected: stats.rejected, kept, seconds, options: opts.clone() })
+    let colours = *tracker.colours();
+    Ok(TrackOutput { tracked, rejected: stats.rejected, kept, seconds, options: opts.clone(), colours })
 }
 
 fn progress_bar(len: u64) -> ProgressBar {

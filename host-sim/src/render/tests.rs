@@ -4,6 +4,7 @@ use super::*;
 use evorec_core::config::NO_HUE;
 use evorec_core::hue::{degrees_to_units, hue_distance};
 use evorec_core::synth;
+use nalgebra::Vector3;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 

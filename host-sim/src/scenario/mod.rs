@@ -59,12 +59,33 @@
 //! [start]
 //! delay_s = 0.033          # [0, 1]: capture → output delay of the hand-over; default frame_period_s
 //!
+//! [render]                 # camera-like light (crate::render::Light); the defaults are the
+//!                          #   flat Lambert shading and nothing else
+//! light_dir_cam = [-0.4, -0.6, -1.0] # finite, non-zero: towards the light, camera frame
+//! ambient = 0.35           # [0, 1]: brightness of a face the light does not reach
+//! diffuse = 0.65           # [0, 1]: Lambert brightness added for a face facing the light
+//! albedo_saturation = 1.0  # (0, 1]: HSV saturation of the faces' paint (lower mixes in white)
+//! specular = 0.0           # [0, 4]: Blinn–Phong highlight strength (white); 0 = none
+//! shininess = 40.0         # [1, 10000]: Blinn–Phong exponent (larger: smaller highlight)
+//! shadow_frame = "camera"  # "camera" (Σ_CR) | "block": the frame the cast shadow is fixed in
+//! shadow_normal = [1, 0, 0] # finite, non-zero: normal n̂ of the shadow band's planes
+//! shadow_offset_m = 0.0    # [-10, 10]: the band is offset ≤ n̂·p < offset + width (m)
+//! shadow_width_m = 0.0     # [0, 20]: 0 = no shadow; there the faces get the ambient light only
+//! tone_curve = "linear"    # "linear" | "srgb" | "filmic": per channel, after the gains
+//! tone_exposure = 1.0      # (0, 16]: factor on every channel before the tone curve
+//! white_balance = [1, 1, 1] # each (0, 4]: per-channel gains (a white-balance error)
+//! chroma_noise_std = 0.0   # [0, 100]: σ of per-pixel Cb and Cr noise (8-bit levels)
+//! exposure_s = 0.0         # [0, min(frame_period_s, 0.5)]: motion blur over [t, t + exposure_s]
+//! blur_samples = 5         # 1 ..= 32: renders averaged over the exposure
+//! jpeg_quality = 0         # 0 ..= 100: JPEG encode and decode at this quality; 0 = none
+//!
 //! [tracker]                # the tracker's tuning: every key of `evorec config`, e.g.
 //! method = "ff"            # "ga" (plain 1-step GA) | "ff" (GA + motion feedforward)
 //!                          #   | "ff+target" (GA + feedforward of the arm's and the target's motion)
 //! ga.population = 40       # 2..=HOST_POPULATION_CAPACITY (the host's compiled capacity, 64)
 //! ```
-//! The target's paths (conveyor, random) are described in [`crate::target_path`].
+//! The target's paths (conveyor, random) are described in [`crate::target_path`]; the light's
+//! effects, their order and formulas in [`crate::render::light`].
 //! Acquisition keys (`[start] initial`, `[target] placement`, `[[occlusion]]`) are
 //! described in [`crate::occlusion`]. `[tracker]` is the core's field table
 //! ([`evorec_core::tuning::FIELDS`], [`TrackerTable`]); `evorec config` prints it with every
@@ -82,6 +103,7 @@ use toml::Table;
 
 use crate::motion::MotionKind;
 use crate::occlusion::{Initial, Occlusions, Placement};
+use crate::render::Light;
 
 /// Population capacity of the host's trackers (simulator and `evorec track`): any population
 /// from 3 up to this is accepted at run time. Larger than the firmware's
@@ -456,6 +478,10 @@ pub struct Scenario {
     pub occlusion: Occlusions,
     /// The tracker's tuning (`[tracker]`).
     pub tracker: TrackerTable,
+    /// The camera-like light (`[render]`); written only when not the default, so older
+    /// scenarios' outputs stay as they were.
+    #[serde(skip_serializing_if = "Light::is_default")]
+    pub render: Light,
 }
 
 impl Scenario {
@@ -472,6 +498,7 @@ impl Scenario {
             start: TrackerStart::new(0.033),
             occlusion: Occlusions::default(),
             tracker: TrackerTable(Tuning { feedforward: method.into(), ..Tuning::DEFAULT }),
+            render: Light::default(),
         }
     }
 
@@ -515,6 +542,7 @@ impl Scenario {
                 "occlusion",
                 "servo",
                 "target_filter",
+                "render",
             ],
         )?;
         refuse_old_keys(&table)?;
@@ -543,7 +571,8 @@ impl Scenario {
         let delay_s = start_section.float_in("delay_s", frame_period_s, Bound::Closed(0.0), 1.0)?;
         let start = TrackerStart { initial, delay_s };
         let occlusion = acquisition::parse_occlusions(top.get("occlusion"), duration_s)?;
-        Ok(Self { seed, duration_s, frame_period_s, camera, target, robot, servo, start, occlusion, tracker })
+        let render = render_table::parse_render(&top.subtable("render")?, frame_period_s)?;
+        Ok(Self { seed, duration_s, frame_period_s, camera, target, robot, servo, start, occlusion, tracker, render })
     }
 
     /// Reads, parses and validates a scenario file.
@@ -832,8 +861,10 @@ fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
 }
 
 mod acquisition;
+mod render_table;
 mod section;
 mod tracker_table;
+pub use render_table::{light_from_toml_str, load_light};
 pub use tracker_table::{TrackerTable, parse_tracker, with_config_file};
 #[cfg(test)]
 mod tests;

@@ -9,7 +9,10 @@
 //!    frame ([`Light::light_dir_cam`]);
 //! 2. **highlight**: Blinn–Phong, `specular · max(n·h, 0)^shininess` of white added to each
 //!    channel (`h` halfway between the light and the viewing direction), which turns part of
-//!    a face turned towards the light nearly white;
+//!    a face turned towards the light nearly white. Across a flat face the viewing direction
+//!    changes by a few degrees only, so a moderate `shininess` whitens the whole face; a spot
+//!    needs a large one (`scenarios/camera_like.toml` uses 1500) and a light near the mirror
+//!    direction of the face;
 //! 3. **cast shadow**: a band `offset ≤ n̂·p < offset + width` of space (`p` in the right
 //!    camera's frame `Σ_CR` or in the block's frame) where the directional light is blocked:
 //!    the faces get only the ambient term there (no diffuse, no highlight); in the camera frame
@@ -17,7 +20,8 @@
 //! 4. **motion blur**: the frame is the mean of `blur_samples` renders at poses evenly spread
 //!    over `[t, t + exposure_s]` (`t` the capture time, [`crate::sim::World::render`]);
 //! 5. **white balance** (per-channel gains) and the **tone curve** (per channel, after the
-//!    gains and [`Light::tone_exposure`]): `linear` (clamped), `srgb` (the sRGB transfer
+//!    gains and [`Light::tone_exposure`]; it takes the drawn 8-bit levels, clamped at 255, as
+//!    linear light): `linear` (clamped), `srgb` (the sRGB transfer
 //!    function) or `filmic` (Narkowicz's fit of the ACES curve,
 //!    `x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14)`), which compresses bright channels more than
 //!    dim ones and so moves hues that are not a multiple of 60°;
@@ -27,6 +31,31 @@
 //! 7. **JPEG**: an encode and decode at [`Light::jpeg_quality`] with the `image` crate's codec.
 //!
 //! The per-face statistics that show what each effect does are [`super::face_stats`].
+//!
+//! The keys of a scenario's `[render]` table (every key optional; the values shown are the
+//! defaults; a bad value gets one message naming the key, e.g.
+//! `render.jpeg_quality: must be in 0..=100, got 101`):
+//!
+//! ```toml
+//! [render]
+//! light_dir_cam = [-0.4, -0.6, -1.0] # finite, non-zero: towards the light, camera frame
+//! ambient = 0.35           # [0, 1]: brightness of a face the light does not reach
+//! diffuse = 0.65           # [0, 1]: Lambert brightness added for a face facing the light
+//! albedo_saturation = 1.0  # (0, 1]: HSV saturation of the faces' paint (lower mixes in white)
+//! specular = 0.0           # [0, 4]: Blinn–Phong highlight strength (white); 0 = none
+//! shininess = 40.0         # [1, 10000]: Blinn–Phong exponent (larger: smaller highlight)
+//! shadow_frame = "camera"  # "camera" (Σ_CR) | "block": the frame the cast shadow is fixed in
+//! shadow_normal = [1, 0, 0] # finite, non-zero: normal n̂ of the shadow band's planes
+//! shadow_offset_m = 0.0    # [-10, 10]: the band is offset ≤ n̂·p < offset + width (m)
+//! shadow_width_m = 0.0     # [0, 20]: 0 = no shadow; there the faces get the ambient light only
+//! tone_curve = "linear"    # "linear" | "srgb" | "filmic": per channel, after the gains
+//! tone_exposure = 1.0      # (0, 16]: factor on every channel before the tone curve
+//! white_balance = [1, 1, 1] # each (0, 4]: per-channel gains (a white-balance error)
+//! chroma_noise_std = 0.0   # [0, 100]: σ of per-pixel Cb and Cr noise (8-bit levels)
+//! exposure_s = 0.0         # [0, min(frame_period_s, 0.5)]: motion blur over [t, t + exposure_s]
+//! blur_samples = 5         # 1 ..= 32: renders averaged over the exposure
+//! jpeg_quality = 0         # 0 ..= 100: JPEG encode and decode at this quality; 0 = none
+//! ```
 
 use image::RgbImage;
 use nalgebra::{Isometry3, Vector3};

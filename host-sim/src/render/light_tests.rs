@@ -1,26 +1,12 @@
 //! Tests of the camera-like light (`super::light`), measured with [`face_stats`].
 
 use super::stats::hsv;
+use super::tests::{cam, pose, rng};
 use super::*;
 use nalgebra::Vector3;
-use rand_core::SeedableRng;
-use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::scenario::Scenario;
 use crate::sim::world_at_frame;
-
-fn cam() -> Pinhole {
-    Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, 640, 480).unwrap()
-}
-
-fn pose() -> Isometry3<f32> {
-    // Three faces visible, ~0.7 m ahead.
-    Isometry3::new(Vector3::new(0.02, -0.01, 0.7), Vector3::new(0.5, -0.6, 0.3))
-}
-
-fn rng() -> Xoshiro256PlusPlus {
-    Xoshiro256PlusPlus::seed_from_u64(7)
-}
 
 fn image_with(light: Light, block: &Block) -> RgbImage {
     render(&cam(), &pose(), block, &RenderOptions::default().with_light(light), &mut rng())

@@ -349,11 +349,12 @@ fn render_blurred<R: Rng + ?Sized>(
     rng: &mut R,
 ) -> RgbImage {
     let mut buf = match poses {
-        [(one, shadow)] => draw(cam, one, block, opts, *shadow),
+        [(one, shadow)] => draw(cam, &screen_faces_shadowed(cam, one, block, opts, *shadow), opts),
         poses => {
             let mut sum = vec![0u32; 3 * usize::from(cam.width()) * usize::from(cam.height())];
             for (pose, shadow) in poses {
-                for (s, &b) in sum.iter_mut().zip(&draw(cam, pose, block, opts, *shadow)) {
+                let faces = screen_faces_shadowed(cam, pose, block, opts, *shadow);
+                for (s, &b) in sum.iter_mut().zip(&draw(cam, &faces, opts)) {
                     *s += u32::from(b);
                 }
             }
@@ -391,14 +392,9 @@ fn develop<R: Rng + ?Sized>(buf: &mut [u8], opts: &RenderOptions, rng: &mut R) {
     }
 }
 
-/// The scene (background and block, before the camera's [`develop`]) as RGB bytes.
-fn draw(
-    cam: &Pinhole,
-    cam_from_model: &Isometry3<f32>,
-    block: &Block,
-    opts: &RenderOptions,
-    shadow: Option<Band>,
-) -> Vec<u8> {
+/// The scene (the background and the block's `faces`, before the camera's [`develop`]) as RGB
+/// bytes.
+fn draw(cam: &Pinhole, faces: &[ScreenFace], opts: &RenderOptions) -> Vec<u8> {
     let (width, height) = (u32::from(cam.width()), u32::from(cam.height()));
     let (w, h) = (width as usize, height as usize);
     let (cols, rows) = background_tables(width, height, opts);
@@ -409,10 +405,9 @@ fn draw(
         }
     }
 
-    let faces = screen_faces_shadowed(cam, cam_from_model, block, opts, shadow);
     if !faces.is_empty() {
         let mut bbox = [f32::MAX, f32::MAX, f32::MIN, f32::MIN];
-        for f in &faces {
+        for f in faces {
             bbox = [bbox[0].min(f.bbox[0]), bbox[1].min(f.bbox[1]), bbox[2].max(f.bbox[2]), bbox[3].max(f.bbox[3])];
         }
         let clamp_to = |v: f32, hi: usize| v.clamp(0.0, hi as f32) as usize;

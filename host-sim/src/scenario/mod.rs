@@ -59,25 +59,8 @@
 //! [start]
 //! delay_s = 0.033          # [0, 1]: capture → output delay of the hand-over; default frame_period_s
 //!
-//! [render]                 # camera-like light (crate::render::Light); the defaults are the
-//!                          #   flat Lambert shading and nothing else
-//! light_dir_cam = [-0.4, -0.6, -1.0] # finite, non-zero: towards the light, camera frame
-//! ambient = 0.35           # [0, 1]: brightness of a face the light does not reach
-//! diffuse = 0.65           # [0, 1]: Lambert brightness added for a face facing the light
-//! albedo_saturation = 1.0  # (0, 1]: HSV saturation of the faces' paint (lower mixes in white)
-//! specular = 0.0           # [0, 4]: Blinn–Phong highlight strength (white); 0 = none
-//! shininess = 40.0         # [1, 10000]: Blinn–Phong exponent (larger: smaller highlight)
-//! shadow_frame = "camera"  # "camera" (Σ_CR) | "block": the frame the cast shadow is fixed in
-//! shadow_normal = [1, 0, 0] # finite, non-zero: normal n̂ of the shadow band's planes
-//! shadow_offset_m = 0.0    # [-10, 10]: the band is offset ≤ n̂·p < offset + width (m)
-//! shadow_width_m = 0.0     # [0, 20]: 0 = no shadow; there the faces get the ambient light only
-//! tone_curve = "linear"    # "linear" | "srgb" | "filmic": per channel, after the gains
-//! tone_exposure = 1.0      # (0, 16]: factor on every channel before the tone curve
-//! white_balance = [1, 1, 1] # each (0, 4]: per-channel gains (a white-balance error)
-//! chroma_noise_std = 0.0   # [0, 100]: σ of per-pixel Cb and Cr noise (8-bit levels)
-//! exposure_s = 0.0         # [0, min(frame_period_s, 0.5)]: motion blur over [t, t + exposure_s]
-//! blur_samples = 5         # 1 ..= 32: renders averaged over the exposure
-//! jpeg_quality = 0         # 0 ..= 100: JPEG encode and decode at this quality; 0 = none
+//! [render]                 # optional camera-like light: the keys, their ranges and defaults
+//! specular = 0.0           #   are in crate::render::light (the defaults render flat faces)
 //!
 //! [tracker]                # the tracker's tuning: every key of `evorec config`, e.g.
 //! method = "ff"            # "ga" (plain 1-step GA) | "ff" (GA + motion feedforward)
@@ -85,7 +68,7 @@
 //! ga.population = 40       # 2..=HOST_POPULATION_CAPACITY (the host's compiled capacity, 64)
 //! ```
 //! The target's paths (conveyor, random) are described in [`crate::target_path`]; the light's
-//! effects, their order and formulas in [`crate::render::light`].
+//! keys and effects in [`crate::render::light`].
 //! Acquisition keys (`[start] initial`, `[target] placement`, `[[occlusion]]`) are
 //! described in [`crate::occlusion`]. `[tracker]` is the core's field table
 //! ([`evorec_core::tuning::FIELDS`], [`TrackerTable`]); `evorec config` prints it with every

@@ -203,9 +203,8 @@ impl Light {
         (0..n).map(|i| f64::from(i) * step).collect()
     }
 
-    /// The shadow band in the block's frame, `(n̂, lo, hi)`, seen from the camera where the
-    /// block is at `cam_from_model` (for [`ShadowFrame::Camera`] this camera is `Σ_CR`);
-    /// `None` without a shadow.
+    /// The shadow band in the block's frame, the block at `cr_from_model` in the camera a
+    /// [`ShadowFrame::Camera`] band is fixed in (`Σ_CR`); `None` without a shadow.
     pub(super) fn shadow_in_block(&self, cr_from_model: &Isometry3<f32>) -> Option<Band> {
         if self.shadow_width_m <= 0.0 {
             return None;

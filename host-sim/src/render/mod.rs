@@ -437,7 +437,7 @@ fn draw(cam: &Pinhole, faces: &[ScreenFace], opts: &RenderOptions) -> Vec<u8> {
                         Some(sh) => px.copy_from_slice(&sh.colour_at(x as f32 + 0.5, v).map(to_u8)),
                     }
                 } else if (0..n_faces).any(|k| within(x, touched[k])) {
-                    shade_pixel(&faces, &colours, x as f32 + 0.5, v, col + row_off, opts.antialias, px);
+                    shade_pixel(faces, &colours, x as f32 + 0.5, v, col + row_off, opts.antialias, px);
                 }
             }
         }

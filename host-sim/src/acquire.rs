@@ -34,6 +34,7 @@ use serde::Serialize;
 use crate::experiment;
 use crate::motion::MotionKind;
 use crate::occlusion::{Initial, Occlusion, OcclusionKind, Occlusions, Placement};
+use crate::render::Light;
 use crate::scenario::{Method, Scenario};
 use crate::sim::TraceRow;
 use evorec_core::pose::Psi;
@@ -189,7 +190,7 @@ fn wrong_tracking(rows: &[TraceRow]) -> (usize, usize) {
     (wrong, tracking.len())
 }
 
-/// Runs both runs of one trial.
+/// Runs both runs of one trial, rendered under `light`.
 ///
 /// # Errors
 /// A run's error.
@@ -198,10 +199,12 @@ pub fn run_trial(
     case: Case,
     points: usize,
     tuning: &Tuning,
+    light: &Light,
     on_frame: &(impl Fn() + Sync),
 ) -> Result<Trial> {
     let go = |mut s: Scenario| {
         s.tracker.0 = *tuning;
+        s.render = *light;
         crate::with_rows!("--points", points, G => experiment::run_with_rows::<G>(&s, on_frame))
     };
     let a = go(scenario(seed, case, false))?;
@@ -294,13 +297,16 @@ pub struct Report {
     pub first_seed: u64,
     /// Points per sample row of the tracker.
     pub points_per_row: usize,
+    /// The light every run was rendered under (`[render]`; written only when not the default).
+    #[serde(skip_serializing_if = "Light::is_default")]
+    pub light: Light,
     /// Simulator version.
     pub evorec_version: &'static str,
 }
 
 /// Runs `trials` trials from seed `first_seed` in parallel with a progress bar, with a
 /// tracker of `points` points per sample row (one of [`crate::rows::SUPPORTED`]) tuned as
-/// `tuning`, and writes `acquire.json`, `acquire.md`, `acquire_cdf.png` and `config.toml` (the
+/// `tuning`, rendered under `light`, and writes `acquire.json`, `acquire.md`, `acquire_cdf.png` and `config.toml` (the
 /// tuning) into `out`.
 ///
 /// # Errors
@@ -310,6 +316,7 @@ pub fn run(
     first_seed: u64,
     points: usize,
     tuning: &Tuning,
+    light: &Light,
     out: &Path,
     show_progress: bool,
 ) -> Result<Report> {
@@ -332,7 +339,7 @@ pub fn run(
     );
     let done = Mutex::new(Vec::new());
     jobs.par_iter().try_for_each(|(seed, case)| -> Result<()> {
-        let t = run_trial(*seed, *case, points, tuning, &|| bar.inc(1))?;
+        let t = run_trial(*seed, *case, points, tuning, light, &|| bar.inc(1))?;
         done.lock().map_err(|_| anyhow::anyhow!("poisoned"))?.push(t);
         Ok(())
     })?;
@@ -344,6 +351,7 @@ pub fn run(
         trials: all,
         first_seed,
         points_per_row: points,
+        light: *light,
         evorec_version: env!("CARGO_PKG_VERSION"),
     };
     crate::io::write_json(&out.join("acquire.json"), &report)?;

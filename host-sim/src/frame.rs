@@ -1,5 +1,6 @@
 //! `evorec render`: one frame's images, the projected search model over them (as the paper's
-//! Fig. 4), and the frame's geometry as JSON.
+//! Fig. 4), and the frame's geometry and each visible face's colour statistics
+//! ([`render::face_stats`]) as JSON.
 
 use std::path::{Path, PathBuf};
 
@@ -45,6 +46,14 @@ struct FrameJson {
     world_from_target: [[f64; 4]; 4],
     camera_from_target: [[f64; 4]; 4],
     true_psi: [f32; 6],
+    /// HSV statistics of each visible face's pixels in the left and right image.
+    face_stats: FaceStatsPair,
+}
+
+#[derive(Serialize)]
+struct FaceStatsPair {
+    left: Vec<render::FaceStats>,
+    right: Vec<render::FaceStats>,
 }
 
 fn rows(m: Matrix4<f64>) -> [[f64; 4]; 4] {
@@ -105,6 +114,10 @@ pub fn render_frame(s: &Scenario, n: u32, out: &Path) -> Result<Vec<PathBuf>> {
         world_from_target: mat(&world.target_pose()),
         camera_from_target: mat(&world.target_in_camera()),
         true_psi: world.truth().0,
+        face_stats: FaceStatsPair {
+            left: render::face_stats(&images.left, &rig.left, &(rig.left_from_right * pose), world.block()),
+            right: render::face_stats(&images.right, &rig.right, &pose, world.block()),
+        },
     };
     let path = out.join("frame.json");
     crate::io::write_json(&path, &json)?;

@@ -99,7 +99,10 @@ impl World {
             path: TargetPath::from_scenario(scenario),
             rig: rig(scenario)?,
             block: block(scenario),
-            render: RenderOptions::default().with_antialias(antialias).with_noise(scenario.camera.noise_std as f32),
+            render: RenderOptions::default()
+                .with_antialias(antialias)
+                .with_noise(scenario.camera.noise_std as f32)
+                .with_light(scenario.render),
             rng: Xoshiro256PlusPlus::seed_from_u64(scenario.seed ^ 0x5EED_0FF4_A3E5),
             hidden: false,
         })
@@ -210,20 +213,36 @@ impl World {
         self.scenario.occlusion.at(self.arm.time())
     }
 
+    /// `^CR T_M` at `τ` s after the current time: the block along its path, the cameras moved
+    /// on at the joints' current velocities (`τ = 0`: [`World::target_in_camera`]).
+    pub fn target_in_camera_after(&self, tau: f64) -> Isometry3<f64> {
+        if tau == 0.0 {
+            return self.target_in_camera();
+        }
+        let (q, qd) = (self.arm.q(), self.arm.qd());
+        let q: [f64; DOF] = core::array::from_fn(|i| q[i] + qd[i] * tau);
+        let camera = crate::arm::forward(&q) * motion::flange_to_camera_f64(self.scenario.camera.baseline_m);
+        camera.inverse() * self.target_pose_at(self.arm.time() + tau)
+    }
+
     /// Renders both cameras' RGB images at the current time, with the scenario's occlusions:
-    /// a removed block is not drawn, an occluder is painted over the block's image.
+    /// a removed block is not drawn, an occluder is painted over the block's image. With a
+    /// `[render] exposure_s` the block is blurred over the exposure from now on
+    /// ([`World::target_in_camera_after`] at [`render::Light::blur_times`]).
     pub fn render(&mut self) -> StereoImages {
-        let pose: Isometry3<f32> = self.target_in_camera().cast();
+        let poses: Vec<Isometry3<f32>> =
+            self.render.light.blur_times().iter().map(|&tau| self.target_in_camera_after(tau).cast()).collect();
+        let pose = poses[0];
         let occlusion = if self.hidden { Some(OcclusionKind::Removed) } else { self.occlusion() };
+        let draw = |w: &mut Self, poses: &[Isometry3<f32>]| {
+            render::render_stereo_blurred(&w.rig, poses, &w.block, &w.render, &mut w.rng)
+        };
         match occlusion {
-            None => render::render_stereo(&self.rig, &pose, &self.block, &self.render, &mut self.rng),
-            Some(OcclusionKind::Removed) => {
-                // A block behind the cameras renders as the background alone.
-                let gone = Isometry3::translation(0.0, 0.0, -10.0);
-                render::render_stereo(&self.rig, &gone, &self.block, &self.render, &mut self.rng)
-            }
+            None => draw(self, &poses),
+            // No pose: the background alone.
+            Some(OcclusionKind::Removed) => draw(self, &[]),
             Some(OcclusionKind::Occluder) => {
-                let mut images = render::render_stereo(&self.rig, &pose, &self.block, &self.render, &mut self.rng);
+                let mut images = draw(self, &poses);
                 let right = occlusion::corners_in(&pose, &self.block);
                 let left = occlusion::corners_in(&(self.rig.left_from_right * pose), &self.block);
                 occlusion::paint_occluder(&mut images.right, &self.rig.right, &right);

@@ -5,7 +5,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use evorec_core::tuning::Tuning;
-use evorec_sim::scenario::{TrackerTable, with_config_file};
+use evorec_sim::render::Light;
+use evorec_sim::scenario::{Method, Scenario, TrackerTable, load_light, with_config_file};
 use evorec_sim::{export, frame, servo};
 
 use super::{OutArgs, load};
@@ -125,6 +126,11 @@ pub struct AcquireArgs {
     /// every trial (default: the core's defaults).
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
+    /// A TOML file holding a `[render]` table (a scenario's keys, e.g.
+    /// scenarios/light/camera_like.toml): the light every trial is rendered under (default:
+    /// the flat light).
+    #[arg(long, value_name = "FILE")]
+    light: Option<PathBuf>,
 }
 
 impl AcquireArgs {
@@ -132,7 +138,13 @@ impl AcquireArgs {
         let t0 = Instant::now();
         let out = &self.out.out;
         let tuning = with_config_file(Tuning::DEFAULT, self.config.as_deref())?;
-        let report = evorec_sim::acquire::run(self.trials, self.first_seed, self.points, &tuning, out, progress)?;
+        let frame_period_s = Scenario::new(0, 1.0, Method::Ff).frame_period_s;
+        let light = match &self.light {
+            Some(path) => load_light(path, frame_period_s)?,
+            None => Light::default(),
+        };
+        let report =
+            evorec_sim::acquire::run(self.trials, self.first_seed, self.points, &tuning, &light, out, progress)?;
         println!("{}", evorec_sim::acquire::markdown(&report));
         println!("{} trials per case in {:.1} s; wrote {}", self.trials, t0.elapsed().as_secs_f64(), out.display());
         Ok(())

@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::ValueEnum;
 use evorec_sim::motion::MotionKind;
-use evorec_sim::scenario::{Method, Scenario};
+use evorec_sim::scenario::{Method, Scenario, load_light};
 use evorec_sim::{paper, paper_seeds, target_grid};
 
 use super::{OutArgs, load};
@@ -20,6 +20,10 @@ pub struct PaperArgs {
     /// seed 1, 72 s); the target grid also takes its duration (the paper's is 72 s).
     #[arg(long)]
     base: Option<PathBuf>,
+    /// A TOML file holding a `[render]` table (a scenario's keys, e.g.
+    /// scenarios/light/camera_like.toml): the light of every run, in place of the base's.
+    #[arg(long, value_name = "FILE")]
+    light: Option<PathBuf>,
     /// Which grid: the paper's, the one over the block's own motion, or both.
     #[arg(long, value_enum, default_value_t = Grid::Paper)]
     grid: Grid,
@@ -87,15 +91,19 @@ impl PaperArgs {
     }
 
     /// `--base`, or the built-in defaults with the paper's 1-step GA (one generation per
-    /// frame; a `--base` file sets its own `generations_per_frame`).
+    /// frame; a `--base` file sets its own `generations_per_frame`), under `--light`'s light.
     fn base(&self) -> Result<Scenario> {
-        match &self.base {
-            Some(p) => load(p),
+        let mut s = match &self.base {
+            Some(p) => load(p)?,
             None => {
                 let mut s = Scenario::new(1, paper::DURATION_S, Method::Ff);
                 s.tracker.0.generations_per_frame = 1;
-                Ok(s)
+                s
             }
+        };
+        if let Some(path) = &self.light {
+            s.render = load_light(path, s.frame_period_s)?;
         }
+        Ok(s)
     }
 }

@@ -12,7 +12,10 @@
 //!   change of the pose changes the image; pixels whose whole square lies inside one face or
 //!   outside every face take a fast path;
 //! - optional per-channel noise (a sum of four uniform 4-bit values, scaled to the requested
-//!   standard deviation: close to Gaussian, truncated at ±3.25σ), clamped to `0..=255`.
+//!   standard deviation: close to Gaussian, truncated at ±3.25σ), clamped to `0..=255`;
+//! - optional camera-like light ([`light`], a scenario's `[render]` table): a highlight, a cast
+//!   shadow, motion blur ([`render_stereo_blurred`]), white balance and a tone curve, chroma
+//!   noise and JPEG; all off by default. [`face_stats`] measures what they do to each face.
 //!
 //! Only faces turned towards the camera are drawn; the block is convex, so their projections
 //! do not overlap and no z-buffer is needed. Faces with a corner closer than
@@ -27,8 +30,14 @@ use evorec_core::image::{HueImage, ImageError, rgb565_to_rgb888, rgb888_to_rgb56
 use evorec_core::model::{Block, FACES};
 use evorec_core::tracker::StereoFrame;
 use image::{Rgb, RgbImage};
-use nalgebra::{Isometry3, Point2, Vector3};
+use nalgebra::{Isometry3, Point2};
 use rand_core::Rng;
+
+pub mod light;
+pub mod stats;
+use light::{Band, FaceShader};
+pub use light::{Light, ShadowFrame, ToneCurve, jpeg_round_trip};
+pub use stats::{FaceStats, face_stats};
 
 /// Half the diagonal of a pixel: a pixel whose centre is farther than this from a line lies
 /// entirely on one side of it.
@@ -52,14 +61,9 @@ pub struct RenderOptions {
     pub antialias: AntiAlias,
     /// Standard deviation of the per-channel noise in 8-bit levels (`0` = none).
     pub noise_std: f32,
-    /// Direction from the surface **towards** the light, in the camera frame (need not be
-    /// normalised). The default comes from the upper left, in front of the block.
-    pub light_dir_cam: [f32; 3],
-    /// Ambient brightness (0..=1) a face has when the light does not reach it. Keep it above
-    /// about 0.16 so that unlit faces stay bright enough to have a hue.
-    pub ambient: f32,
-    /// Diffuse (Lambert) brightness added for a face turned straight at the light.
-    pub diffuse: f32,
+    /// Light, shading and the camera's imaging ([`Light`]; the default is flat Lambert
+    /// shading and nothing else).
+    pub light: Light,
     /// Mean grey level of the background (8-bit).
     pub background_level: f32,
     /// Amplitude (8-bit levels) of the background's low-frequency brightness variation.
@@ -71,9 +75,7 @@ impl Default for RenderOptions {
         Self {
             antialias: AntiAlias::Exact,
             noise_std: 0.0,
-            light_dir_cam: [-0.4, -0.6, -1.0],
-            ambient: 0.35,
-            diffuse: 0.65,
+            light: Light::default(),
             background_level: 140.0,
             background_variation: 12.0,
         }
@@ -89,6 +91,11 @@ impl RenderOptions {
     /// These options with the given anti-aliasing.
     pub fn with_antialias(self, antialias: AntiAlias) -> Self {
         Self { antialias, ..self }
+    }
+
+    /// These options with the given light.
+    pub fn with_light(self, light: Light) -> Self {
+        Self { light, ..self }
     }
 }
 
@@ -108,8 +115,12 @@ struct ScreenFace {
     edges: [[f32; 3]; 4],
     /// Bounding box `[u0, v0, u1, v1]` (continuous pixel coordinates).
     bbox: [f32; 4],
-    /// Shaded face colour, 8-bit scale.
+    /// Shaded face colour, 8-bit scale (where [`ScreenFace::shader`] is `None`).
     colour: [f32; 3],
+    /// The per-pixel shading of a face with a highlight or a shadow.
+    shader: Option<FaceShader>,
+    /// The model's face (the core's face order).
+    face: usize,
 }
 
 impl ScreenFace {
@@ -132,6 +143,15 @@ impl ScreenFace {
         let first = (lo - 0.5).ceil().clamp(0.0, wf) as usize;
         let end = ((hi - 0.5).floor() + 1.0).clamp(0.0, wf) as usize;
         (first, end.max(first))
+    }
+
+    /// The face's colour (8-bit scale) at the pixel centre `(u, v)`.
+    #[inline(always)]
+    fn colour_at(&self, u: f32, v: f32) -> [f32; 3] {
+        match &self.shader {
+            None => self.colour,
+            Some(s) => s.colour_at(u, v),
+        }
     }
 
     /// Signed distances of the point `(u, v)` from the four edges.
@@ -157,19 +177,26 @@ fn hue_rgb(deg: f32) -> [f32; 3] {
     }
 }
 
-/// Projects the camera-facing faces of `block` at `cam_from_model` into the image of `cam`.
+/// Projects the camera-facing faces of `block` at `cam_from_model` into the image of `cam`
+/// (a cast shadow in the camera frame is taken in this camera's frame).
 fn screen_faces(
     cam: &Pinhole,
     cam_from_model: &Isometry3<f32>,
     block: &Block,
     opts: &RenderOptions,
 ) -> Vec<ScreenFace> {
-    let light = Vector3::from(opts.light_dir_cam);
-    let light = if light.norm() > 0.0 && light.iter().all(|c| c.is_finite()) {
-        light.normalize()
-    } else {
-        Vector3::new(0.0, 0.0, -1.0)
-    };
+    screen_faces_shadowed(cam, cam_from_model, block, opts, opts.light.shadow_in_block(cam_from_model))
+}
+
+/// [`screen_faces`] with the cast shadow given in the block's frame.
+fn screen_faces_shadowed(
+    cam: &Pinhole,
+    cam_from_model: &Isometry3<f32>,
+    block: &Block,
+    opts: &RenderOptions,
+    shadow: Option<Band>,
+) -> Vec<ScreenFace> {
+    let light = opts.light.direction();
     let mut faces = Vec::with_capacity(3);
     for k in 0..FACES {
         let normal = cam_from_model.rotation * Block::normal(k);
@@ -214,10 +241,23 @@ fn screen_faces(
         for p in &quad {
             bbox = [bbox[0].min(p.x), bbox[1].min(p.y), bbox[2].max(p.x), bbox[3].max(p.y)];
         }
+        let l = &opts.light;
         let lambert = normal.dot(&light).max(0.0);
-        let shade = (opts.ambient + opts.diffuse * lambert).clamp(0.0, 1.0) * 255.0;
-        let base = hue_rgb(block.face_hues_deg[k]);
-        faces.push(ScreenFace { edges, bbox, colour: base.map(|c| c * shade) });
+        let shade = (l.ambient + l.diffuse * lambert).clamp(0.0, 1.0) * 255.0;
+        let base = light::albedo(hue_rgb(block.face_hues_deg[k]), l.albedo_saturation);
+        let shader = (!l.is_flat()).then(|| FaceShader {
+            intrinsics: [cam.fx(), cam.fy(), cam.cx(), cam.cy()],
+            normal,
+            plane: normal.dot(&corners[0].coords),
+            albedo: base,
+            light,
+            ambient: l.ambient,
+            diffuse: l.diffuse,
+            specular: l.specular,
+            shininess: l.shininess,
+            shadow: shadow.map(|b| b.moved(cam_from_model)),
+        });
+        faces.push(ScreenFace { edges, bbox, colour: base.map(|c| c * shade), shader, face: k });
     }
     faces
 }
@@ -284,8 +324,9 @@ fn to_u8(v: f32) -> u8 {
 
 /// Renders the block as seen by `cam`.
 ///
-/// `cam_from_model` is the block's pose in this camera's frame; `rng` drives the noise only
-/// (it is not touched when `opts.noise_std` is 0). Never panics: a pose with non-finite
+/// `cam_from_model` is the block's pose in this camera's frame (a cast shadow in the camera
+/// frame is taken in this camera's frame); `rng` drives the noise only (it is not touched
+/// when `opts.noise_std` and the chroma noise are 0). Never panics: a pose with non-finite
 /// values, or a block behind the camera, gives the background alone.
 pub fn render<R: Rng + ?Sized>(
     cam: &Pinhole,
@@ -294,6 +335,66 @@ pub fn render<R: Rng + ?Sized>(
     opts: &RenderOptions,
     rng: &mut R,
 ) -> RgbImage {
+    let shadow = opts.light.shadow_in_block(cam_from_model);
+    render_blurred(cam, &[(*cam_from_model, shadow)], block, opts, rng)
+}
+
+/// The mean of the scene drawn at each pose of `poses` (the motion blur of one exposure),
+/// then developed ([`develop`]). Each pose comes with the cast shadow in the block's frame.
+fn render_blurred<R: Rng + ?Sized>(
+    cam: &Pinhole,
+    poses: &[(Isometry3<f32>, Option<Band>)],
+    block: &Block,
+    opts: &RenderOptions,
+    rng: &mut R,
+) -> RgbImage {
+    let mut buf = match poses {
+        [(one, shadow)] => draw(cam, &screen_faces_shadowed(cam, one, block, opts, *shadow), opts),
+        poses => {
+            let mut sum = vec![0u32; 3 * usize::from(cam.width()) * usize::from(cam.height())];
+            for (pose, shadow) in poses {
+                let faces = screen_faces_shadowed(cam, pose, block, opts, *shadow);
+                for (s, &b) in sum.iter_mut().zip(&draw(cam, &faces, opts)) {
+                    *s += u32::from(b);
+                }
+            }
+            let n = poses.len().max(1) as u32;
+            sum.iter().map(|&s| ((s + n / 2) / n) as u8).collect()
+        }
+    };
+    develop(&mut buf, opts, rng);
+    let (width, height) = (u32::from(cam.width()), u32::from(cam.height()));
+    // The buffer has exactly width·height·3 bytes, so this cannot fail; fall back to a blank
+    // image rather than panicking.
+    let img = RgbImage::from_raw(width, height, buf).unwrap_or_else(|| RgbImage::new(width, height));
+    match opts.light.jpeg_quality {
+        0 => img,
+        q => light::jpeg_round_trip(&img, q),
+    }
+}
+
+/// What the camera makes of the drawn scene `buf` (RGB bytes): white balance and tone curve,
+/// then noise and chroma noise.
+fn develop<R: Rng + ?Sized>(buf: &mut [u8], opts: &RenderOptions, rng: &mut R) {
+    if let Some(table) = opts.light.tone_table() {
+        for px in buf.chunks_exact_mut(3) {
+            for (c, t) in px.iter_mut().zip(&table) {
+                *c = t[usize::from(*c)];
+            }
+        }
+    }
+    if opts.noise_std.is_finite() && opts.noise_std > 0.0 {
+        add_noise(buf, opts.noise_std, rng);
+    }
+    let chroma = opts.light.chroma_noise_std;
+    if chroma.is_finite() && chroma > 0.0 {
+        light::add_chroma_noise(buf, chroma, rng);
+    }
+}
+
+/// The scene (the background and the block's `faces`, before the camera's [`develop`]) as RGB
+/// bytes.
+fn draw(cam: &Pinhole, faces: &[ScreenFace], opts: &RenderOptions) -> Vec<u8> {
     let (width, height) = (u32::from(cam.width()), u32::from(cam.height()));
     let (w, h) = (width as usize, height as usize);
     let (cols, rows) = background_tables(width, height, opts);
@@ -304,10 +405,9 @@ pub fn render<R: Rng + ?Sized>(
         }
     }
 
-    let faces = screen_faces(cam, cam_from_model, block, opts);
     if !faces.is_empty() {
         let mut bbox = [f32::MAX, f32::MAX, f32::MIN, f32::MIN];
-        for f in &faces {
+        for f in faces {
             bbox = [bbox[0].min(f.bbox[0]), bbox[1].min(f.bbox[1]), bbox[2].max(f.bbox[2]), bbox[3].max(f.bbox[3])];
         }
         let clamp_to = |v: f32, hi: usize| v.clamp(0.0, hi as f32) as usize;
@@ -332,20 +432,18 @@ pub fn render<R: Rng + ?Sized>(
             let within = |x: usize, (a, b): (usize, usize)| a <= x && x < b;
             for (x, (px, &col)) in line.chunks_exact_mut(3).zip(&cols).enumerate().take(hi).skip(lo) {
                 if let Some(k) = (0..n_faces).find(|&k| within(x, inner[k])) {
-                    px.copy_from_slice(&colours[k]);
+                    match &faces[k].shader {
+                        None => px.copy_from_slice(&colours[k]),
+                        Some(sh) => px.copy_from_slice(&sh.colour_at(x as f32 + 0.5, v).map(to_u8)),
+                    }
                 } else if (0..n_faces).any(|k| within(x, touched[k])) {
-                    shade_pixel(&faces, &colours, x as f32 + 0.5, v, col + row_off, opts.antialias, px);
+                    shade_pixel(faces, &colours, x as f32 + 0.5, v, col + row_off, opts.antialias, px);
                 }
             }
         }
     }
 
-    if opts.noise_std.is_finite() && opts.noise_std > 0.0 {
-        add_noise(&mut buf, opts.noise_std, rng);
-    }
-    // The buffer has exactly width·height·3 bytes, so this cannot fail; fall back to a blank
-    // image rather than panicking.
-    RgbImage::from_raw(width, height, buf).unwrap_or_else(|| RgbImage::new(width, height))
+    buf
 }
 
 /// Colours one pixel (centre `(u, v)`, background grey `bg`) inside the silhouette's box.
@@ -357,7 +455,10 @@ fn shade_pixel(faces: &[ScreenFace], colours: &[[u8; 3]], u: f32, v: f32, bg: f3
         let d = f.distances(u, v);
         let dmin = d[0].min(d[1]).min(d[2]).min(d[3]);
         if dmin >= HALF_DIAGONAL {
-            px.copy_from_slice(&colours[k]);
+            match &f.shader {
+                None => px.copy_from_slice(&colours[k]),
+                Some(sh) => px.copy_from_slice(&sh.colour_at(u, v).map(to_u8)),
+            }
             return; // fully inside face k
         }
         any_edge |= dmin > -HALF_DIAGONAL;
@@ -405,10 +506,14 @@ fn shade_pixel(faces: &[ScreenFace], colours: &[[u8; 3]], u: f32, v: f32, bg: f3
     let total: f32 = cover.iter().sum();
     let scale = if total > 1.0 { 1.0 / total } else { 1.0 };
     let bg_weight = (1.0 - total * scale).max(0.0);
+    let mut face_colour = [[0.0f32; 3]; 3];
+    for k in 0..n_faces {
+        face_colour[k] = faces[k].colour_at(u, v);
+    }
     for (c, out) in px.iter_mut().enumerate() {
         let mut acc = bg * bg_weight;
         for k in 0..n_faces {
-            acc += cover[k] * scale * faces[k].colour[c];
+            acc += cover[k] * scale * face_colour[k][c];
         }
         *out = to_u8(acc);
     }
@@ -420,6 +525,19 @@ fn shade_pixel(faces: &[ScreenFace], colours: &[[u8; 3]], u: f32, v: f32, bg: f3
 /// 4·255/12 = 85), mapped through a table to `round(std · z)`, so one `u64` gives four samples
 /// (the generator is the main cost). The shape is close to Gaussian, truncated at ±3.25σ.
 fn add_noise<R: Rng + ?Sized>(buf: &mut [u8], std: f32, rng: &mut R) {
+    // Noise is drawn into a block buffer first, so that adding it vectorises.
+    let mut noise = [0i16; 2048];
+    for chunk in buf.chunks_mut(noise.len()) {
+        fill_noise(&mut noise[..chunk.len().next_multiple_of(4)], std, rng);
+        for (b, &n) in chunk.iter_mut().zip(&noise) {
+            *b = (i16::from(*b) + n).clamp(0, 255) as u8;
+        }
+    }
+}
+
+/// Fills `out` with [`add_noise`]'s samples of standard deviation `std`, four from each `u64`
+/// of `rng` (a last partial group of four takes a whole `u64`).
+fn fill_noise<R: Rng + ?Sized>(out: &mut [i16], std: f32, rng: &mut R) {
     const SUM_MEAN: f32 = 30.0;
     const SUM_STD: f32 = 9.219_544; // √85
     const NIBBLES: u64 = 0x0F0F_0F0F_0F0F_0F0F;
@@ -429,21 +547,14 @@ fn add_noise<R: Rng + ?Sized>(buf: &mut [u8], std: f32, rng: &mut R) {
         let z = (s as f32 - SUM_MEAN) / SUM_STD;
         *t = (std * z).round().clamp(-512.0, 512.0) as i16;
     }
-    // Noise is drawn into a block buffer first, so that adding it vectorises.
-    let mut noise = [0i16; 2048];
-    for chunk in buf.chunks_mut(noise.len()) {
-        for quad in noise[..chunk.len().next_multiple_of(4)].chunks_exact_mut(4) {
-            let x = rng.next_u64();
-            // Eight byte lanes of two nibbles each, then four 16-bit lanes of four nibbles.
-            let s8 = (x & NIBBLES) + ((x >> 4) & NIBBLES);
-            let s16 = (s8 & BYTES) + ((s8 >> 8) & BYTES);
-            for (i, n) in quad.iter_mut().enumerate() {
-                // Each lane sum is ≤ 60, so the mask keeps it inside the table.
-                *n = table[((s16 >> (16 * i)) & 0x3F) as usize];
-            }
-        }
-        for (b, &n) in chunk.iter_mut().zip(&noise) {
-            *b = (i16::from(*b) + n).clamp(0, 255) as u8;
+    for quad in out.chunks_mut(4) {
+        let x = rng.next_u64();
+        // Eight byte lanes of two nibbles each, then four 16-bit lanes of four nibbles.
+        let s8 = (x & NIBBLES) + ((x >> 4) & NIBBLES);
+        let s16 = (s8 & BYTES) + ((s8 >> 8) & BYTES);
+        for (i, n) in quad.iter_mut().enumerate() {
+            // Each lane sum is ≤ 60, so the mask keeps it inside the table.
+            *n = table[((s16 >> (16 * i)) & 0x3F) as usize];
         }
     }
 }
@@ -457,8 +568,26 @@ pub fn render_stereo<R: Rng + ?Sized>(
     opts: &RenderOptions,
     rng: &mut R,
 ) -> StereoImages {
-    let right = render(&rig.right, cr_from_model, block, opts, rng);
-    let left = render(&rig.left, &(rig.left_from_right * cr_from_model), block, opts, rng);
+    render_stereo_blurred(rig, &[*cr_from_model], block, opts, rng)
+}
+
+/// [`render_stereo`] with motion blur: each image is the mean of the block drawn at every pose
+/// of `cr_from_model` (in `Σ_CR`, over one exposure). One pose is [`render_stereo`]; no pose
+/// gives the background alone.
+pub fn render_stereo_blurred<R: Rng + ?Sized>(
+    rig: &StereoRig,
+    cr_from_model: &[Isometry3<f32>],
+    block: &Block,
+    opts: &RenderOptions,
+    rng: &mut R,
+) -> StereoImages {
+    let gone = [Isometry3::translation(0.0, 0.0, -10.0)];
+    let right_poses = if cr_from_model.is_empty() { &gone[..] } else { cr_from_model };
+    // A shadow of the camera frame is where Σ_CR puts it, for both cameras.
+    let right: Vec<_> = right_poses.iter().map(|p| (*p, opts.light.shadow_in_block(p))).collect();
+    let left: Vec<_> = right.iter().map(|(p, shadow)| (rig.left_from_right * p, *shadow)).collect();
+    let right = render_blurred(&rig.right, &right, block, opts, rng);
+    let left = render_blurred(&rig.left, &left, block, opts, rng);
     StereoImages { left, right }
 }
 
@@ -547,3 +676,7 @@ pub fn draw_points(img: &mut RgbImage, points: &[(f32, f32)], colour: [u8; 3]) {
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests;
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+mod light_tests;

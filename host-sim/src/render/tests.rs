@@ -4,19 +4,20 @@ use super::*;
 use evorec_core::config::NO_HUE;
 use evorec_core::hue::{degrees_to_units, hue_distance};
 use evorec_core::synth;
+use nalgebra::Vector3;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-fn cam() -> Pinhole {
+pub(super) fn cam() -> Pinhole {
     Pinhole::new_checked(800.0, 800.0, 320.0, 240.0, 640, 480).unwrap()
 }
 
-fn pose() -> Isometry3<f32> {
+pub(super) fn pose() -> Isometry3<f32> {
     // Three faces visible, ~0.7 m ahead.
     Isometry3::new(Vector3::new(0.02, -0.01, 0.7), Vector3::new(0.5, -0.6, 0.3))
 }
 
-fn rng() -> Xoshiro256PlusPlus {
+pub(super) fn rng() -> Xoshiro256PlusPlus {
     Xoshiro256PlusPlus::seed_from_u64(7)
 }
 

@@ -59,12 +59,16 @@
 //! [start]
 //! delay_s = 0.033          # [0, 1]: capture → output delay of the hand-over; default frame_period_s
 //!
+//! [render]                 # optional camera-like light: the keys, their ranges and defaults
+//! specular = 0.0           #   are in crate::render::light (the defaults render flat faces)
+//!
 //! [tracker]                # the tracker's tuning: every key of `evorec config`, e.g.
 //! method = "ff"            # "ga" (plain 1-step GA) | "ff" (GA + motion feedforward)
 //!                          #   | "ff+target" (GA + feedforward of the arm's and the target's motion)
 //! ga.population = 40       # 2..=HOST_POPULATION_CAPACITY (the host's compiled capacity, 64)
 //! ```
-//! The target's paths (conveyor, random) are described in [`crate::target_path`].
+//! The target's paths (conveyor, random) are described in [`crate::target_path`]; the light's
+//! keys and effects in [`crate::render::light`].
 //! Acquisition keys (`[start] initial`, `[target] placement`, `[[occlusion]]`) are
 //! described in [`crate::occlusion`]. `[tracker]` is the core's field table
 //! ([`evorec_core::tuning::FIELDS`], [`TrackerTable`]); `evorec config` prints it with every
@@ -82,6 +86,7 @@ use toml::Table;
 
 use crate::motion::MotionKind;
 use crate::occlusion::{Initial, Occlusions, Placement};
+use crate::render::Light;
 
 /// Population capacity of the host's trackers (simulator and `evorec track`): any population
 /// from 3 up to this is accepted at run time. Larger than the firmware's
@@ -456,6 +461,10 @@ pub struct Scenario {
     pub occlusion: Occlusions,
     /// The tracker's tuning (`[tracker]`).
     pub tracker: TrackerTable,
+    /// The camera-like light (`[render]`); written only when not the default, so older
+    /// scenarios' outputs stay as they were.
+    #[serde(skip_serializing_if = "Light::is_default")]
+    pub render: Light,
 }
 
 impl Scenario {
@@ -472,6 +481,7 @@ impl Scenario {
             start: TrackerStart::new(0.033),
             occlusion: Occlusions::default(),
             tracker: TrackerTable(Tuning { feedforward: method.into(), ..Tuning::DEFAULT }),
+            render: Light::default(),
         }
     }
 
@@ -515,6 +525,7 @@ impl Scenario {
                 "occlusion",
                 "servo",
                 "target_filter",
+                "render",
             ],
         )?;
         refuse_old_keys(&table)?;
@@ -543,7 +554,8 @@ impl Scenario {
         let delay_s = start_section.float_in("delay_s", frame_period_s, Bound::Closed(0.0), 1.0)?;
         let start = TrackerStart { initial, delay_s };
         let occlusion = acquisition::parse_occlusions(top.get("occlusion"), duration_s)?;
-        Ok(Self { seed, duration_s, frame_period_s, camera, target, robot, servo, start, occlusion, tracker })
+        let render = render_table::parse_render(&top.subtable("render")?, frame_period_s)?;
+        Ok(Self { seed, duration_s, frame_period_s, camera, target, robot, servo, start, occlusion, tracker, render })
     }
 
     /// Reads, parses and validates a scenario file.
@@ -832,8 +844,10 @@ fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
 }
 
 mod acquisition;
+mod render_table;
 mod section;
 mod tracker_table;
+pub use render_table::{light_from_toml_str, load_light};
 pub use tracker_table::{TrackerTable, parse_tracker, with_config_file};
 #[cfg(test)]
 mod tests;

@@ -40,6 +40,11 @@ impl<'a> Section<'a> {
         Ok(s)
     }
 
+    /// The section of table `table` named `name`, its keys not yet checked.
+    pub(super) fn named(name: &'static str, table: &'a Table) -> Self {
+        Self { name, table: Some(table) }
+    }
+
     pub(super) fn path(&self, key: &str) -> String {
         if self.name.is_empty() { key.to_owned() } else { format!("{}.{key}", self.name) }
     }

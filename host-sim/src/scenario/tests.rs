@@ -1,6 +1,7 @@
 //! Tests of scenario files.
 
 use super::*;
+use crate::render::Light;
 
 const BASE: &str = "seed = 1\nduration_s = 10.0\n";
 
@@ -368,4 +369,41 @@ fn conveyor_keys_round_trip_and_are_written_only_when_not_default() {
     let json = serde_json::to_value(s).unwrap_or_else(|e| unreachable!("{e}"));
     assert_eq!(json["target"]["conveyor_start"], "moving");
     assert_eq!(json["target"]["conveyor_direction_frame"], "camera");
+}
+
+#[test]
+fn the_render_table_is_read_and_names_bad_fields() {
+    assert_eq!(Scenario::from_toml_str(BASE).unwrap_or_else(|e| unreachable!("{e}")).render, Light::default());
+    let bad = [
+        ("jpeg_quality = 101", "render.jpeg_quality: must be in 0..=100, got 101"),
+        ("tone_curve = \"log\"", "render.tone_curve: expected \"linear\", \"srgb\" or \"filmic\", got \"log\""),
+        ("white_balance = [1.0, 0.0, 1.0]", "render.white_balance[1]: must be in (0, 4], got 0"),
+        ("exposure_s = 0.05", "render.exposure_s: must be in [0, 0.033], got 0.05"),
+        ("shadow_normal = [0, 0, 0]", "render.shadow_normal: must be a finite, non-zero vector, got [0, 0, 0]"),
+        ("shadow_frame = \"world\"", "render.shadow_frame: expected \"camera\" or \"block\", got \"world\""),
+        ("albedo_saturation = 0", "render.albedo_saturation: must be in (0, 1], got 0"),
+        ("blur_samples = 0", "render.blur_samples: must be in 1..=32, got 0"),
+        ("specular = -1", "render.specular: must be in [0, 4], got -1"),
+    ];
+    for (line, want) in bad {
+        assert_eq!(err(&with(&format!("[render]\n{line}\n"))), want);
+    }
+    assert!(err(&with("[render]\nglare = 1\n")).starts_with("render.glare: unknown key"));
+}
+
+#[test]
+fn the_camera_like_scenario_round_trips_and_its_light_file_matches() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+    let s = Scenario::load(dir.join("camera_like.toml")).unwrap_or_else(|e| unreachable!("{e}"));
+    assert!(!s.render.is_default());
+    let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(Scenario::from_toml_str(&text).unwrap_or_else(|e| unreachable!("{e}\n{text}")), s);
+    let light =
+        load_light(dir.join("light/camera_like.toml"), s.frame_period_s).unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(light, s.render);
+    let plain = Scenario::load(dir.join("motion_a_ff.toml")).unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(Scenario { render: light, ..plain }, s);
+    assert!(!plain.to_toml_string().unwrap_or_default().contains("[render]"));
+    let e = light_from_toml_str("[tracker]\nmethod = \"ga\"\n", 0.033).err().map(|e| e.to_string());
+    assert_eq!(e.as_deref(), Some("tracker: unknown key (a light file holds a [render] table only)"));
 }

@@ -1,9 +1,12 @@
 //! The first pass over a bag: every message but the pixels (see the [module docs](super)).
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::fs::File;
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Result, anyhow, bail};
+use mcap::sans_io::LinearReaderOptions;
 
 use super::msgs::{self, CameraInfo, JointState};
 use super::rig::{Rig, UrdfSource};
@@ -27,24 +30,59 @@ pub struct Msg<'a> {
     pub data: &'a [u8],
 }
 
-/// Calls `f` on every message of the bag in file order, until it returns `false`.
+/// Where a bag stops being readable: a file cut short (a recording interrupted) or a corrupt
+/// record. Every message before it was read whole (chunk CRCs checked first), so it is used.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Cut {
+    /// The file.
+    pub file: PathBuf,
+    /// Messages of that file read before it.
+    pub messages: usize,
+    /// What the MCAP reader found.
+    pub error: String,
+}
+
+impl Cut {
+    /// What is wrong, without the file's name.
+    pub fn what(&self) -> String {
+        format!("not a readable MCAP file (truncated or corrupt) after {} messages: {}", self.messages, self.error)
+    }
+}
+
+impl std::fmt::Display for Cut {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.file.display(), self.what())
+    }
+}
+
+/// Largest MCAP record (a chunk, compressed or not) the reader buffers: a corrupt length
+/// field is an error, not an allocation of that size. Real chunks are far smaller (rosbag2
+/// writes 768 KiB ones; a chunk holding one 4K raw image is 25 MiB).
+const RECORD_LIMIT: usize = 1 << 30;
+
+/// Calls `f` on every message of the bag in file order, until it returns `false`. The files
+/// are streamed: memory holds one chunk (and its decompressed records) at a time, whatever
+/// the bag's size.
+///
+/// Returns where the bag could not be read further ([`Cut`]), if it could not: the messages
+/// before it were handed to `f`, none after it (nor from later files).
 ///
 /// # Errors
-/// An unreadable file, a truncated or corrupt MCAP (naming the file and how many messages were
-/// read), or `f`'s error.
-pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<bool>) -> Result<()> {
+/// A file that cannot be opened, or `f`'s error.
+pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<bool>) -> Result<Option<Cut>> {
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
     for file in &files.files {
-        let bytes = std::fs::read(file).map_err(|e| anyhow!("{}: cannot read: {e}", file.display()))?;
-        let corrupt = |n: usize, e: mcap::McapError| {
-            anyhow!("{}: not a readable MCAP file (truncated or corrupt) after {n} messages: {e}", file.display())
-        };
-        // Chunk CRCs are checked (when the writer stored them), so damage inside an
-        // uncompressed chunk is found too, not read as pixels.
-        let options = enumset::EnumSet::only(mcap::read::Options::ValidateChunkCrcs);
-        let stream = mcap::MessageStream::new_with_options(&bytes, options).map_err(|e| corrupt(0, e))?;
-        for (n, m) in stream.enumerate() {
-            let m = m.map_err(|e| corrupt(n, e))?;
+        let handle = File::open(file).map_err(|e| anyhow!("{}: cannot read: {e}", file.display()))?;
+        // Each chunk's CRC (when the writer stored one) is checked before any of its messages
+        // is handed over, so damage inside an uncompressed chunk is found, not read as pixels.
+        let options =
+            LinearReaderOptions::default().with_prevalidate_chunk_crcs(true).with_record_length_limit(RECORD_LIMIT);
+        let reader = mcap::io::MessageReader::new_with_options(BufReader::with_capacity(1 << 20, handle), options);
+        for (n, m) in reader.enumerate() {
+            let m = match m {
+                Ok(m) => m,
+                Err(e) => return Ok(Some(Cut { file: file.clone(), messages: n, error: e.to_string() })),
+            };
             let count = counts.entry(m.channel.topic.clone()).or_insert(0);
             let msg = Msg {
                 topic: &m.channel.topic,
@@ -55,11 +93,11 @@ pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<
             };
             *count += 1;
             if !f(&msg)? {
-                return Ok(());
+                return Ok(None);
             }
         }
     }
-    Ok(())
+    Ok(None)
 }
 
 /// An image message found in the first pass.
@@ -101,6 +139,8 @@ pub struct Scan {
     pub tf: TfTree,
     /// The URDF from the description topic.
     pub urdf: Option<String>,
+    /// Where the bag could not be read further (a truncated recording), if it could not.
+    pub cut: Option<Cut>,
 }
 
 /// The image types a camera topic may have.
@@ -118,12 +158,13 @@ impl Scan {
     pub fn read(files: &BagFiles, rig: &Rig) -> Result<Self> {
         let name = files.display();
         let mut scan = Self::default();
-        for_each_message(files, |m| {
+        let cut = for_each_message(files, |m| {
             let info = scan.topics.entry(m.topic.to_owned()).or_insert(TopicInfo { schema: m.schema.into(), count: 0 });
             info.count += 1;
             scan.take(m, rig).map_err(|e| anyhow!("{name}: {} message {}: {e}", m.topic, m.index))?;
             Ok(true)
         })?;
+        scan.cut = cut;
         Ok(scan)
     }
 

@@ -149,7 +149,14 @@ fn track_bag(
     let ev = bag::track::track_and_write(&b, opts, out)?;
     println!("{}", b.report.describe());
     print_track(&ev.summary, t0, out);
-    Ok(())
+    match &b.cut {
+        Some(cut) => anyhow::bail!(
+            "{cut}: tracked the {} frames before it; wrote {} (summary.json: \"partial\": true)",
+            ev.summary.frames,
+            out.display()
+        ),
+        None => Ok(()),
+    }
 }
 
 fn print_track(s: &track::output::TrackSummary, t0: Instant, out: &Path) {
@@ -209,6 +216,13 @@ impl ImportArgs {
             b.pairs.len() as f64 / secs.max(1e-9),
             self.out.display()
         );
-        Ok(())
+        match &b.cut {
+            Some(cut) => anyhow::bail!(
+                "{cut}: imported the {} frames before it into {}",
+                b.pairs.len(),
+                self.out.display()
+            ),
+            None => Ok(()),
+        }
     }
 }

@@ -63,6 +63,10 @@ pub struct TrackSummary {
     /// reader's report, as JSON, so that tracking does not depend on the bag reader.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bag: Option<serde_json::Value>,
+    /// `true` when the input ended early (a truncated bag): the results cover the frames
+    /// before that point only (absent otherwise).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub partial: bool,
 }
 
 /// One `trace.csv` row's truth (aligned modulo symmetry) and the errors, per frame.
@@ -113,6 +117,7 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
         frames_per_s: out.tracked.len() as f64 / out.seconds.max(1e-9),
         evorec_version: env!("CARGO_PKG_VERSION"),
         bag: None,
+        partial: false,
     };
     Evaluation { truth, errors, summary }
 }

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, anyhow, bail};
 use mcap::sans_io::LinearReaderOptions;
 
-use super::msgs::{self, CameraInfo, JointState};
+use super::joints::JointMessages;
+use super::msgs::{self, CameraInfo};
 use super::rig::{Rig, UrdfSource};
 use super::tf::TfTree;
 use super::{BagFiles, images};
@@ -133,8 +134,8 @@ pub struct Scan {
     pub left_info: Option<CameraInfo>,
     /// The first right camera_info.
     pub right_info: Option<CameraInfo>,
-    /// Joint states (message index, message).
-    pub joints: Vec<(usize, JointState)>,
+    /// Joint states.
+    pub joints: JointMessages,
     /// Transforms.
     pub tf: TfTree,
     /// The URDF from the description topic.
@@ -196,7 +197,7 @@ impl Scan {
             }
         } else if m.topic == t.joint_states {
             expect_type(m, "sensor_msgs/msg/JointState")?;
-            self.joints.push((m.index, msgs::joint_state(m.data)?));
+            self.joints.push(m.index, msgs::joint_state(m.data)?).map_err(|e| anyhow!(e))?;
         } else if m.topic == t.tf_static || m.topic == TF_TOPIC {
             expect_type(m, "tf2_msgs/msg/TFMessage")?;
             let transforms = msgs::tf_message(m.data)?;

@@ -1,5 +1,7 @@
 //! `evorec import` and `evorec track BAG` on bad bags: one `error: …` line naming the topic,
-//! message or key, exit status 1, and nothing at `--out`. The bags are written by the test
+//! message or key, exit status 1, and nothing at `--out` — except for a bag that cannot be
+//! read to its end (truncated or corrupt), whose frames before that point are tracked and
+//! written. The bags are written by the test
 //! from an exported simulator scenario (`evorec_sim::bag::testbag`), then spoiled.
 
 use std::path::{Path, PathBuf};
@@ -63,20 +65,19 @@ fn bad_bags_are_named_and_nothing_is_written() {
     let no_joints = bag("no-joints", TestBag { skip_topics: vec!["/joint_states".into()], ..TestBag::default() });
     fails(&dir, &no_joints, &rig, &["no topic /joint_states", "the bag's topics: ", "/stereo/left/image ("]);
 
+    let silent =
+        bag("silent-info", TestBag { silent_topics: vec!["/stereo/right/camera_info".into()], ..TestBag::default() });
+    fails(
+        &dir,
+        &silent,
+        &rig,
+        &["topic /stereo/right/camera_info (topics.right_info of the rig file) is in the bag but holds no message"],
+    );
     let good = bag("good", TestBag::default());
     let bytes = std::fs::read(&good).expect("bag");
-    let truncated = dir.join("truncated.mcap");
-    std::fs::write(&truncated, &bytes[..bytes.len() * 3 / 5]).expect("write");
-    fails(&dir, &truncated, &rig, &["truncated.mcap", "not a readable MCAP file (truncated or corrupt)"]);
-    for (name, compression) in [("corrupt-zstd", Some(mcap::Compression::Zstd)), ("corrupt-plain", None)] {
-        let mut bytes = std::fs::read(bag(name, TestBag { compression, ..TestBag::default() })).expect("bag");
-        let mid = bytes.len() / 2;
-        bytes[mid..mid + 64].fill(0xA5);
-        let corrupt = dir.join(format!("{name}.mcap"));
-        std::fs::write(&corrupt, &bytes).expect("write");
-        fails(&dir, &corrupt, &rig, &[&format!("{name}.mcap")]);
-    }
-
+    let junk = dir.join("junk.mcap");
+    std::fs::write(&junk, &bytes[bytes.len() / 3..bytes.len() / 2]).expect("write");
+    fails(&dir, &junk, &rig, &["junk.mcap: not a readable MCAP file (truncated or corrupt) after 0 messages"]);
     let yuv = bag("yuv", TestBag { left_encoding: "yuv422".into(), ..TestBag::default() });
     fails(&dir, &yuv, &rig, &["/stereo/left/image message 0", "unknown encoding \"yuv422\""]);
     let mono = bag("mono", TestBag { right_encoding: "mono8".into(), ..TestBag::default() });
@@ -107,6 +108,76 @@ fn bad_bags_are_named_and_nothing_is_written() {
         testbag::rig_toml(&seq).lines().filter(|l| !l.starts_with("initial_pose")).collect::<Vec<_>>().join("\n");
     std::fs::write(&bad_rig, format!("{text}\n{pose}")).expect("rig");
     fails(&dir, &good, &bad_rig, &["bad-rig.toml: target.initial_pose: q_xyzw must be a unit quaternion"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Runs `evorec ARGS --out OUT` on a bag that cannot be read to its end: one error line naming
+/// the file and the cut, exit status 1, and the outputs of the frames before the cut written.
+fn cut_short(cmd: &str, args: &[&str], out: &Path, needles: &[&str]) {
+    let mut all = vec![cmd];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--out", path_str(out), "-q"]);
+    let o = evorec(&all);
+    assert_eq!(o.status.code(), Some(1), "{cmd}: {o:?}");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{cmd}: expected one line on stderr, got:\n{stderr}");
+    for n in needles.iter().chain(&["error: ", "not a readable MCAP file (truncated or corrupt) after"]) {
+        assert!(lines[0].contains(n), "{cmd}: '{n}' not in: {}", lines[0]);
+    }
+}
+
+/// The estimate's rows (without comments).
+fn rows(path: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    text.lines().filter(|l| !l.starts_with('#')).map(str::to_owned).collect()
+}
+
+#[test]
+fn a_bag_cut_short_is_tracked_up_to_the_cut() {
+    let dir = scratch("cut");
+    let seq = sequence(&dir);
+    let rig = dir.join("rig.toml");
+    std::fs::write(&rig, testbag::rig_toml(&seq)).expect("rig");
+    let good = dir.join("good.mcap");
+    testbag::write(&seq, &good, &TestBag::default()).unwrap_or_else(|e| panic!("{e:#}"));
+    let full = dir.join("full");
+    let o = evorec(&["track", path_str(&good), "--rig", path_str(&rig), "--out", path_str(&full), "-q"]);
+    assert!(o.status.success(), "{o:?}");
+    let all = rows(&full.join("estimate.tum"));
+    let bytes = std::fs::read(&good).expect("bag");
+    let truncated = dir.join("truncated.mcap");
+    std::fs::write(&truncated, &bytes[..bytes.len() * 3 / 5]).expect("write");
+    let mut spoiled = vec![truncated];
+    for (name, compression) in [("corrupt-zstd", Some(mcap::Compression::Zstd)), ("corrupt-plain", None)] {
+        let p = dir.join(format!("{name}.mcap"));
+        testbag::write(&seq, &p, &TestBag { compression, ..TestBag::default() }).unwrap_or_else(|e| panic!("{e:#}"));
+        let mut bytes = std::fs::read(&p).expect("bag");
+        let mid = bytes.len() / 2;
+        bytes[mid..mid + 64].fill(0xA5);
+        std::fs::write(&p, &bytes).expect("write");
+        spoiled.push(p);
+    }
+    for bag in &spoiled {
+        let name = bag.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        let (out, seq_out) = (dir.join(format!("out-{name}")), dir.join(format!("seq-{name}")));
+        cut_short(
+            "track",
+            &[path_str(bag), "--rig", path_str(&rig)],
+            &out,
+            &[name, "tracked the", "\"partial\": true"],
+        );
+        let summary = std::fs::read_to_string(out.join("summary.json")).expect("summary");
+        assert!(summary.contains("\"partial\": true") && summary.contains("\"cut\": "), "{summary}");
+        // The frames before the cut are tracked as in the whole bag (the last one's joint
+        // velocity may differ: it is one-sided at the cut).
+        let some = rows(&out.join("estimate.tum"));
+        assert!(some.len() > 2 && some.len() < all.len(), "{name}: {} of {} frames", some.len(), all.len());
+        assert_eq!(some[..some.len() - 1], all[..some.len() - 1], "{name}");
+        cut_short("import", &[path_str(bag), "--rig", path_str(&rig)], &seq_out, &[name, "imported the"]);
+        let imported = Sequence::load(&seq_out).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(imported.frames.len(), some.len(), "{name}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

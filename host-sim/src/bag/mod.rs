@@ -46,8 +46,8 @@ use serde::Serialize;
 use crate::sequence::camera_info::{self, YamlMatrix};
 use crate::sequence::write::{ManifestFields, image_path, manifest_text};
 use crate::sequence::{FrameRow, Robot, Sequence, Texts};
-pub use rig::Rig;
 use pairing::Pairing;
+pub use rig::Rig;
 use scan::{ImageRef, Scan};
 
 /// What `evorec import` / `evorec track BAG` take besides the bag and the rig file.
@@ -174,8 +174,10 @@ pub fn load(bag: &Path, rig: &Rig, opts: &BagOptions, dir: &Path) -> Result<BagS
     let files = BagFiles::open(bag)?;
     let scan = Scan::read(&files, rig)?;
     let cut = scan.cut.clone();
+    let read_any = scan.topics.values().any(|t| t.count > 0);
     let loaded = from_scan(files, scan, rig, opts, dir);
     match (loaded, &cut) {
+        (Err(_), Some(cut)) if !read_any => bail!("{cut}"),
         (Err(e), Some(cut)) => bail!("{cut}; the messages before it do not make a sequence: {e:#}"),
         (loaded, _) => loaded,
     }
@@ -231,7 +233,19 @@ fn from_scan(files: BagFiles, scan: Scan, rig: &Rig, opts: &BagOptions, dir: &Pa
     };
     let seq = Sequence::from_memory(dir, &texts, frames, table).map_err(|e| rig_error(e, rig))?;
     let cut = scan.cut;
-    Ok(BagSequence { seq, manifest, left_yaml, right_yaml, urdf, pairs, stamps_ns, files, rig: rig.clone(), report, cut })
+    Ok(BagSequence {
+        seq,
+        manifest,
+        left_yaml,
+        right_yaml,
+        urdf,
+        pairs,
+        stamps_ns,
+        files,
+        rig: rig.clone(),
+        report,
+        cut,
+    })
 }
 
 /// The stereo pairs of the scanned images (at least one), and how they were paired.

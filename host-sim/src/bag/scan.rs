@@ -61,29 +61,44 @@ impl std::fmt::Display for Cut {
 /// writes 768 KiB ones; a chunk holding one 4K raw image is 25 MiB).
 const RECORD_LIMIT: usize = 1 << 30;
 
+/// How a pass over a bag ended.
+#[derive(Debug, Clone, Default)]
+pub struct Pass {
+    /// Where the bag could not be read further, if it could not (see [`Cut`]).
+    pub cut: Option<Cut>,
+    /// Every channel of the files read to their end or cut, messages or not: topic → schema.
+    pub channels: BTreeMap<String, String>,
+}
+
 /// Calls `f` on every message of the bag in file order, until it returns `false`. The files
 /// are streamed: memory holds one chunk (and its decompressed records) at a time, whatever
 /// the bag's size.
 ///
-/// Returns where the bag could not be read further ([`Cut`]), if it could not: the messages
-/// before it were handed to `f`, none after it (nor from later files).
+/// A file that cannot be read to its end ends the pass ([`Pass::cut`]): the messages before
+/// that point were handed to `f`, none after it (nor from later files).
 ///
 /// # Errors
 /// A file that cannot be opened, or `f`'s error.
-pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<bool>) -> Result<Option<Cut>> {
+pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<bool>) -> Result<Pass> {
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    let mut pass = Pass::default();
     for file in &files.files {
         let handle = File::open(file).map_err(|e| anyhow!("{}: cannot read: {e}", file.display()))?;
         // Each chunk's CRC (when the writer stored one) is checked before any of its messages
         // is handed over, so damage inside an uncompressed chunk is found, not read as pixels.
         let options =
             LinearReaderOptions::default().with_prevalidate_chunk_crcs(true).with_record_length_limit(RECORD_LIMIT);
-        let reader = mcap::io::MessageReader::new_with_options(BufReader::with_capacity(1 << 20, handle), options);
-        for (n, m) in reader.enumerate() {
+        let mut reader = mcap::io::MessageReader::new_with_options(BufReader::with_capacity(1 << 20, handle), options);
+        let mut n = 0;
+        while let Some(m) = reader.next() {
             let m = match m {
                 Ok(m) => m,
-                Err(e) => return Ok(Some(Cut { file: file.clone(), messages: n, error: e.to_string() })),
+                Err(e) => {
+                    pass.cut = Some(Cut { file: file.clone(), messages: n, error: e.to_string() });
+                    break;
+                }
             };
+            n += 1;
             let count = counts.entry(m.channel.topic.clone()).or_insert(0);
             let msg = Msg {
                 topic: &m.channel.topic,
@@ -94,11 +109,19 @@ pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<
             };
             *count += 1;
             if !f(&msg)? {
-                return Ok(None);
+                return Ok(pass);
             }
         }
+        // The reader looks channels up by id only: every id is asked for.
+        for c in (0..=u16::MAX).filter_map(|id| reader.get_channel(id)) {
+            let schema = c.schema.as_ref().map_or_else(String::new, |s| s.name.clone());
+            pass.channels.entry(c.topic.clone()).or_insert(schema);
+        }
+        if pass.cut.is_some() {
+            break;
+        }
     }
-    Ok(None)
+    Ok(pass)
 }
 
 /// An image message found in the first pass.
@@ -124,7 +147,7 @@ pub struct TopicInfo {
 /// What the first pass found.
 #[derive(Debug, Clone, Default)]
 pub struct Scan {
-    /// Every topic of the bag.
+    /// Every topic of the bag (with no message too).
     pub topics: BTreeMap<String, TopicInfo>,
     /// Left images.
     pub left: Vec<ImageRef>,
@@ -159,13 +182,16 @@ impl Scan {
     pub fn read(files: &BagFiles, rig: &Rig) -> Result<Self> {
         let name = files.display();
         let mut scan = Self::default();
-        let cut = for_each_message(files, |m| {
+        let pass = for_each_message(files, |m| {
             let info = scan.topics.entry(m.topic.to_owned()).or_insert(TopicInfo { schema: m.schema.into(), count: 0 });
             info.count += 1;
             scan.take(m, rig).map_err(|e| anyhow!("{name}: {} message {}: {e}", m.topic, m.index))?;
             Ok(true)
         })?;
-        scan.cut = cut;
+        for (topic, schema) in pass.channels {
+            scan.topics.entry(topic).or_insert(TopicInfo { schema, count: 0 });
+        }
+        scan.cut = pass.cut;
         Ok(scan)
     }
 
@@ -231,14 +257,17 @@ impl Scan {
             needed.push(("robot_description", d));
         }
         for (key, topic) in needed {
-            if !self.topics.contains_key(topic.as_str()) {
-                let list: Vec<String> =
-                    self.topics.iter().map(|(n, i)| format!("{n} ({}, {} messages)", i.schema, i.count)).collect();
-                bail!(
-                    "{name}: no topic {topic} (topics.{key} of the rig file); the bag's topics: {}",
-                    if list.is_empty() { "none".to_owned() } else { list.join(", ") }
-                );
-            }
+            let what = match self.topics.get(topic.as_str()) {
+                Some(info) if info.count > 0 => continue,
+                Some(_) => format!("topic {topic} (topics.{key} of the rig file) is in the bag but holds no message"),
+                None => format!("no topic {topic} (topics.{key} of the rig file)"),
+            };
+            let list: Vec<String> =
+                self.topics.iter().map(|(n, i)| format!("{n} ({}, {} messages)", i.schema, i.count)).collect();
+            bail!(
+                "{name}: {what}; the bag's topics: {}",
+                if list.is_empty() { "none".to_owned() } else { list.join(", ") }
+            );
         }
         Ok(())
     }

@@ -103,13 +103,13 @@ impl FrameSource for BagFrames {
             return Err(e);
         }
         let file = || PathBuf::from(self.files.display());
-        let cut = result.map_err(|e| {
+        let pass = result.map_err(|e| {
             let text = format!("{e:#}");
             let text = text.strip_prefix(&format!("{}: ", self.files.display())).map_or(text.clone(), str::to_owned);
             SequenceError::file(file(), text)
         })?;
         if next < end {
-            return Err(match cut {
+            return Err(match pass.cut {
                 // The first pass read up to the same place: it is where the bag ends.
                 Some(cut) => SequenceError::file(&cut.file, cut.what()),
                 None => SequenceError::file(

@@ -217,11 +217,9 @@ impl ImportArgs {
             self.out.display()
         );
         match &b.cut {
-            Some(cut) => anyhow::bail!(
-                "{cut}: imported the {} frames before it into {}",
-                b.pairs.len(),
-                self.out.display()
-            ),
+            Some(cut) => {
+                anyhow::bail!("{cut}: imported the {} frames before it into {}", b.pairs.len(), self.out.display())
+            }
             None => Ok(()),
         }
     }

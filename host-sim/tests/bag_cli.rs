@@ -13,7 +13,7 @@ use evorec_sim::sequence::Sequence;
 
 /// A short exported scenario (1 s of 160x120 frames).
 mod common;
-use common::evorec;
+use common::{evorec, evorec_env};
 
 fn scratch(name: &str) -> PathBuf {
     common::scratch("bag-cli", name)
@@ -205,7 +205,18 @@ fn a_good_bag_imports_and_tracks_from_the_command_line() {
     let o = evorec(&["track", path_str(&bag), "--out", path_str(&dir.join("x")), "-q"]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("give its rig file with --rig"), "{o:?}");
     let o = evorec(&["import", path_str(&bag), "--rig", path_str(&rig), "--out", path_str(&dir.join("seq2")), "-q"]);
-    assert!(o.status.success() && o.stderr.is_empty(), "{o:?}");
+    assert!(o.status.success() && o.stderr.is_empty() && o.stdout.is_empty(), "{o:?}");
+    // Progress on stderr that is not a terminal: plain lines (here one per frame).
+    let lines = dir.join("lines");
+    let args = ["track", path_str(&bag), "--rig", path_str(&rig), "--out", path_str(&lines)];
+    let o = evorec_env(&args, &[("EVOREC_PROGRESS_SECS", "0")]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && stderr.lines().any(|l| l.contains("frames done, ") && l.contains(" frames/s, ETA ")),
+        "{stderr}"
+    );
+    let o = evorec(&["-q", "track", path_str(&bag), "--rig", path_str(&rig), "--out", path_str(&dir.join("quiet"))]);
+    assert!(o.status.success() && o.stderr.is_empty() && o.stdout.is_empty(), "{o:?}");
     assert!(Sequence::load(&dir.join("seq2")).is_ok());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -189,6 +189,7 @@ fn from_scan(files: BagFiles, scan: Scan, rig: &Rig, opts: &BagOptions, dir: &Pa
     let urdf = urdf_text(&scan, rig, &name)?;
     let urdf_name = PathBuf::from(format!("{name}: {}", urdf_label(rig)));
     let robot = Robot::from_urdf_str(&urdf, &rig.frames.base_link, &rig.frames.flange_link, &urdf_name)?;
+    log_resolved(&scan, rig, &robot, &name);
     let (mut pairs, pairing) = pairs(&scan, rig, opts, &name)?;
     let origin_ns = pairs[0].0.stamp_ns.div_euclid(1_000_000_000) * 1_000_000_000;
     let (table, velocities, duplicates) =
@@ -246,6 +247,37 @@ fn from_scan(files: BagFiles, scan: Scan, rig: &Rig, opts: &BagOptions, dir: &Pa
         report,
         cut,
     })
+}
+
+/// Logs (`-v`) what the bag's messages resolved to: the chain, the image encodings and the
+/// intrinsics (the transforms are logged by [`manifest`], the pairing by [`BagReport::log`]).
+fn log_resolved(scan: &Scan, rig: &Rig, robot: &Robot, name: &str) {
+    let f = &rig.frames;
+    log::info!(
+        "{name}: chain {} -> {}: {} joints ({})",
+        f.base_link,
+        f.flange_link,
+        robot.joint_names.len(),
+        robot.joint_names.join(", ")
+    );
+    let t = &rig.topics;
+    for (topic, info) in [(&t.left_image, &scan.left_info), (&t.right_image, &scan.right_info)] {
+        let encodings: Vec<&str> =
+            scan.encodings.get(topic).map_or_else(Vec::new, |e| e.iter().map(String::as_str).collect());
+        let Some(c) = info else { continue };
+        log::info!(
+            "{name}: {topic}: encoding {}; {}x{}, fx {} fy {} cx {} cy {}, distortion {} ({} coefficients)",
+            encodings.join(", "),
+            c.width,
+            c.height,
+            c.k[0],
+            c.k[4],
+            c.k[2],
+            c.k[5],
+            c.distortion_model,
+            c.d.len()
+        );
+    }
 }
 
 /// The stereo pairs of the scanned images (at least one), and how they were paired.
@@ -431,6 +463,22 @@ fn manifest(scan: &Scan, rig: &Rig, (seq_name, name, paired): (&str, &str, &str)
     let tf_err = |e: String| anyhow!("{name}: {} (rig file frames): {e}", rig.topics.tf_static);
     let flange_to_right = scan.tf.pose_of(&f.right_camera, &f.flange_link).map_err(tf_err)?;
     let right_to_left = scan.tf.pose_of(&f.right_camera, &f.left_camera).map_err(tf_err)?;
+    for (what, iso) in [
+        (format!("flange_to_right ({} to {})", f.flange_link, f.right_camera), flange_to_right),
+        (format!("right_to_left ({} to {})", f.right_camera, f.left_camera), right_to_left),
+    ] {
+        let (t, q) = (iso.translation.vector, iso.rotation.coords);
+        log::info!(
+            "{name}: transform {what}: t [{}, {}, {}] m, q_xyzw [{}, {}, {}, {}]",
+            t.x,
+            t.y,
+            t.z,
+            q.x,
+            q.y,
+            q.z,
+            q.w
+        );
+    }
     let t = &rig.target;
     let comment = format!(
         "imported by evorec from the ROS 2 bag {name}\n{paired}\nt_s = header.stamp - {} s",

@@ -1,6 +1,6 @@
 //! The first pass over a bag: every message but the pixels (see the [module docs](super)).
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fs::File;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
@@ -165,6 +165,8 @@ pub struct Scan {
     pub urdf: Option<String>,
     /// Where the bag could not be read further (a truncated recording), if it could not.
     pub cut: Option<Cut>,
+    /// The encodings met on each image topic (`png` / `jpeg` for compressed images).
+    pub encodings: BTreeMap<String, BTreeSet<String>>,
 }
 
 /// The image types a camera topic may have.
@@ -211,7 +213,10 @@ impl Scan {
             bail!("message encoding \"{}\" is not CDR (evorec reads ROS 2 bags)", m.encoding);
         }
         if m.topic == t.left_image || m.topic == t.right_image {
-            let r = image_ref(m)?;
+            let (r, encoding) = image_ref(m)?;
+            if !self.encodings.get(m.topic).is_some_and(|e| e.contains(&encoding)) {
+                self.encodings.entry(m.topic.to_owned()).or_default().insert(encoding);
+            }
             if m.topic == t.left_image { self.left.push(r) } else { self.right.push(r) }
         } else if m.topic == t.left_info || m.topic == t.right_info {
             expect_type(m, "sensor_msgs/msg/CameraInfo")?;
@@ -280,20 +285,23 @@ fn expect_type(m: &Msg<'_>, schema: &str) -> Result<()> {
     Ok(())
 }
 
-fn image_ref(m: &Msg<'_>) -> Result<ImageRef> {
+/// The image's header and its encoding.
+fn image_ref(m: &Msg<'_>) -> Result<(ImageRef, String)> {
     match m.schema {
         IMAGE => {
             let img = msgs::image(m.data)?;
             images::check_encoding(&img.encoding).map_err(|e| anyhow!(e))?;
-            Ok(ImageRef { index: m.index, stamp_ns: img.header.stamp_ns, size: Some((img.width, img.height)) })
+            let size = Some((img.width, img.height));
+            Ok((ImageRef { index: m.index, stamp_ns: img.header.stamp_ns, size }, img.encoding))
         }
         COMPRESSED_IMAGE => {
             let img = msgs::compressed_image(m.data)?;
-            match image::guess_format(img.data) {
-                Ok(image::ImageFormat::Png | image::ImageFormat::Jpeg) => {}
+            let encoding = match image::guess_format(img.data) {
+                Ok(image::ImageFormat::Png) => "png",
+                Ok(image::ImageFormat::Jpeg) => "jpeg",
                 _ => bail!("unknown encoding: format \"{}\", the data is neither PNG nor JPEG", img.format),
-            }
-            Ok(ImageRef { index: m.index, stamp_ns: img.header.stamp_ns, size: None })
+            };
+            Ok((ImageRef { index: m.index, stamp_ns: img.header.stamp_ns, size: None }, encoding.to_owned()))
         }
         other => bail!("type {other} is not {IMAGE} or {COMPRESSED_IMAGE}"),
     }

@@ -129,7 +129,9 @@ fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<
     let output = track::run(&seq, opts)?;
     let ev = track::output::evaluate(&seq, &output);
     track::output::write_all(&seq, &output, &ev, out)?;
-    print_track(&ev.summary, t0, out);
+    if opts.progress {
+        print_track(&ev.summary, t0, out);
+    }
     Ok(())
 }
 
@@ -147,8 +149,11 @@ fn track_bag(
     let b = bag::load(path, &rig, bag_opts, path)?;
     b.report.log();
     let ev = bag::track::track_and_write(&b, opts, out)?;
-    println!("{}", b.report.describe());
-    print_track(&ev.summary, t0, out);
+    // `opts.progress` is off with -q: nothing but errors then.
+    if opts.progress {
+        println!("{}", b.report.describe());
+        print_track(&ev.summary, t0, out);
+    }
     match &b.cut {
         Some(cut) => anyhow::bail!(
             "{cut}: tracked the {} frames before it; wrote {} (summary.json: \"partial\": true)",
@@ -203,12 +208,25 @@ impl ImportArgs {
         let bag_opts = bag::BagOptions { pair_tolerance_ms: self.pair_tolerance_ms };
         let b = bag::load(&self.bag, &rig, &bag_opts, &self.out)?;
         b.report.log();
-        let bar = progress.then(|| evorec_sim::logging::progress_bar(b.pairs.len() as u64));
+        let bar = progress.then(|| evorec_sim::logging::progress_bar_of(b.pairs.len() as u64, "pairs"));
         bag::import::import(&b, &self.out, bar.as_ref())?;
         if let Some(bar) = bar {
             bar.finish_and_clear();
         }
         let secs = t0.elapsed().as_secs_f64();
+        if progress {
+            self.print(&b, secs);
+        }
+        match &b.cut {
+            Some(cut) => {
+                anyhow::bail!("{cut}: imported the {} frames before it into {}", b.pairs.len(), self.out.display())
+            }
+            None => Ok(()),
+        }
+    }
+
+    /// The lines a run prints on stdout (none with -q).
+    fn print(&self, b: &bag::BagSequence, secs: f64) {
         println!("{}", b.report.describe());
         println!(
             "imported {} frame pairs in {secs:.1} s ({:.0} pairs/s); wrote {}",
@@ -216,11 +234,5 @@ impl ImportArgs {
             b.pairs.len() as f64 / secs.max(1e-9),
             self.out.display()
         );
-        match &b.cut {
-            Some(cut) => {
-                anyhow::bail!("{cut}: imported the {} frames before it into {}", b.pairs.len(), self.out.display())
-            }
-            None => Ok(()),
-        }
     }
 }

@@ -31,7 +31,7 @@ use evorec_core::pose::Psi;
 use evorec_core::tracker::{Tracker, TrackerConfig};
 use evorec_core::tuning::Tuning;
 use image::RgbImage;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use nalgebra::Isometry3;
 
 use crate::experiment::{Population, SetupError, setup_tracker};
@@ -244,11 +244,7 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
 }
 
 fn progress_bar(len: u64) -> ProgressBar {
-    let bar = crate::logging::progress_bar(len);
-    if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} {eta}") {
-        bar.set_style(style);
-    }
-    bar
+    crate::logging::progress_bar_of(len, "frames")
 }
 
 /// The estimate of a tracked frame as a pose (f64).

@@ -127,6 +127,25 @@ fn cut_short(cmd: &str, args: &[&str], out: &Path, needles: &[&str]) {
     }
 }
 
+/// `--start/--end` keep the frames of the window (times as in the whole run), and
+/// `--absolute-stamps` writes them as ROS stamps; the header says which.
+fn window_and_stamps(bag: &Path, rig: &Path, whole: &Path, dir: &Path) {
+    let header = std::fs::read_to_string(whole.join("estimate.tum")).expect("estimate");
+    assert!(header.contains("# t: s since the ROS stamp 1700000000 s (header.stamp = 1700000000 + t"), "{header}");
+    let time = |row: &String| row.split(' ').next().and_then(|t| t.parse::<f64>().ok()).expect("time");
+    let all: Vec<f64> = rows(&whole.join("estimate.tum")).iter().map(time).collect();
+    let (out, args) = (dir.join("window"), ["--start", "0.3", "--end", "1700000000600000000ns", "--absolute-stamps"]);
+    let mut cmd = vec!["track", path_str(bag), "--rig", path_str(rig), "--out", path_str(&out), "-q"];
+    cmd.extend_from_slice(&args);
+    assert!(evorec(&cmd).status.success());
+    let text = std::fs::read_to_string(out.join("estimate.tum")).expect("estimate");
+    assert!(text.contains("# t: the image's header.stamp (ROS time, s since the epoch)"), "{text}");
+    let got: Vec<f64> = rows(&out.join("estimate.tum")).iter().map(|r| time(r) - 1.7e9).collect();
+    let want: Vec<f64> = all.iter().copied().filter(|t| *t >= all[0] + 0.3 - 1e-9 && *t <= 0.6 + 1e-9).collect();
+    assert_eq!(got.len(), want.len());
+    assert!(got.iter().zip(&want).all(|(g, w)| (g - w).abs() < 1e-6), "{got:?} vs {want:?}");
+}
+
 /// The estimate's rows (without comments).
 fn rows(path: &Path) -> Vec<String> {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -201,6 +220,7 @@ fn a_good_bag_imports_and_tracks_from_the_command_line() {
     }
     let summary = std::fs::read_to_string(out.join("summary.json")).expect("summary");
     assert!(summary.contains("\"unpaired_left\": 0") && summary.contains("\"joint_velocities\": \"derived\""));
+    window_and_stamps(&bag, &rig, &out, &dir);
     // Without --rig a bag is recognised and the rig file asked for.
     let o = evorec(&["track", path_str(&bag), "--out", path_str(&dir.join("x")), "-q"]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("give its rig file with --rig"), "{o:?}");

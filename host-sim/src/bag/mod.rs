@@ -36,6 +36,7 @@ pub mod source;
 pub mod testbag;
 pub mod tf;
 pub mod track;
+pub mod window;
 pub mod write_mcap;
 
 use std::path::{Path, PathBuf};
@@ -55,6 +56,10 @@ use scan::{ImageRef, Scan};
 pub struct BagOptions {
     /// Largest stamp difference of a stereo pair (ms); default a quarter of the frame period.
     pub pair_tolerance_ms: Option<f64>,
+    /// The first frame to use (`--start`).
+    pub start: Option<window::TimeArg>,
+    /// The last frame to use (`--end`).
+    pub end: Option<window::TimeArg>,
 }
 
 /// What was found in a bag (printed, logged and written into `summary.json`).
@@ -191,7 +196,9 @@ fn from_scan(files: BagFiles, scan: Scan, rig: &Rig, opts: &BagOptions, dir: &Pa
     let robot = Robot::from_urdf_str(&urdf, &rig.frames.base_link, &rig.frames.flange_link, &urdf_name)?;
     log_resolved(&scan, rig, &robot, &name);
     let (mut pairs, pairing) = pairs(&scan, rig, opts, &name)?;
-    let origin_ns = pairs[0].0.stamp_ns.div_euclid(1_000_000_000) * 1_000_000_000;
+    // Time 0 is the whole second before the bag's first frame (whatever --start says, so that
+    // times agree with a run over the whole bag).
+    let origin_ns = scan.left[pairing.pairs[0].0].stamp_ns.div_euclid(1_000_000_000) * 1_000_000_000;
     let (table, velocities, duplicates) =
         joints::table(&scan.joints, &robot.joint_names, origin_ns).map_err(|(index, e)| match index {
             Some(i) => anyhow!("{name}: {} message {i}: {e}", rig.topics.joint_states),
@@ -294,7 +301,9 @@ fn pairs(scan: &Scan, rig: &Rig, opts: &BagOptions, name: &str) -> Result<(Vec<(
             rig.topics.right_image
         );
     }
-    let pairs = pairing.pairs.iter().map(|&(l, r)| (scan.left[l].clone(), scan.right[r].clone())).collect();
+    let stamps: Vec<i64> = pairing.pairs.iter().map(|&(l, _)| scan.left[l].stamp_ns).collect();
+    let range = window::select(&stamps, opts.start, opts.end).map_err(|e| anyhow!("{name}: {e}"))?;
+    let pairs = pairing.pairs[range].iter().map(|&(l, r)| (scan.left[l].clone(), scan.right[r].clone())).collect();
     Ok((pairs, pairing))
 }
 
@@ -487,6 +496,7 @@ fn manifest(scan: &Scan, rig: &Rig, (seq_name, name, paired): (&str, &str, &str)
     Ok(manifest_text(&ManifestFields {
         name: seq_name,
         comment: &comment,
+        stamp_origin_s: Some(origin_ns / 1_000_000_000),
         base_link: &f.base_link,
         flange_link: &f.flange_link,
         right_to_left,

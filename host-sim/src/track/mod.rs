@@ -60,6 +60,9 @@ pub struct TrackOptions {
     pub progress: bool,
     /// The pixel format the tracker reads the PNGs in.
     pub pixels: Pixels,
+    /// `estimate.tum` gives each frame's ROS stamp instead of the time since the origin
+    /// (a bag, or a sequence with `stamp_origin_s`).
+    pub absolute_stamps: bool,
 }
 
 /// The pixel format `evorec track` hands the decoded PNGs to the tracker in.
@@ -93,6 +96,7 @@ impl Default for TrackOptions {
             overlay: BTreeSet::new(),
             progress: false,
             pixels: Pixels::default(),
+            absolute_stamps: false,
         }
     }
 }

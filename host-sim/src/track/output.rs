@@ -196,7 +196,12 @@ pub fn write_all(seq: &Sequence, out: &TrackOutput, ev: &Evaluation, dir: &Path)
     written.push(trace.clone());
     let poses: Vec<(f64, Isometry3<f64>)> =
         out.tracked.iter().map(|t| (seq.frames[t.i].t_s, super::estimate_pose(t))).collect();
-    written.push(crate::io::write_estimate_tum(dir, &poses)?);
+    let times = match (seq.manifest.raw.stamp_origin_s, out.options.absolute_stamps) {
+        (Some(origin), false) => crate::io::TumTimes::SinceStamp(origin),
+        (Some(origin), true) => crate::io::TumTimes::Absolute(origin),
+        (None, _) => crate::io::TumTimes::Sequence,
+    };
+    written.push(crate::io::write_estimate_tum(dir, &poses, times)?);
     for (i, l, r) in &out.kept {
         if let Some(t) = out.tracked.iter().find(|t| t.i == *i) {
             let img = overlay(seq, l, r, &super::estimate_pose(t).cast())?;

@@ -89,8 +89,7 @@ pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<
         let options =
             LinearReaderOptions::default().with_prevalidate_chunk_crcs(true).with_record_length_limit(RECORD_LIMIT);
         let mut reader = mcap::io::MessageReader::new_with_options(BufReader::with_capacity(1 << 20, handle), options);
-        let mut n = 0;
-        while let Some(m) = reader.next() {
+        for (n, m) in reader.by_ref().enumerate() {
             let m = match m {
                 Ok(m) => m,
                 Err(e) => {
@@ -98,7 +97,6 @@ pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<
                     break;
                 }
             };
-            n += 1;
             let count = counts.entry(m.channel.topic.clone()).or_insert(0);
             let msg = Msg {
                 topic: &m.channel.topic,

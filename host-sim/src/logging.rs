@@ -81,7 +81,8 @@ fn line_interval() -> Duration {
 }
 
 /// A progress bar's draw target that prints its text as one line on stderr at most every
-/// [`line_interval`] (the first after one interval), for output that is not a terminal.
+/// `EVOREC_PROGRESS_SECS` seconds (default 5; the first after one interval), for output that
+/// is not a terminal.
 #[derive(Debug)]
 pub struct LineTarget {
     interval: Duration,

@@ -31,20 +31,34 @@ fn path_str(p: &Path) -> &str {
     p.to_str().unwrap_or_else(|| panic!("non-UTF-8 path {}", p.display()))
 }
 
+/// A scratch directory with the short sequence and its rig file.
+fn setup(name: &str) -> (PathBuf, Sequence, PathBuf) {
+    let dir = scratch(name);
+    let seq = sequence(&dir);
+    let rig = dir.join("rig.toml");
+    std::fs::write(&rig, testbag::rig_toml(&seq)).expect("rig");
+    (dir, seq, rig)
+}
+
+/// The one line a failed run printed on stderr (exit status 1), holding every one of `needles`.
+fn one_error_line(cmd: &str, o: &std::process::Output, needles: &[&str]) {
+    assert_eq!(o.status.code(), Some(1), "{cmd}: {o:?}");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{cmd}: expected one line on stderr, got:\n{stderr}");
+    assert!(lines[0].starts_with("error: "), "{}", lines[0]);
+    for n in needles {
+        assert!(lines[0].contains(n), "{cmd}: '{n}' not in: {}", lines[0]);
+    }
+}
+
 /// Runs `evorec import` and `evorec track` on `bag`; both must fail with one line holding
 /// every one of `needles`, and leave nothing at their `--out`.
 fn fails(dir: &Path, bag: &Path, rig: &Path, needles: &[&str]) {
     for cmd in ["import", "track"] {
         let out = dir.join(format!("out-{cmd}"));
         let o = evorec(&[cmd, path_str(bag), "--rig", path_str(rig), "--out", path_str(&out)]);
-        assert_eq!(o.status.code(), Some(1), "{cmd}: {o:?}");
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        let lines: Vec<&str> = stderr.lines().collect();
-        assert_eq!(lines.len(), 1, "{cmd}: expected one line on stderr, got:\n{stderr}");
-        assert!(lines[0].starts_with("error: "), "{}", lines[0]);
-        for n in needles {
-            assert!(lines[0].contains(n), "{cmd}: '{n}' not in: {}", lines[0]);
-        }
+        one_error_line(cmd, &o, needles);
         assert!(!out.exists(), "{cmd} wrote {}", out.display());
         assert!(!dir.join(format!("out-{cmd}.partial")).exists(), "{cmd} left a partial directory");
     }
@@ -52,10 +66,7 @@ fn fails(dir: &Path, bag: &Path, rig: &Path, needles: &[&str]) {
 
 #[test]
 fn bad_bags_are_named_and_nothing_is_written() {
-    let dir = scratch("bad");
-    let seq = sequence(&dir);
-    let rig = dir.join("rig.toml");
-    std::fs::write(&rig, testbag::rig_toml(&seq)).expect("rig");
+    let (dir, seq, rig) = setup("bad");
     let bag = |name: &str, opts: TestBag| {
         let p = dir.join(format!("{name}.mcap"));
         testbag::write(&seq, &p, &opts).unwrap_or_else(|e| panic!("{e:#}"));
@@ -117,14 +128,9 @@ fn cut_short(cmd: &str, args: &[&str], out: &Path, needles: &[&str]) {
     let mut all = vec![cmd];
     all.extend_from_slice(args);
     all.extend_from_slice(&["--out", path_str(out), "-q"]);
-    let o = evorec(&all);
-    assert_eq!(o.status.code(), Some(1), "{cmd}: {o:?}");
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    let lines: Vec<&str> = stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{cmd}: expected one line on stderr, got:\n{stderr}");
-    for n in needles.iter().chain(&["error: ", "not a readable MCAP file (truncated or corrupt) after"]) {
-        assert!(lines[0].contains(n), "{cmd}: '{n}' not in: {}", lines[0]);
-    }
+    let mut needles = needles.to_vec();
+    needles.push("not a readable MCAP file (truncated or corrupt) after");
+    one_error_line(cmd, &evorec(&all), &needles);
 }
 
 /// `--start/--end` keep the frames of the window (times as in the whole run), and
@@ -154,10 +160,7 @@ fn rows(path: &Path) -> Vec<String> {
 
 #[test]
 fn a_bag_cut_short_is_tracked_up_to_the_cut() {
-    let dir = scratch("cut");
-    let seq = sequence(&dir);
-    let rig = dir.join("rig.toml");
-    std::fs::write(&rig, testbag::rig_toml(&seq)).expect("rig");
+    let (dir, seq, rig) = setup("cut");
     let good = dir.join("good.mcap");
     testbag::write(&seq, &good, &TestBag::default()).unwrap_or_else(|e| panic!("{e:#}"));
     let full = dir.join("full");
@@ -202,10 +205,7 @@ fn a_bag_cut_short_is_tracked_up_to_the_cut() {
 
 #[test]
 fn a_good_bag_imports_and_tracks_from_the_command_line() {
-    let dir = scratch("good");
-    let seq = sequence(&dir);
-    let rig = dir.join("rig.toml");
-    std::fs::write(&rig, testbag::rig_toml(&seq)).expect("rig");
+    let (dir, seq, rig) = setup("good");
     // A bag directory as `ros2 bag record` writes it.
     std::fs::create_dir_all(dir.join("bag")).expect("bag dir");
     testbag::write(&seq, &dir.join("bag/bag_0.mcap"), &TestBag::default()).unwrap_or_else(|e| panic!("{e:#}"));

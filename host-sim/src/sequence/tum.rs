@@ -75,7 +75,7 @@ pub fn format(comment: &str, poses: &[(f64, Isometry3<f64>)]) -> String {
     format_with(comment, poses, |t| format!("{t:.9}"))
 }
 
-/// As [`format`], each time written by `time`; every line of `comment` becomes a `#` line.
+/// As [`format()`], each time written by `time`; every line of `comment` becomes a `#` line.
 pub fn format_with(comment: &str, poses: &[(f64, Isometry3<f64>)], time: impl Fn(f64) -> String) -> String {
     let mut s = String::new();
     for line in comment.lines() {

@@ -152,6 +152,27 @@ fn window_and_stamps(bag: &Path, rig: &Path, whole: &Path, dir: &Path) {
     assert!(got.iter().zip(&want).all(|(g, w)| (g - w).abs() < 1e-6), "{got:?} vs {want:?}");
 }
 
+/// `evorec rig BAG` drafts the rig file: with the block's section added, it tracks to the same
+/// estimate as the hand-written one.
+fn drafted_rig_tracks_the_same(bag: &Path, rig: &Path, whole: &Path, dir: &Path) {
+    let draft = dir.join("drafted.toml");
+    let o = evorec(&["rig", path_str(bag), "--out", path_str(&draft)]);
+    assert!(o.status.success(), "{o:?}");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("add the block's [target] section"), "{o:?}");
+    let text = std::fs::read_to_string(&draft).expect("draft");
+    assert!(!text.contains("\"TODO\"") && text.contains("# [target]"), "{text}");
+    let hand = std::fs::read_to_string(rig).expect("rig");
+    let target = &hand[hand.find("[target]").expect("target")..];
+    std::fs::write(&draft, format!("{text}\n{target}")).expect("write");
+    let out = dir.join("drafted");
+    let o = evorec(&["track", path_str(bag), "--rig", path_str(&draft), "--out", path_str(&out), "-q"]);
+    assert!(o.status.success(), "{o:?}");
+    let same = std::fs::read(out.join("estimate.tum")).expect("estimate");
+    assert_eq!(same, std::fs::read(whole.join("estimate.tum")).expect("estimate"), "estimate.tum differs");
+    let again = evorec(&["rig", path_str(bag), "--out", path_str(&draft)]);
+    assert_eq!(again.status.code(), Some(1), "overwrote the rig file");
+}
+
 /// The estimate's rows (without comments).
 fn rows(path: &Path) -> Vec<String> {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -221,6 +242,7 @@ fn a_good_bag_imports_and_tracks_from_the_command_line() {
     let summary = std::fs::read_to_string(out.join("summary.json")).expect("summary");
     assert!(summary.contains("\"unpaired_left\": 0") && summary.contains("\"joint_velocities\": \"derived\""));
     window_and_stamps(&bag, &rig, &out, &dir);
+    drafted_rig_tracks_the_same(&bag, &rig, &out, &dir);
     // Without --rig a bag is recognised and the rig file asked for.
     let o = evorec(&["track", path_str(&bag), "--out", path_str(&dir.join("x")), "-q"]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("give its rig file with --rig"), "{o:?}");

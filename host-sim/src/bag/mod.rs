@@ -31,6 +31,7 @@ pub mod joints;
 pub mod msgs;
 pub mod pairing;
 pub mod rig;
+pub mod rigfile;
 pub mod scan;
 pub mod source;
 pub mod testbag;

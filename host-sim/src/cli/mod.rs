@@ -64,7 +64,7 @@ pub enum Command {
     /// Draft a rig file (`evorec-rig/1`) from a ROS 2 bag: topics by message type, the camera
     /// frames from the images, the base link from the URDF and the flange from /tf_static.
     /// Keys the bag leaves open are written as "TODO" with the candidates; the block's
-    /// [target] section is written commented out, to fill in.
+    /// `[target]` section is written commented out, to fill in.
     Rig(track::RigArgs),
     /// Write a simulator scenario as a recorded sequence (`evorec-seq/1`): the PA-10's URDF,
     /// camera_info YAMLs, PNGs, joints at 1 kHz, ground truth, sequence.toml with the initial

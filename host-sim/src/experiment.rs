@@ -455,6 +455,6 @@ pub fn write_outputs(out: &RunOutput, dir: &Path, title: &str) -> Result<()> {
 /// I/O errors.
 pub fn write_estimate(out: &RunOutput, dir: &Path) -> Result<()> {
     let poses: Vec<_> = out.rows.iter().map(|r| (r.t, isometry_of(&r.estimate))).collect();
-    crate::io::write_estimate_tum(dir, &poses)?;
+    crate::io::write_estimate_tum(dir, &poses, crate::io::TumTimes::Plain)?;
     Ok(())
 }

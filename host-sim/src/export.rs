@@ -119,6 +119,7 @@ fn manifest(s: &Scenario, name: &str, world: &World) -> String {
     manifest_text(&ManifestFields {
         name,
         comment: "",
+        stamp_origin_s: None,
         base_link: PA10_BASE_LINK,
         flange_link: PA10_FLANGE_LINK,
         right_to_left: world.rig().left_from_right.cast(),

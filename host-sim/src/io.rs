@@ -167,14 +167,47 @@ pub fn write_csv(path: &Path, columns: &[&str], records: &[Vec<String>]) -> Resu
 ///
 /// # Errors
 /// As [`write_atomic`].
-pub fn write_estimate_tum(dir: &Path, poses: &[(f64, Isometry3<f64>)]) -> Result<PathBuf> {
+pub fn write_estimate_tum(dir: &Path, poses: &[(f64, Isometry3<f64>)], times: TumTimes) -> Result<PathBuf> {
     let path = dir.join("estimate.tum");
-    let text = crate::sequence::tum::format(
-        "t tx ty tz qx qy qz qw: evorec's estimate of the block in the right camera frame (^CR T_M), metres",
-        poses,
-    );
+    let mut comment =
+        "t tx ty tz qx qy qz qw: evorec's estimate of the block in the right camera frame (^CR T_M), metres".to_owned();
+    let text = match times {
+        TumTimes::Plain => crate::sequence::tum::format(&comment, poses),
+        TumTimes::Sequence => {
+            comment.push_str("\nt: the sequence's time (frames.csv t_s), s");
+            crate::sequence::tum::format(&comment, poses)
+        }
+        TumTimes::SinceStamp(origin) => {
+            comment.push_str(&format!(
+                "\nt: s since the ROS stamp {origin} s (header.stamp = {origin} + t; --absolute-stamps writes the stamps)"
+            ));
+            crate::sequence::tum::format(&comment, poses)
+        }
+        TumTimes::Absolute(origin) => {
+            comment.push_str("\nt: the image's header.stamp (ROS time, s since the epoch)");
+            let stamp = |t: f64| {
+                let ns = i128::from(origin) * 1_000_000_000 + (t * 1e9).round() as i128;
+                format!("{}.{:09}", ns.div_euclid(1_000_000_000), ns.rem_euclid(1_000_000_000))
+            };
+            crate::sequence::tum::format_with(&comment, poses, stamp)
+        }
+    };
     write_bytes(&path, text.as_bytes())?;
     Ok(path)
+}
+
+/// How `estimate.tum` gives each pose's time (its second comment line says which).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum TumTimes {
+    /// A simulator run's time (s), no second comment line.
+    #[default]
+    Plain,
+    /// A recorded sequence's `frames.csv` `t_s`.
+    Sequence,
+    /// Seconds since the ROS stamp `origin` (s): a bag's, or a sequence's `stamp_origin_s`.
+    SinceStamp(i64),
+    /// The stamps themselves (`origin` + t, to the nanosecond): `--absolute-stamps`.
+    Absolute(i64),
 }
 
 /// The columns of `trace.csv` that every trace has, for an arm of `dof` joints: time, joints,

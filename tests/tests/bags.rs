@@ -204,7 +204,7 @@ fn unpaired_images_are_counted() {
     assert_eq!((b.report.frames, b.report.unpaired_left, b.report.unpaired_right), (62 - dropped, dropped, 0));
     let summary = std::fs::read_to_string(dir.join("tracked/summary.json")).expect("summary");
     assert!(summary.contains(&format!("\"unpaired_left\": {dropped}")), "{summary}");
-    let tight = BagOptions { pair_tolerance_ms: Some(0.5) };
+    let tight = BagOptions { pair_tolerance_ms: Some(0.5), ..BagOptions::default() };
     let err = format!("{:#}", bag::load(&path, &rig, &tight, &path).expect_err("no pair within 0.5 ms"));
     assert!(err.contains("no stereo pair") && err.contains("0.500 ms"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);

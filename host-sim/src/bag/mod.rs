@@ -31,11 +31,13 @@ pub mod joints;
 pub mod msgs;
 pub mod pairing;
 pub mod rig;
+pub mod rigfile;
 pub mod scan;
 pub mod source;
 pub mod testbag;
 pub mod tf;
 pub mod track;
+pub mod window;
 pub mod write_mcap;
 
 use std::path::{Path, PathBuf};
@@ -46,6 +48,7 @@ use serde::Serialize;
 use crate::sequence::camera_info::{self, YamlMatrix};
 use crate::sequence::write::{ManifestFields, image_path, manifest_text};
 use crate::sequence::{FrameRow, Robot, Sequence, Texts};
+use pairing::Pairing;
 pub use rig::Rig;
 use scan::{ImageRef, Scan};
 
@@ -54,6 +57,10 @@ use scan::{ImageRef, Scan};
 pub struct BagOptions {
     /// Largest stamp difference of a stereo pair (ms); default a quarter of the frame period.
     pub pair_tolerance_ms: Option<f64>,
+    /// The first frame to use (`--start`).
+    pub start: Option<window::TimeArg>,
+    /// The last frame to use (`--end`).
+    pub end: Option<window::TimeArg>,
 }
 
 /// What was found in a bag (printed, logged and written into `summary.json`).
@@ -79,6 +86,10 @@ pub struct BagReport {
     pub joint_velocities: joints::Velocities,
     /// The sequence's time 0 as a stamp (s since the epoch).
     pub stamp_origin_s: i64,
+    /// Where the bag stops being readable (truncated or corrupt), when it does: only the
+    /// frames before it are used.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cut: Option<String>,
 }
 
 /// The files of a bag: its `.mcap` files in order, and its name.
@@ -155,52 +166,65 @@ pub struct BagSequence {
     pub rig: Rig,
     /// What was found.
     pub report: BagReport,
+    /// Where the bag stops being readable, when it does (see [`scan::Cut`]).
+    pub cut: Option<scan::Cut>,
 }
 
-/// Reads `bag` with `rig` into a sequence whose files would be in `dir`.
+/// Reads `bag` with `rig` into a sequence whose files would be in `dir`. A bag that stops
+/// being readable part-way (a truncated recording) gives the frames before that point, with
+/// [`BagSequence::cut`] saying where.
 ///
 /// # Errors
 /// The first bad input, as one message naming the topic and message index or the key.
 pub fn load(bag: &Path, rig: &Rig, opts: &BagOptions, dir: &Path) -> Result<BagSequence> {
     let files = BagFiles::open(bag)?;
-    let name = files.display();
     let scan = Scan::read(&files, rig)?;
+    let cut = scan.cut.clone();
+    let read_any = scan.topics.values().any(|t| t.count > 0);
+    let loaded = from_scan(files, scan, rig, opts, dir);
+    match (loaded, &cut) {
+        (Err(_), Some(cut)) if !read_any => bail!("{cut}"),
+        (Err(e), Some(cut)) => bail!("{cut}; the messages before it do not make a sequence: {e:#}"),
+        (loaded, _) => loaded,
+    }
+}
+
+fn from_scan(files: BagFiles, scan: Scan, rig: &Rig, opts: &BagOptions, dir: &Path) -> Result<BagSequence> {
+    let name = files.display();
     scan.check_topics(&name, rig)?;
     let urdf = urdf_text(&scan, rig, &name)?;
     let urdf_name = PathBuf::from(format!("{name}: {}", urdf_label(rig)));
     let robot = Robot::from_urdf_str(&urdf, &rig.frames.base_link, &rig.frames.flange_link, &urdf_name)?;
-    let tolerance_ns = tolerance_ns(opts.pair_tolerance_ms)?;
-    let left_stamps: Vec<i64> = scan.left.iter().map(|r| r.stamp_ns).collect();
-    let right_stamps: Vec<i64> = scan.right.iter().map(|r| r.stamp_ns).collect();
-    let pairing = pairing::pair(&left_stamps, &right_stamps, tolerance_ns).map_err(|e| anyhow!("{name}: {e}"))?;
-    let Some(&(l0, _)) = pairing.pairs.first() else {
-        bail!(
-            "{name}: no stereo pair: no image on {} is within {:.3} ms of one on {}",
-            rig.topics.left_image,
-            pairing.tolerance_ns as f64 / 1e6,
-            rig.topics.right_image
-        );
-    };
-    let origin_ns = scan.left[l0].stamp_ns.div_euclid(1_000_000_000) * 1_000_000_000;
+    log_resolved(&scan, rig, &robot, &name);
+    let (mut pairs, pairing) = pairs(&scan, rig, opts, &name)?;
+    // Time 0 is the whole second before the bag's first frame (whatever --start says, so that
+    // times agree with a run over the whole bag).
+    let origin_ns = scan.left[pairing.pairs[0].0].stamp_ns.div_euclid(1_000_000_000) * 1_000_000_000;
     let (table, velocities, duplicates) =
         joints::table(&scan.joints, &robot.joint_names, origin_ns).map_err(|(index, e)| match index {
             Some(i) => anyhow!("{name}: {} message {i}: {e}", rig.topics.joint_states),
             None => anyhow!("{name}: {}: {e}", rig.topics.joint_states),
         })?;
-    let pairs: Vec<(ImageRef, ImageRef)> =
-        pairing.pairs.iter().map(|&(l, r)| (scan.left[l].clone(), scan.right[r].clone())).collect();
+    if scan.cut.is_some() {
+        // The images of the last frames may have been read, their joint states not.
+        let last_ns = origin_ns + (table.span().1 * 1e9).round() as i64;
+        pairs.truncate(pairs.partition_point(|(l, _)| l.stamp_ns <= last_ns).max(1));
+    }
     let stamps_ns: Vec<i64> = pairs.iter().map(|(l, _)| l.stamp_ns).collect();
     let frames = frame_rows(&pairs, origin_ns, dir);
     check_frame_times(&frames, &pairs, &table, (rig, origin_ns, &name))?;
     check_image_sizes(&pairs, &scan, rig, &name)?;
     let (left_yaml, right_yaml) = (camera_yaml(&scan, rig, true, &name)?, camera_yaml(&scan, rig, false, &name)?);
-    let paired = format!(
+    let mut paired = format!(
         "{} stereo pairs within {:.3} ms; unpaired: {} left, {} right",
         pairs.len(),
         pairing.tolerance_ns as f64 / 1e6,
         pairing.unpaired_left.len(),
         pairing.unpaired_right.len()
     );
+    if let Some(cut) = &scan.cut {
+        paired.push_str(&format!("\nthe frames before where the bag ends: {cut}"));
+    }
     let manifest = manifest(&scan, rig, (&files.name, &name, &paired), origin_ns)?;
     let texts = Texts { manifest: &manifest, left_yaml: &left_yaml, right_yaml: &right_yaml, urdf: &urdf };
     let report = BagReport {
@@ -214,9 +238,74 @@ pub fn load(bag: &Path, rig: &Rig, opts: &BagOptions, dir: &Path) -> Result<BagS
         duplicate_joint_stamps: duplicates,
         joint_velocities: velocities,
         stamp_origin_s: origin_ns / 1_000_000_000,
+        cut: scan.cut.as_ref().map(ToString::to_string),
     };
     let seq = Sequence::from_memory(dir, &texts, frames, table).map_err(|e| rig_error(e, rig))?;
-    Ok(BagSequence { seq, manifest, left_yaml, right_yaml, urdf, pairs, stamps_ns, files, rig: rig.clone(), report })
+    let cut = scan.cut;
+    Ok(BagSequence {
+        seq,
+        manifest,
+        left_yaml,
+        right_yaml,
+        urdf,
+        pairs,
+        stamps_ns,
+        files,
+        rig: rig.clone(),
+        report,
+        cut,
+    })
+}
+
+/// Logs (`-v`) what the bag's messages resolved to: the chain, the image encodings and the
+/// intrinsics (the transforms are logged by [`manifest`], the pairing by [`BagReport::log`]).
+fn log_resolved(scan: &Scan, rig: &Rig, robot: &Robot, name: &str) {
+    let f = &rig.frames;
+    log::info!(
+        "{name}: chain {} -> {}: {} joints ({})",
+        f.base_link,
+        f.flange_link,
+        robot.joint_names.len(),
+        robot.joint_names.join(", ")
+    );
+    let t = &rig.topics;
+    for (topic, info) in [(&t.left_image, &scan.left_info), (&t.right_image, &scan.right_info)] {
+        let encodings: Vec<&str> =
+            scan.encodings.get(topic).map_or_else(Vec::new, |e| e.iter().map(String::as_str).collect());
+        let Some(c) = info else { continue };
+        log::info!(
+            "{name}: {topic}: encoding {}; {}x{}, fx {} fy {} cx {} cy {}, distortion {} ({} coefficients)",
+            encodings.join(", "),
+            c.width,
+            c.height,
+            c.k[0],
+            c.k[4],
+            c.k[2],
+            c.k[5],
+            c.distortion_model,
+            c.d.len()
+        );
+    }
+}
+
+/// The stereo pairs of the scanned images (at least one), and how they were paired.
+fn pairs(scan: &Scan, rig: &Rig, opts: &BagOptions, name: &str) -> Result<(Vec<(ImageRef, ImageRef)>, Pairing)> {
+    let tolerance_ns = tolerance_ns(opts.pair_tolerance_ms)?;
+    let left_stamps: Vec<i64> = scan.left.iter().map(|r| r.stamp_ns).collect();
+    let right_stamps: Vec<i64> = scan.right.iter().map(|r| r.stamp_ns).collect();
+    let pairing = pairing::pair(&left_stamps, &right_stamps, tolerance_ns).map_err(|e| anyhow!("{name}: {e}"))?;
+    if pairing.pairs.is_empty() {
+        bail!(
+            "{name}: no stereo pair: no image on {} is within {:.3} ms of one on {}",
+            rig.topics.left_image,
+            pairing.tolerance_ns as f64 / 1e6,
+            rig.topics.right_image
+        );
+    }
+    let stamps: Vec<i64> = pairing.pairs.iter().map(|&(l, _)| scan.left[l].stamp_ns).collect();
+    let range = window::select(&stamps, opts.start, opts.end).map_err(|e| anyhow!("{name}: {e}"))?;
+    let pairs = pairing.pairs[range].iter().map(|&(l, r)| (scan.left[l].clone(), scan.right[r].clone())).collect();
+    Ok((pairs, pairing))
 }
 
 impl BagReport {
@@ -384,6 +473,22 @@ fn manifest(scan: &Scan, rig: &Rig, (seq_name, name, paired): (&str, &str, &str)
     let tf_err = |e: String| anyhow!("{name}: {} (rig file frames): {e}", rig.topics.tf_static);
     let flange_to_right = scan.tf.pose_of(&f.right_camera, &f.flange_link).map_err(tf_err)?;
     let right_to_left = scan.tf.pose_of(&f.right_camera, &f.left_camera).map_err(tf_err)?;
+    for (what, iso) in [
+        (format!("flange_to_right ({} to {})", f.flange_link, f.right_camera), flange_to_right),
+        (format!("right_to_left ({} to {})", f.right_camera, f.left_camera), right_to_left),
+    ] {
+        let (t, q) = (iso.translation.vector, iso.rotation.coords);
+        log::info!(
+            "{name}: transform {what}: t [{}, {}, {}] m, q_xyzw [{}, {}, {}, {}]",
+            t.x,
+            t.y,
+            t.z,
+            q.x,
+            q.y,
+            q.z,
+            q.w
+        );
+    }
     let t = &rig.target;
     let comment = format!(
         "imported by evorec from the ROS 2 bag {name}\n{paired}\nt_s = header.stamp - {} s",
@@ -392,6 +497,7 @@ fn manifest(scan: &Scan, rig: &Rig, (seq_name, name, paired): (&str, &str, &str)
     Ok(manifest_text(&ManifestFields {
         name: seq_name,
         comment: &comment,
+        stamp_origin_s: Some(origin_ns / 1_000_000_000),
         base_link: &f.base_link,
         flange_link: &f.flange_link,
         right_to_left,

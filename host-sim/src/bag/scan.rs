@@ -1,11 +1,15 @@
 //! The first pass over a bag: every message but the pixels (see the [module docs](super)).
 
-use std::collections::BTreeMap;
-use std::path::Path;
+use std::collections::{BTreeMap, BTreeSet};
+use std::fs::File;
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Result, anyhow, bail};
+use mcap::sans_io::LinearReaderOptions;
 
-use super::msgs::{self, CameraInfo, JointState};
+use super::joints::JointMessages;
+use super::msgs::{self, CameraInfo};
 use super::rig::{Rig, UrdfSource};
 use super::tf::TfTree;
 use super::{BagFiles, images};
@@ -27,24 +31,72 @@ pub struct Msg<'a> {
     pub data: &'a [u8],
 }
 
-/// Calls `f` on every message of the bag in file order, until it returns `false`.
+/// Where a bag stops being readable: a file cut short (a recording interrupted) or a corrupt
+/// record. Every message before it was read whole (chunk CRCs checked first), so it is used.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Cut {
+    /// The file.
+    pub file: PathBuf,
+    /// Messages of that file read before it.
+    pub messages: usize,
+    /// What the MCAP reader found.
+    pub error: String,
+}
+
+impl Cut {
+    /// What is wrong, without the file's name.
+    pub fn what(&self) -> String {
+        format!("not a readable MCAP file (truncated or corrupt) after {} messages: {}", self.messages, self.error)
+    }
+}
+
+impl std::fmt::Display for Cut {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.file.display(), self.what())
+    }
+}
+
+/// Largest MCAP record (a chunk, compressed or not) the reader buffers: a corrupt length
+/// field is an error, not an allocation of that size. Real chunks are far smaller (rosbag2
+/// writes 768 KiB ones; a chunk holding one 4K raw image is 25 MiB).
+const RECORD_LIMIT: usize = 1 << 30;
+
+/// How a pass over a bag ended.
+#[derive(Debug, Clone, Default)]
+pub struct Pass {
+    /// Where the bag could not be read further, if it could not (see [`Cut`]).
+    pub cut: Option<Cut>,
+    /// Every channel of the files read to their end or cut, messages or not: topic → schema.
+    pub channels: BTreeMap<String, String>,
+}
+
+/// Calls `f` on every message of the bag in file order, until it returns `false`. The files
+/// are streamed: memory holds one chunk (and its decompressed records) at a time, whatever
+/// the bag's size.
+///
+/// A file that cannot be read to its end ends the pass ([`Pass::cut`]): the messages before
+/// that point were handed to `f`, none after it (nor from later files).
 ///
 /// # Errors
-/// An unreadable file, a truncated or corrupt MCAP (naming the file and how many messages were
-/// read), or `f`'s error.
-pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<bool>) -> Result<()> {
+/// A file that cannot be opened, or `f`'s error.
+pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<bool>) -> Result<Pass> {
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    let mut pass = Pass::default();
     for file in &files.files {
-        let bytes = std::fs::read(file).map_err(|e| anyhow!("{}: cannot read: {e}", file.display()))?;
-        let corrupt = |n: usize, e: mcap::McapError| {
-            anyhow!("{}: not a readable MCAP file (truncated or corrupt) after {n} messages: {e}", file.display())
-        };
-        // Chunk CRCs are checked (when the writer stored them), so damage inside an
-        // uncompressed chunk is found too, not read as pixels.
-        let options = enumset::EnumSet::only(mcap::read::Options::ValidateChunkCrcs);
-        let stream = mcap::MessageStream::new_with_options(&bytes, options).map_err(|e| corrupt(0, e))?;
-        for (n, m) in stream.enumerate() {
-            let m = m.map_err(|e| corrupt(n, e))?;
+        let handle = File::open(file).map_err(|e| anyhow!("{}: cannot read: {e}", file.display()))?;
+        // Each chunk's CRC (when the writer stored one) is checked before any of its messages
+        // is handed over, so damage inside an uncompressed chunk is found, not read as pixels.
+        let options =
+            LinearReaderOptions::default().with_prevalidate_chunk_crcs(true).with_record_length_limit(RECORD_LIMIT);
+        let mut reader = mcap::io::MessageReader::new_with_options(BufReader::with_capacity(1 << 20, handle), options);
+        for (n, m) in reader.by_ref().enumerate() {
+            let m = match m {
+                Ok(m) => m,
+                Err(e) => {
+                    pass.cut = Some(Cut { file: file.clone(), messages: n, error: e.to_string() });
+                    break;
+                }
+            };
             let count = counts.entry(m.channel.topic.clone()).or_insert(0);
             let msg = Msg {
                 topic: &m.channel.topic,
@@ -55,11 +107,19 @@ pub fn for_each_message(files: &BagFiles, mut f: impl FnMut(&Msg<'_>) -> Result<
             };
             *count += 1;
             if !f(&msg)? {
-                return Ok(());
+                return Ok(pass);
             }
         }
+        // The reader looks channels up by id only: every id is asked for.
+        for c in (0..=u16::MAX).filter_map(|id| reader.get_channel(id)) {
+            let schema = c.schema.as_ref().map_or_else(String::new, |s| s.name.clone());
+            pass.channels.entry(c.topic.clone()).or_insert(schema);
+        }
+        if pass.cut.is_some() {
+            break;
+        }
     }
-    Ok(())
+    Ok(pass)
 }
 
 /// An image message found in the first pass.
@@ -85,7 +145,7 @@ pub struct TopicInfo {
 /// What the first pass found.
 #[derive(Debug, Clone, Default)]
 pub struct Scan {
-    /// Every topic of the bag.
+    /// Every topic of the bag (with no message too).
     pub topics: BTreeMap<String, TopicInfo>,
     /// Left images.
     pub left: Vec<ImageRef>,
@@ -95,12 +155,16 @@ pub struct Scan {
     pub left_info: Option<CameraInfo>,
     /// The first right camera_info.
     pub right_info: Option<CameraInfo>,
-    /// Joint states (message index, message).
-    pub joints: Vec<(usize, JointState)>,
+    /// Joint states.
+    pub joints: JointMessages,
     /// Transforms.
     pub tf: TfTree,
     /// The URDF from the description topic.
     pub urdf: Option<String>,
+    /// Where the bag could not be read further (a truncated recording), if it could not.
+    pub cut: Option<Cut>,
+    /// The encodings met on each image topic (`png` / `jpeg` for compressed images).
+    pub encodings: BTreeMap<String, BTreeSet<String>>,
 }
 
 /// The image types a camera topic may have.
@@ -118,12 +182,16 @@ impl Scan {
     pub fn read(files: &BagFiles, rig: &Rig) -> Result<Self> {
         let name = files.display();
         let mut scan = Self::default();
-        for_each_message(files, |m| {
+        let pass = for_each_message(files, |m| {
             let info = scan.topics.entry(m.topic.to_owned()).or_insert(TopicInfo { schema: m.schema.into(), count: 0 });
             info.count += 1;
             scan.take(m, rig).map_err(|e| anyhow!("{name}: {} message {}: {e}", m.topic, m.index))?;
             Ok(true)
         })?;
+        for (topic, schema) in pass.channels {
+            scan.topics.entry(topic).or_insert(TopicInfo { schema, count: 0 });
+        }
+        scan.cut = pass.cut;
         Ok(scan)
     }
 
@@ -143,7 +211,10 @@ impl Scan {
             bail!("message encoding \"{}\" is not CDR (evorec reads ROS 2 bags)", m.encoding);
         }
         if m.topic == t.left_image || m.topic == t.right_image {
-            let r = image_ref(m)?;
+            let (r, encoding) = image_ref(m)?;
+            if !self.encodings.get(m.topic).is_some_and(|e| e.contains(&encoding)) {
+                self.encodings.entry(m.topic.to_owned()).or_default().insert(encoding);
+            }
             if m.topic == t.left_image { self.left.push(r) } else { self.right.push(r) }
         } else if m.topic == t.left_info || m.topic == t.right_info {
             expect_type(m, "sensor_msgs/msg/CameraInfo")?;
@@ -155,7 +226,7 @@ impl Scan {
             }
         } else if m.topic == t.joint_states {
             expect_type(m, "sensor_msgs/msg/JointState")?;
-            self.joints.push((m.index, msgs::joint_state(m.data)?));
+            self.joints.push(m.index, msgs::joint_state(m.data)?).map_err(|e| anyhow!(e))?;
         } else if m.topic == t.tf_static || m.topic == TF_TOPIC {
             expect_type(m, "tf2_msgs/msg/TFMessage")?;
             let transforms = msgs::tf_message(m.data)?;
@@ -189,14 +260,17 @@ impl Scan {
             needed.push(("robot_description", d));
         }
         for (key, topic) in needed {
-            if !self.topics.contains_key(topic.as_str()) {
-                let list: Vec<String> =
-                    self.topics.iter().map(|(n, i)| format!("{n} ({}, {} messages)", i.schema, i.count)).collect();
-                bail!(
-                    "{name}: no topic {topic} (topics.{key} of the rig file); the bag's topics: {}",
-                    if list.is_empty() { "none".to_owned() } else { list.join(", ") }
-                );
-            }
+            let what = match self.topics.get(topic.as_str()) {
+                Some(info) if info.count > 0 => continue,
+                Some(_) => format!("topic {topic} (topics.{key} of the rig file) is in the bag but holds no message"),
+                None => format!("no topic {topic} (topics.{key} of the rig file)"),
+            };
+            let list: Vec<String> =
+                self.topics.iter().map(|(n, i)| format!("{n} ({}, {} messages)", i.schema, i.count)).collect();
+            bail!(
+                "{name}: {what}; the bag's topics: {}",
+                if list.is_empty() { "none".to_owned() } else { list.join(", ") }
+            );
         }
         Ok(())
     }
@@ -209,20 +283,23 @@ fn expect_type(m: &Msg<'_>, schema: &str) -> Result<()> {
     Ok(())
 }
 
-fn image_ref(m: &Msg<'_>) -> Result<ImageRef> {
+/// The image's header and its encoding.
+fn image_ref(m: &Msg<'_>) -> Result<(ImageRef, String)> {
     match m.schema {
         IMAGE => {
             let img = msgs::image(m.data)?;
             images::check_encoding(&img.encoding).map_err(|e| anyhow!(e))?;
-            Ok(ImageRef { index: m.index, stamp_ns: img.header.stamp_ns, size: Some((img.width, img.height)) })
+            let size = Some((img.width, img.height));
+            Ok((ImageRef { index: m.index, stamp_ns: img.header.stamp_ns, size }, img.encoding))
         }
         COMPRESSED_IMAGE => {
             let img = msgs::compressed_image(m.data)?;
-            match image::guess_format(img.data) {
-                Ok(image::ImageFormat::Png | image::ImageFormat::Jpeg) => {}
+            let encoding = match image::guess_format(img.data) {
+                Ok(image::ImageFormat::Png) => "png",
+                Ok(image::ImageFormat::Jpeg) => "jpeg",
                 _ => bail!("unknown encoding: format \"{}\", the data is neither PNG nor JPEG", img.format),
-            }
-            Ok(ImageRef { index: m.index, stamp_ns: img.header.stamp_ns, size: None })
+            };
+            Ok((ImageRef { index: m.index, stamp_ns: img.header.stamp_ns, size: None }, encoding.to_owned()))
         }
         other => bail!("type {other} is not {IMAGE} or {COMPRESSED_IMAGE}"),
     }

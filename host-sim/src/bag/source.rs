@@ -102,16 +102,21 @@ impl FrameSource for BagFrames {
         if let Some(e) = failure {
             return Err(e);
         }
-        result.map_err(|e| {
-            let (file, text) = (self.files.display(), format!("{e:#}"));
-            let text = text.strip_prefix(&format!("{file}: ")).map_or(text.clone(), str::to_owned);
-            SequenceError::file(PathBuf::from(file), text)
+        let file = || PathBuf::from(self.files.display());
+        let pass = result.map_err(|e| {
+            let text = format!("{e:#}");
+            let text = text.strip_prefix(&format!("{}: ", self.files.display())).map_or(text.clone(), str::to_owned);
+            SequenceError::file(file(), text)
         })?;
         if next < end {
-            return Err(SequenceError::file(
-                PathBuf::from(self.files.display()),
-                format!("frame {next}'s images were not found on the second pass (the bag changed while read?)"),
-            ));
+            return Err(match pass.cut {
+                // The first pass read up to the same place: it is where the bag ends.
+                Some(cut) => SequenceError::file(&cut.file, cut.what()),
+                None => SequenceError::file(
+                    file(),
+                    format!("frame {next}'s images were not found on the second pass (the bag changed while read?)"),
+                ),
+            });
         }
         Ok(())
     }

@@ -35,6 +35,8 @@ pub struct TestBag {
     pub joint_velocities: bool,
     /// Topics not to write.
     pub skip_topics: Vec<String>,
+    /// Topics declared (their channel written) but given no message.
+    pub silent_topics: Vec<String>,
     /// Joint samples only up to this sequence time (s).
     pub joints_until_s: Option<f64>,
     /// Which transforms `/tf_static` holds.
@@ -67,6 +69,7 @@ impl Default for TestBag {
             right_delay_ns: 1_000_000,
             joint_velocities: false,
             skip_topics: Vec::new(),
+            silent_topics: Vec::new(),
             joints_until_s: None,
             transforms: Transforms::Good,
             drop_right_every: None,
@@ -150,7 +153,7 @@ pub fn write(seq: &Sequence, path: &Path, opts: &TestBag) -> Result<()> {
     }
     out.messages.retain(|(_, topic, _)| !opts.skip_topics.contains(topic));
     out.messages.sort_by_key(|m| m.0);
-    std::fs::write(path, mcap_bytes(&out.messages, opts.compression)?)?;
+    std::fs::write(path, mcap_bytes(&out.messages, opts.compression, &opts.silent_topics)?)?;
     Ok(())
 }
 
@@ -260,11 +263,16 @@ pub fn image_message(header: &Header, encoding: &str, img: &RgbImage) -> Result<
 }
 
 /// An MCAP file of `messages` (log time, topic, CDR bytes), with the ros2msg schemas of
-/// [`msgs::input_schemas`] by topic.
+/// [`msgs::input_schemas`] by topic; the channels of `silent` topics are written, their
+/// messages not.
 ///
 /// # Errors
 /// The writer's errors.
-pub fn mcap_bytes(messages: &[(u64, String, Vec<u8>)], compression: Option<mcap::Compression>) -> Result<Vec<u8>> {
+pub fn mcap_bytes(
+    messages: &[(u64, String, Vec<u8>)],
+    compression: Option<mcap::Compression>,
+    silent: &[String],
+) -> Result<Vec<u8>> {
     let schemas: BTreeMap<&str, String> = msgs::input_schemas().into_iter().collect();
     let options = mcap::WriteOptions::new().profile("ros2").compression(compression).chunk_size(Some(256 * 1024));
     let mut w = options.create(Cursor::new(Vec::new()))?;
@@ -287,7 +295,9 @@ pub fn mcap_bytes(messages: &[(u64, String, Vec<u8>)], compression: Option<mcap:
             log_time: *time,
             publish_time: *time,
         };
-        w.write_to_known_channel(&header, data)?;
+        if !silent.contains(topic) {
+            w.write_to_known_channel(&header, data)?;
+        }
     }
     w.finish()?;
     Ok(w.into_inner().into_inner())

@@ -10,7 +10,9 @@ use super::source::BagFrames;
 use super::write_mcap::{FrameResult, estimate_mcap};
 use crate::track::{self, TrackOptions, output};
 
-/// Tracks `bag` and writes every output into `out` (only once the whole bag was tracked).
+/// Tracks `bag` and writes every output into `out` (only once every frame was tracked; for a
+/// bag cut short, [`BagSequence::cut`], those before the cut, with `summary.json` saying
+/// `"partial": true`).
 ///
 /// # Errors
 /// As [`track::run_with`], and I/O errors.
@@ -18,6 +20,7 @@ pub fn track_and_write(bag: &BagSequence, opts: &TrackOptions, out: &Path) -> Re
     let result = track::run_with(&bag.seq, Box::new(BagFrames::new(bag)), opts)?;
     let mut ev = output::evaluate(&bag.seq, &result);
     ev.summary.bag = Some(serde_json::to_value(&bag.report)?);
+    ev.summary.partial = bag.cut.is_some();
     let frames: Vec<FrameResult> = result
         .tracked
         .iter()

@@ -62,6 +62,11 @@ pub enum Command {
     /// (`evorec-seq/1`): images paired by stamp, joint states by name, transforms from tf, the URDF
     /// from the bag or the rig file. Nothing is written at OUT unless the whole bag was read.
     Import(track::ImportArgs),
+    /// Draft a rig file (`evorec-rig/1`) from a ROS 2 bag: topics by message type, the camera
+    /// frames from the images, the base link from the URDF and the flange from /tf_static.
+    /// Keys the bag leaves open are written as "TODO" with the candidates; the block's
+    /// `[target]` section is written commented out, to fill in.
+    Rig(track::RigArgs),
     /// Write a simulator scenario as a recorded sequence (`evorec-seq/1`): the PA-10's URDF,
     /// camera_info YAMLs, PNGs, joints at 1 kHz, ground truth, sequence.toml with the initial
     /// pose; `evorec track SEQ` then reads it back.
@@ -96,6 +101,7 @@ impl Command {
             Self::Timing(a) => a.run(),
             Self::Track(a) => a.run(progress),
             Self::Import(a) => a.run(progress),
+            Self::Rig(a) => a.run(),
             Self::Export(a) => a.run(progress),
             Self::Acquire(a) => a.run(progress),
             Self::Render(a) => a.run(),

@@ -20,10 +20,8 @@ pub struct TrackArgs {
     /// The rig file (`evorec-rig/1`) of a bag: its topics, frames and block.
     #[arg(long)]
     rig: Option<PathBuf>,
-    /// Largest stamp difference of a bag's stereo pair in ms (default: a quarter of the
-    /// frame period).
-    #[arg(long, requires = "rig")]
-    pair_tolerance_ms: Option<f64>,
+    #[command(flatten)]
+    bag: BagArgs,
     #[command(flatten)]
     out: OutArgs,
     /// Plain 1-step GA (no motion feedforward; the same as `--method ga`).
@@ -54,6 +52,11 @@ pub struct TrackArgs {
     /// Frame indices (frames.csv `index`) to draw the model at its estimate over, e.g. 0,90.
     #[arg(long, value_delimiter = ',')]
     overlay: Vec<u64>,
+    /// Write each frame's ROS `header.stamp` (s since the epoch, to the ns) as the time of
+    /// estimate.tum, instead of the seconds since the whole second before the bag's first
+    /// frame (a bag, or a sequence imported from one).
+    #[arg(long)]
+    absolute_stamps: bool,
     /// A TOML file holding a `[tracker]` table (as `evorec config` prints it, or a run's
     /// `config.toml`): its keys replace the defaults; `--method`, `--no-ff` and `--population`
     /// replace its keys.
@@ -83,11 +86,14 @@ impl TrackArgs {
     pub fn run(self, progress: bool) -> Result<()> {
         let opts = self.options(progress)?;
         let out = &self.out.out;
-        let bag_opts = bag::BagOptions { pair_tolerance_ms: self.pair_tolerance_ms };
+        let bag_opts = self.bag.options();
         match &self.rig {
             Some(rig) => track_bag(&self.seq, rig, out, &opts, &bag_opts),
             None if bag::scan::is_bag(&self.seq) => {
                 anyhow::bail!("{}: is a ROS 2 bag: give its rig file with --rig RIG.toml", self.seq.display())
+            }
+            None if self.bag.given() => {
+                anyhow::bail!("--pair-tolerance-ms, --start and --end apply to a ROS 2 bag (with --rig)")
             }
             None => track_sequence(&self.seq, out, &opts),
         }
@@ -102,6 +108,7 @@ impl TrackArgs {
             overlay: self.overlay.iter().copied().collect(),
             progress,
             pixels: self.pixels.into(),
+            absolute_stamps: self.absolute_stamps,
         })
     }
 
@@ -136,11 +143,19 @@ fn base_tuning(config: Option<&Path>) -> Result<Tuning> {
 
 fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<()> {
     let seq = Sequence::load(dir)?;
+    if opts.absolute_stamps && seq.manifest.raw.stamp_origin_s.is_none() {
+        anyhow::bail!(
+            "--absolute-stamps: {} has no stamp_origin_s (only a bag, or a sequence imported from one, has stamps)",
+            dir.join("sequence.toml").display()
+        );
+    }
     let t0 = Instant::now();
     let output = track::run(&seq, opts)?;
     let ev = track::output::evaluate(&seq, &output);
     track::output::write_all(&seq, &output, &ev, out)?;
-    print_track(&ev.summary, t0, out);
+    if opts.progress {
+        print_track(&ev.summary, t0, out);
+    }
     Ok(())
 }
 
@@ -158,9 +173,19 @@ fn track_bag(
     let b = bag::load(path, &rig, bag_opts, path)?;
     b.report.log();
     let ev = bag::track::track_and_write(&b, opts, out)?;
-    println!("{}", b.report.describe());
-    print_track(&ev.summary, t0, out);
-    Ok(())
+    // `opts.progress` is off with -q: nothing but errors then.
+    if opts.progress {
+        println!("{}", b.report.describe());
+        print_track(&ev.summary, t0, out);
+    }
+    match &b.cut {
+        Some(cut) => anyhow::bail!(
+            "{cut}: tracked the {} frames before it; wrote {} (summary.json: \"partial\": true)",
+            ev.summary.frames,
+            out.display()
+        ),
+        None => Ok(()),
+    }
 }
 
 fn print_track(s: &track::output::TrackSummary, t0: Instant, out: &Path) {
@@ -194,25 +219,61 @@ pub struct ImportArgs {
     /// Sequence directory to create (must not exist or be empty).
     #[arg(long)]
     out: PathBuf,
-    /// Largest stamp difference of a stereo pair in ms (default: a quarter of the frame
-    /// period).
+    #[command(flatten)]
+    bag_args: BagArgs,
+}
+
+/// How to read a bag (`track BAG --rig`, `import`).
+#[derive(clap::Args, Debug)]
+pub struct BagArgs {
+    /// Largest stamp difference of a bag's stereo pair in ms (default: a quarter of the
+    /// frame period).
     #[arg(long)]
     pair_tolerance_ms: Option<f64>,
+    /// The bag's first frame to use: seconds from its first stereo frame (`12.5`) or a
+    /// header.stamp in nanoseconds (`1700000012500000000ns`).
+    #[arg(long, value_name = "TIME")]
+    start: Option<bag::window::TimeArg>,
+    /// The bag's last frame to use (as `--start`).
+    #[arg(long, value_name = "TIME")]
+    end: Option<bag::window::TimeArg>,
+}
+
+impl BagArgs {
+    fn options(&self) -> bag::BagOptions {
+        bag::BagOptions { pair_tolerance_ms: self.pair_tolerance_ms, start: self.start, end: self.end }
+    }
+
+    fn given(&self) -> bool {
+        self.pair_tolerance_ms.is_some() || self.start.is_some() || self.end.is_some()
+    }
 }
 
 impl ImportArgs {
     pub fn run(self, progress: bool) -> Result<()> {
         let t0 = Instant::now();
         let rig = bag::Rig::load(&self.rig)?;
-        let bag_opts = bag::BagOptions { pair_tolerance_ms: self.pair_tolerance_ms };
-        let b = bag::load(&self.bag, &rig, &bag_opts, &self.out)?;
+        let b = bag::load(&self.bag, &rig, &self.bag_args.options(), &self.out)?;
         b.report.log();
-        let bar = progress.then(|| evorec_sim::logging::progress_bar(b.pairs.len() as u64));
+        let bar = progress.then(|| evorec_sim::logging::progress_bar_of(b.pairs.len() as u64, "pairs"));
         bag::import::import(&b, &self.out, bar.as_ref())?;
         if let Some(bar) = bar {
             bar.finish_and_clear();
         }
         let secs = t0.elapsed().as_secs_f64();
+        if progress {
+            self.print(&b, secs);
+        }
+        match &b.cut {
+            Some(cut) => {
+                anyhow::bail!("{cut}: imported the {} frames before it into {}", b.pairs.len(), self.out.display())
+            }
+            None => Ok(()),
+        }
+    }
+
+    /// The lines a run prints on stdout (none with -q).
+    fn print(&self, b: &bag::BagSequence, secs: f64) {
         println!("{}", b.report.describe());
         println!(
             "imported {} frame pairs in {secs:.1} s ({:.0} pairs/s); wrote {}",
@@ -220,6 +281,29 @@ impl ImportArgs {
             b.pairs.len() as f64 / secs.max(1e-9),
             self.out.display()
         );
+    }
+}
+
+#[derive(clap::Args, Debug)]
+pub struct RigArgs {
+    /// The bag (directory or .mcap file).
+    bag: PathBuf,
+    /// The rig file to write (must not exist).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+impl RigArgs {
+    pub fn run(self) -> Result<()> {
+        if self.out.exists() {
+            anyhow::bail!("{}: exists; evorec rig does not overwrite a rig file", self.out.display());
+        }
+        let draft = bag::rigfile::draft(&self.bag)?;
+        evorec_sim::io::write_bytes(&self.out, draft.text.as_bytes())?;
+        for key in &draft.open {
+            log::warn!("{}: left to you: {key}", self.out.display());
+        }
+        log::warn!("{}: add the block's [target] section (written commented out)", self.out.display());
         Ok(())
     }
 }

@@ -28,6 +28,10 @@ pub struct Manifest {
     /// Free text.
     #[serde(default)]
     pub name: String,
+    /// The time origin as a ROS stamp (s since the epoch): `t_s = header.stamp − stamp_origin_s`.
+    /// Written by `evorec import`; optional.
+    #[serde(default)]
+    pub stamp_origin_s: Option<i64>,
     /// `[robot]`.
     pub robot: RobotSection,
     /// `[cameras]`.

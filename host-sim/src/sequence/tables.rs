@@ -209,6 +209,13 @@ impl JointTable {
         t
     }
 
+    /// A table from its sample times and, per sample, `q` then `q̇` (`2 × names.len()`
+    /// values each).
+    pub fn from_flat(names: Vec<String>, times: Vec<f64>, values: Vec<f64>) -> Self {
+        debug_assert_eq!(values.len(), times.len() * 2 * names.len());
+        Self { names, times, values }
+    }
+
     /// The joint names.
     pub fn names(&self) -> &[String] {
         &self.names

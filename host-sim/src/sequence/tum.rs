@@ -72,11 +72,20 @@ pub fn parse(text: &str, path: &Path) -> Result<Vec<TumPose>> {
 
 /// TUM text of `poses` under a `#` comment line.
 pub fn format(comment: &str, poses: &[(f64, Isometry3<f64>)]) -> String {
-    let mut s = format!("# {comment}\n");
+    format_with(comment, poses, |t| format!("{t:.9}"))
+}
+
+/// As [`format()`], each time written by `time`; every line of `comment` becomes a `#` line.
+pub fn format_with(comment: &str, poses: &[(f64, Isometry3<f64>)], time: impl Fn(f64) -> String) -> String {
+    let mut s = String::new();
+    for line in comment.lines() {
+        let _ = writeln!(s, "# {line}");
+    }
     for (t, p) in poses {
         let (tr, q) = (p.translation.vector, p.rotation.coords);
         // coords are x, y, z, w.
-        let _ = writeln!(s, "{t:.9} {:.9} {:.9} {:.9} {:.9} {:.9} {:.9} {:.9}", tr.x, tr.y, tr.z, q.x, q.y, q.z, q.w);
+        let _ =
+            writeln!(s, "{} {:.9} {:.9} {:.9} {:.9} {:.9} {:.9} {:.9}", time(*t), tr.x, tr.y, tr.z, q.x, q.y, q.z, q.w);
     }
     s
 }

@@ -16,6 +16,8 @@ pub struct ManifestFields<'a> {
     pub name: &'a str,
     /// A comment written under `name` (e.g. where the sequence came from), or empty.
     pub comment: &'a str,
+    /// `stamp_origin_s`: the ROS stamp of time 0 (s), for a sequence imported from a bag.
+    pub stamp_origin_s: Option<i64>,
     /// `[robot].base_link`.
     pub base_link: &'a str,
     /// `[robot].flange_link`.
@@ -43,6 +45,9 @@ pub fn floats(v: &[f64]) -> String {
 /// The text of `sequence.toml` (URDF `robot.urdf`, calibration `calib/{left,right}.yaml`).
 pub fn manifest_text(m: &ManifestFields<'_>) -> String {
     let mut s = format!("format = \"{FORMAT}\"\nname = {:?}\n", m.name);
+    if let Some(origin) = m.stamp_origin_s {
+        let _ = writeln!(s, "stamp_origin_s = {origin}");
+    }
     for line in m.comment.lines() {
         let _ = writeln!(s, "# {line}");
     }

@@ -33,7 +33,7 @@ use evorec_core::pose::Psi;
 use evorec_core::tracker::{Tracker, TrackerConfig};
 use evorec_core::tuning::Tuning;
 use image::RgbImage;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use nalgebra::Isometry3;
 
 use crate::experiment::{Population, SetupError, setup_tracker};
@@ -62,6 +62,9 @@ pub struct TrackOptions {
     pub progress: bool,
     /// The pixel format the tracker reads the PNGs in.
     pub pixels: Pixels,
+    /// `estimate.tum` gives each frame's ROS stamp instead of the time since the origin
+    /// (a bag, or a sequence with `stamp_origin_s`).
+    pub absolute_stamps: bool,
 }
 
 /// The pixel format `evorec track` hands the decoded PNGs to the tracker in.
@@ -95,6 +98,7 @@ impl Default for TrackOptions {
             overlay: BTreeSet::new(),
             progress: false,
             pixels: Pixels::default(),
+            absolute_stamps: false,
         }
     }
 }
@@ -249,11 +253,7 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
 }
 
 fn progress_bar(len: u64) -> ProgressBar {
-    let bar = crate::logging::progress_bar(len);
-    if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} {eta}") {
-        bar.set_style(style);
-    }
-    bar
+    crate::logging::progress_bar_of(len, "frames")
 }
 
 /// The estimate of a tracked frame as a pose (f64).

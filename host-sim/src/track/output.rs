@@ -63,6 +63,10 @@ pub struct TrackSummary {
     /// reader's report, as JSON, so that tracking does not depend on the bag reader.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bag: Option<serde_json::Value>,
+    /// `true` when the input ended early (a truncated bag): the results cover the frames
+    /// before that point only (absent otherwise).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub partial: bool,
 }
 
 /// One `trace.csv` row's truth (aligned modulo symmetry) and the errors, per frame.
@@ -113,6 +117,7 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
         frames_per_s: out.tracked.len() as f64 / out.seconds.max(1e-9),
         evorec_version: env!("CARGO_PKG_VERSION"),
         bag: None,
+        partial: false,
     };
     Evaluation { truth, errors, summary }
 }
@@ -191,7 +196,12 @@ pub fn write_all(seq: &Sequence, out: &TrackOutput, ev: &Evaluation, dir: &Path)
     written.push(trace.clone());
     let poses: Vec<(f64, Isometry3<f64>)> =
         out.tracked.iter().map(|t| (seq.frames[t.i].t_s, super::estimate_pose(t))).collect();
-    written.push(crate::io::write_estimate_tum(dir, &poses)?);
+    let times = match (seq.manifest.raw.stamp_origin_s, out.options.absolute_stamps) {
+        (Some(origin), false) => crate::io::TumTimes::SinceStamp(origin),
+        (Some(origin), true) => crate::io::TumTimes::Absolute(origin),
+        (None, _) => crate::io::TumTimes::Sequence,
+    };
+    written.push(crate::io::write_estimate_tum(dir, &poses, times)?);
     for (i, l, r) in &out.kept {
         if let Some(t) = out.tracked.iter().find(|t| t.i == *i) {
             let img = overlay(seq, l, r, &super::estimate_pose(t).cast())?;

@@ -14,8 +14,15 @@ pub fn scratch(suite: &str, name: &str) -> PathBuf {
 /// Runs `evorec ARGS` with backtraces requested (so a printed backtrace would show) and no
 /// `RUST_LOG` of the caller's.
 pub fn evorec(args: &[&str]) -> Output {
+    evorec_env(args, &[])
+}
+
+/// [`evorec`] with environment variables set.
+#[allow(dead_code)] // not every test binary uses it
+pub fn evorec_env(args: &[&str], vars: &[(&str, &str)]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_evorec"))
         .args(args)
+        .envs(vars.iter().copied())
         .env("RUST_BACKTRACE", "1")
         .env("RUST_LIB_BACKTRACE", "1")
         .env_remove("RUST_LOG")

@@ -5,12 +5,17 @@ Requires: Python >= 3.8, standard library only; git on PATH (for the commit stam
 binary of evorec (`cargo build --release -p evorec-sim`), and for the timing section the firmware
 (`cd hil-stubs && cargo build --release`) and qemu-system-arm.
 
-    scripts/results.py [--work DIR] [--sequences DIR] [--trials N] [--reuse]
+    scripts/results.py [--work DIR] [--sequences DIR] [--bags DIR] [--trials N] [--reuse]
 
 Runs, into WORK (default target/results):
   evorec paper --out WORK/paper                     the paper's experiment (30 runs)
   evorec track SEQ --out WORK/track/NAME            every sequence directory under SEQUENCES
                                                     (default ../shared/data/sequences), if any
+  evorec import BAG --rig NAME.rig.toml --out WORK/bags/NAME, then evorec track of it
+    --out WORK/track/NAME-bag                       every ROS 2 bag NAME under BAGS (default
+                                                    ../shared/data/bags) with NAME.rig.toml and
+                                                    NAME.groundtruth.tum beside it (the ground
+                                                    truth copied in; import == track BAG)
   evorec acquire --trials N --out WORK/acquire      acquisition statistics (N = 100)
   evorec timing --out WORK/timing                   M4 instructions per generation
 then writes docs/results.md from those outputs, stamped with the commit they ran on, and replaces
@@ -25,6 +30,7 @@ import argparse
 import datetime
 import json
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -49,6 +55,20 @@ def run_step(name, args, out, reuse):
     print(f'== {name}: {" ".join(args)}', flush=True)
     if subprocess.call(args) != 0:
         die(f'step "{name}" failed ({" ".join(args)}); nothing written')
+
+
+def bags_with_truth(bags_dir):
+    """(name, bag, rig file, ground truth) of every bag under `bags_dir` whose rig file and
+    ground truth lie beside it as NAME.rig.toml and NAME.groundtruth.tum."""
+    if not os.path.isdir(bags_dir):
+        return []
+    found = []
+    for name in sorted(os.listdir(bags_dir)):
+        bag = os.path.join(bags_dir, name)
+        rig, truth = bag + '.rig.toml', bag + '.groundtruth.tum'
+        if os.path.isdir(bag) and os.path.isfile(rig) and os.path.isfile(truth):
+            found.append((name, bag, rig, truth))
+    return found
 
 
 def commit_stamp():
@@ -170,6 +190,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument('--work', default=os.path.join(ROOT, 'target', 'results'))
     ap.add_argument('--sequences', default=os.path.join(ROOT, '..', 'shared', 'data', 'sequences'))
+    ap.add_argument('--bags', default=os.path.join(ROOT, '..', 'shared', 'data', 'bags'))
     ap.add_argument('--trials', type=int, default=100)
     ap.add_argument('--reuse', action='store_true')
     a = ap.parse_args()
@@ -185,6 +206,14 @@ def main():
             if os.path.isfile(os.path.join(seq, 'sequence.toml')):
                 run_step(f'track {name}', [evorec, '-q', 'track', seq, '--out', f'{w}/track/{name}'],
                          f'{w}/track/{name}', a.reuse)
+    for name, bag, rig, truth in bags_with_truth(a.bags):
+        seq = f'{w}/bags/{name}'
+        if not a.reuse and os.path.isdir(seq):
+            shutil.rmtree(seq)  # import writes only into a new or empty directory
+        run_step(f'import {name}', [evorec, '-q', 'import', bag, '--rig', rig, '--out', seq], seq, a.reuse)
+        shutil.copyfile(truth, os.path.join(seq, 'groundtruth.tum'))
+        run_step(f'track {name}', [evorec, '-q', 'track', seq, '--out', f'{w}/track/{name}-bag'],
+                 f'{w}/track/{name}-bag', a.reuse)
     run_step('acquire', [evorec, '-q', 'acquire', '--trials', str(a.trials), '--out', f'{w}/acquire'],
              f'{w}/acquire', a.reuse)
     run_step('timing', [evorec, '-q', 'timing', '--out', f'{w}/timing'], f'{w}/timing', a.reuse)
@@ -205,7 +234,8 @@ read from those runs' output files. Do not edit by hand: rerun the script.
 ## Recorded sequences
 
 `evorec track SEQ --out DIR` with default options (DIR/summary.json; "after acquisition" counts
-from the first frame within 10 mm and 5° of the truth):
+from the first frame within 10 mm and 5° of the truth). `NAME-bag` is a ROS 2 bag, imported
+(`evorec import`) with its ground truth copied in:
 
 {track_section(f'{w}/track')}
 

@@ -5,8 +5,10 @@
 //! **tracking** (the elite fits the images), or has **lost** the block (it was tracking, and the
 //! elite no longer fits: occlusion, the block left the view, a burst of bad frames).
 //!
-//! The decision uses only the elite's fitness `F` of the current generation and its short
-//! history (two counters), with hysteresis:
+//! The decision uses only the elite's fitness `F` of the current generation, relative to what
+//! the colour model expects the true pose to score under the current light
+//! ([`crate::colour::ColourModel::expected_fitness`], 1 on a flat image), and its short history
+//! (two counters), with hysteresis:
 //!
 //! ```text
 //!              F ≥ acquire_fitness for confirm_generations in a row

@@ -14,7 +14,13 @@ pub const FIELDS: [Field; 55] = [
         get: |t: &Tuning| method_name(t.feedforward),
         set: set_method,
     },
-    int!("hue_tolerance", "hue unit (2°)", Any, "half-width of the hue match band (below 90)", hue_tolerance),
+    int!(
+        "hue_tolerance",
+        "hue unit (2°)",
+        Any,
+        "narrowest half-width of a face's hue band; the search band is 13 units wider (below 90)",
+        hue_tolerance
+    ),
     real!("max_dt_s", "s", Positive, "longest time step between frames accepted", max_dt_s),
     int!(
         "generations_per_frame",
@@ -253,7 +259,7 @@ pub const FIELDS: [Field; 55] = [
         "status.acquire_fitness",
         "fitness",
         Unit,
-        "fitness at or above which a pose counts as found",
+        "fitness relative to the expected score in the current light at or above which a pose counts as found",
         status.acquire_fitness
     ),
     int!(
@@ -267,7 +273,7 @@ pub const FIELDS: [Field; 55] = [
         "status.lose_fitness",
         "fitness",
         Unit,
-        "fitness below which a tracked block counts as gone",
+        "fitness relative to the expected score in the current light below which a tracked block counts as gone",
         status.lose_fitness
     ),
     int!("status.lose_generations", "frames", AtLeastOne, "frames in a row gone before lost", status.lose_generations),

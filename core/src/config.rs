@@ -121,8 +121,9 @@ pub const COLOUR_FRAMES: u16 = 8;
 /// default grid.
 pub const COLOUR_MIN_SAMPLES: u32 = 16;
 
-/// Minimum `max(r, g, b)` for a pixel to have a hue (darker pixels get [`NO_HUE`]).
-pub const MIN_VALUE: u8 = 40;
+/// Minimum `max(r, g, b)` for a pixel to have a hue (darker pixels get [`NO_HUE`]): 38 is a
+/// value of 0.149, so a face in shadow down to a value of 0.15 keeps its hue.
+pub const MIN_VALUE: u8 = 38;
 
 /// Minimum saturation `(max − min) / max`, in 1/255 steps, for a pixel to have a hue.
 pub const MIN_SATURATION: u8 = 80;

@@ -44,6 +44,27 @@ fn feedforward_tracks_motion_a_and_b_accurately() {
 }
 
 #[test]
+fn camera_like_light_is_tracked_with_the_learnt_colours() {
+    // `scenarios/camera_like.toml` (motion A at 0.5 rad/s with feedforward under shading, a
+    // highlight, a cast shadow, a filmic tone curve, a white-balance error, chroma noise, motion
+    // blur and JPEG), 3 s. With the configured hues alone its true pose scores about 0.5.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/camera_like.toml");
+    let mut s = Scenario::load(&path).unwrap();
+    s.duration_s = 3.0;
+    let a = run(&s);
+    println!("camera-like: {a:?}");
+    assert!(a.f_mean >= 0.9, "F_mean {}", a.f_mean);
+    for (name, v) in [("x", a.rms_x_mm), ("y", a.rms_y_mm)] {
+        assert!(v <= 1.0, "RMS {name} = {v} mm");
+    }
+    // The pale faces' edges bias depth by about +2 mm (docs/method.md).
+    assert!(a.rms_z_mm <= 4.0, "RMS z = {} mm", a.rms_z_mm);
+    for (name, v) in [("e1", a.rms_e1), ("e2", a.rms_e2), ("e3", a.rms_e3)] {
+        assert!(v <= 0.005, "RMS {name} = {v}");
+    }
+}
+
+#[test]
 fn feedforward_is_not_worse_than_the_plain_ga() {
     for motion in [MotionKind::A, MotionKind::B] {
         let ff = run(&short(motion, Method::Ff));

@@ -15,8 +15,8 @@
 //! `tolerance` and never wider than the search band. On a flat image whose faces have their
 //! configured hues the learnt band is the configured one, so the fitness is the paper's.
 //!
-//! **Learning** ([`ColourModel::learn`]). After a frame's generations, when the best pose is
-//! tracked or scores at least the acquisition threshold, the colour census of that pose
+//! **Learning** ([`ColourModel::learn`]). After a frame's generations, while the best pose is
+//! tracked (a pose not yet confirmed teaches the model nothing), the colour census of that pose
 //! (`Evaluator::census`: the hue under the two deeper inner rows of every face it shows each
 //! camera, 64·G points per visible face and camera, away from the anti-aliased edges) is
 //! tallied per face ([`Tally`]). Only hues within the search band around the face's current

@@ -541,7 +541,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         if status == Status::Tracking && acquiring {
             self.acquisition.reset();
         }
-        if status == Status::Tracking || relative >= self.config.tuning.status.acquire_fitness {
+        if status == Status::Tracking {
             self.learn_colours(frame, &best);
         }
         // The target filter (one forward kinematics and a data-dependent update) runs only in the
@@ -567,7 +567,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     }
 
     /// Learns the face colours from the census of the frame's best pose (see
-    /// [`crate::colour`]): called when it is tracked or scores at least the acquisition threshold.
+    /// [`crate::colour`]): called while it is tracked, so that a pose not yet confirmed teaches
+    /// the model nothing.
     fn learn_colours<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>, best: &Best) {
         let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
         let mut tally = Tally::EMPTY;

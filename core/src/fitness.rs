@@ -797,7 +797,7 @@ impl<'m, const G: usize> Evaluator<'m, G> {
 
     /// The colour census of a pose given as rotation `r` and translation `t` in `Σ_CR` in
     /// both cameras: `visit(k, hues)` with the hue bytes under the census points of each row
-    /// of every visible face `k` (see [`census`]).
+    /// of every visible face `k` (see [`crate::colour`]).
     pub fn census<B: AsRef<[u8]>, F: PixelFormat>(
         &self,
         r: &Matrix3<f32>,

@@ -286,7 +286,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// none of its large parts (the hue table, the population), is assembled on the stack and
     /// copied: the configuration is validated first, an empty slot gets a blank tracker written
     /// into it, and then every part is (re)built where it lives — the hue table through
-    /// [`HueLut::fill`], the population through [`Ga::reset_uniform`]. On error the slot is
+    /// [`Colours::configure`], the population through [`Ga::reset_uniform`]. On error the slot is
     /// unchanged.
     ///
     /// # Errors

@@ -90,12 +90,14 @@ pub fn results_bag(input: &BagInput<'_>) -> Result<ResultsBag> {
     let err = |e: mcap::McapError| anyhow!("{FILE}: {e}");
     let options = mcap::WriteOptions::new().profile("ros2").compression(Some(mcap::Compression::Zstd));
     let mut w = options.create(Cursor::new(Vec::new())).map_err(err)?;
-    let none = BTreeMap::new();
+    // rosbag2's MCAP plugin keeps each topic's QoS in its channel's metadata too; readers
+    // (rosbags) match the channels against metadata.yaml's topics by it.
+    let qos = BTreeMap::from([("offered_qos_profiles".to_owned(), metadata::QOS_RELIABLE_VOLATILE.to_owned())]);
     let topics = topics(input.output);
     let mut channels = Vec::with_capacity(topics.len());
     for (topic, kind, text) in &topics {
         let schema = w.add_schema(kind, "ros2msg", text.as_bytes()).map_err(err)?;
-        channels.push(w.add_channel(schema, topic, "cdr", &none).map_err(err)?);
+        channels.push(w.add_channel(schema, topic, "cdr", &qos).map_err(err)?);
     }
     let mut counts = [0u64; 5];
     for r in input.frames {

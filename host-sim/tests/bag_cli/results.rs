@@ -46,6 +46,9 @@ pub fn check(out: &Path, bag: &Path, rig: &Path) {
         let m = m.expect("message");
         let schema = m.channel.schema.as_ref().expect("schema");
         assert_eq!((schema.encoding.as_str(), m.channel.message_encoding.as_str()), ("ros2msg", "cdr"));
+        // The QoS in the channel's metadata too, as rosbag2 writes it (rosbags matches by it).
+        let qos = m.channel.metadata.get("offered_qos_profiles");
+        assert!(qos.is_some_and(|q| q.contains("reliability: 1")), "{:?}", m.channel.metadata);
         let entry = topics.entry(m.channel.topic.clone()).or_insert_with(|| (schema.name.clone(), Vec::new()));
         entry.1.push(m.log_time);
         let stamp = |ns: i64| assert_eq!(u64::try_from(ns).ok(), Some(m.log_time), "{}", m.channel.topic);

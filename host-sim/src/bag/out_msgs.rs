@@ -374,7 +374,10 @@ mod tests {
             hardware_id: String::new(),
             values: vec![("fitness".into(), "0.25".into())],
         };
-        assert_eq!(read::diagnostic_array(&write_diagnostic_array(&h(""), &[s.clone()])).unwrap(), (h(""), vec![s]));
+        assert_eq!(
+            read::diagnostic_array(&write_diagnostic_array(&h(""), std::slice::from_ref(&s))).unwrap(),
+            (h(""), vec![s])
+        );
         let t = read::twist_stamped(&write_twist_stamped(&h("base"), [1.0, 2.0, 3.0], [4.0, 5.0, 6.0])).unwrap();
         assert_eq!(t, (h("base"), [1.0, 2.0, 3.0], [4.0, 5.0, 6.0]));
         let m = Marker {

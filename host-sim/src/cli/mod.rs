@@ -56,7 +56,7 @@ pub enum Command {
     /// `--rig`): writes DIR/trace.csv, DIR/estimate.tum (TUM format), DIR/summary.json, plots
     /// and `DIR/overlay_<N>.png`, and for a bag DIR/estimate.mcap + DIR/metadata.yaml, which
     /// make DIR a rosbag2 bag (pose with covariance, status, /tf, marker, velocity; names from
-    /// the rig file's [output]). Nothing is written unless the whole sequence was tracked.
+    /// the rig file's output table). Nothing is written unless the whole sequence was tracked.
     Track(track::TrackArgs),
     /// Write a ROS 2 bag (MCAP storage: a bag directory or one .mcap file) as a recorded sequence
     /// (`evorec-seq/1`): images paired by stamp, joint states by name, transforms from tf, the URDF

@@ -13,6 +13,8 @@ use evorec_sim::sequence::Sequence;
 
 /// A short exported scenario (1 s of 160x120 frames).
 mod common;
+#[path = "bag_cli/results.rs"]
+mod results;
 use common::{evorec, evorec_env};
 
 fn scratch(name: &str) -> PathBuf {
@@ -236,9 +238,10 @@ fn a_good_bag_imports_and_tracks_from_the_command_line() {
     assert!(o.status.success(), "{o:?}");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.contains("[INFO ]") && stderr.contains("unpaired: 0 left, 0 right"), "{stderr}");
-    for f in ["estimate.tum", "estimate.mcap", "summary.json", "trace.csv"] {
+    for f in ["estimate.tum", "estimate.mcap", "metadata.yaml", "summary.json", "trace.csv"] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
+    results::check(&out, &bag.join("bag_0.mcap"), &rig);
     let summary = std::fs::read_to_string(out.join("summary.json")).expect("summary");
     assert!(summary.contains("\"unpaired_left\": 0") && summary.contains("\"joint_velocities\": \"derived\""));
     window_and_stamps(&bag, &rig, &out, &dir);

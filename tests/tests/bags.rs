@@ -60,7 +60,7 @@ fn track_dir(seq_dir: &Path, out: &Path) -> track::output::Evaluation {
 /// The recorders' defaults (bgr8 left, rgb8 right 1 ms later, zstd, joint names reversed
 /// plus a gripper, empty velocities): `import` then `track` gives `track BAG`'s
 /// `estimate.tum` byte for byte, the images read back exactly, the estimates are about as
-/// good as on the sequence the bag came from, and `estimate.mcap` holds the poses.
+/// good as on the sequence the bag came from, and `estimate.mcap` holds the tracked poses.
 #[test]
 fn import_then_track_equals_tracking_the_bag() {
     let dir = work_dir("identity");
@@ -93,33 +93,40 @@ fn import_then_track_equals_tracking_the_bag() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `estimate.mcap` holds one PoseStamped per line of `estimate.tum` (right camera frame,
-/// ros2msg schema, CDR), plus status and fitness.
+/// `estimate.mcap` holds one PoseWithCovarianceStamped per line of `estimate.tum` whose frame's
+/// status is `tracking` (right camera frame, ros2msg schema, CDR), one status per frame, and
+/// `/tf`, marker and velocity topics.
 fn check_estimate_mcap(path: &Path, tum: &str) {
     let bytes = std::fs::read(path).expect("estimate.mcap");
-    let mut poses = Vec::new();
+    let o = bag::rig::Output::default();
+    let (mut poses, mut tracking) = (Vec::new(), Vec::new());
     let mut topics = std::collections::BTreeSet::new();
     for m in mcap::MessageStream::new(&bytes).expect("mcap") {
         let m = m.expect("message");
         topics.insert(m.channel.topic.clone());
         let schema = m.channel.schema.as_ref().expect("schema");
         assert_eq!((schema.encoding.as_str(), m.channel.message_encoding.as_str()), ("ros2msg", "cdr"));
-        if m.channel.topic == bag::write_mcap::POSE_TOPIC {
-            assert_eq!(schema.name, "geometry_msgs/msg/PoseStamped");
-            let (h, p, q) = bag::msgs::pose_stamped(&m.data).expect("PoseStamped");
+        if m.channel.topic == o.pose_topic {
+            assert_eq!(schema.name, "geometry_msgs/msg/PoseWithCovarianceStamped");
+            let (h, p, _) = bag::out_msgs::read::pose_with_covariance(&m.data).expect("PoseWithCovarianceStamped");
             assert_eq!(h.frame_id, testbag::RIGHT_FRAME);
             assert_eq!(m.log_time, u64::try_from(h.stamp_ns).expect("stamp"));
-            poses.push((p, q));
+            poses.push((p.position, p.orientation));
+        } else if m.channel.topic == o.status_topic {
+            let (_, s) = bag::out_msgs::read::diagnostic_array(&m.data).expect("DiagnosticArray");
+            tracking.push(s[0].message == "tracking");
         }
     }
-    assert_eq!(topics.len(), 3, "{topics:?}");
+    assert_eq!(topics.len(), 5, "{topics:?}");
     let lines: Vec<Vec<f64>> = tum
         .lines()
         .filter(|l| !l.starts_with('#'))
         .map(|l| l.split_whitespace().map(|w| w.parse().expect("number")).collect())
         .collect();
-    assert_eq!(poses.len(), lines.len());
-    for ((p, q), l) in poses.iter().zip(&lines) {
+    assert_eq!(tracking.len(), lines.len());
+    let tracked: Vec<&Vec<f64>> = lines.iter().zip(&tracking).filter(|(_, t)| **t).map(|(l, _)| l).collect();
+    assert_eq!(poses.len(), tracked.len());
+    for ((p, q), l) in poses.iter().zip(&tracked) {
         let v: Vec<f64> = p.iter().chain(q.iter()).copied().collect();
         assert!(v.iter().zip(&l[1..]).all(|(a, b)| (a - b).abs() < 1e-8), "{v:?} vs {l:?}");
     }

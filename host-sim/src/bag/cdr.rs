@@ -106,6 +106,14 @@ impl<'a> Reader<'a> {
         Ok(i32::from_le_bytes(self.array::<4>(field)?))
     }
 
+    /// A `float32`.
+    ///
+    /// # Errors
+    /// The message ends.
+    pub fn f32(&mut self, field: &str) -> Result<f32> {
+        Ok(f32::from_le_bytes(self.array::<4>(field)?))
+    }
+
     /// A `float64`.
     ///
     /// # Errors
@@ -173,6 +181,17 @@ impl<'a> Reader<'a> {
             *v = self.f64(field)?;
         }
         Ok(out)
+    }
+
+    /// Checks that the message was read to its last byte.
+    ///
+    /// # Errors
+    /// Bytes are left after the last field.
+    pub fn finish(&self) -> Result<()> {
+        match self.body.len() - self.pos {
+            0 => Ok(()),
+            n => Err(self.err("end of message", format!("{n} bytes left after the last field"))),
+        }
     }
 
     /// A `string[]` sequence.

@@ -14,8 +14,9 @@
 //! - **`mcap`** (Foxglove's reader and writer, the format's reference implementation): plain,
 //!   zstd and lz4 chunks.
 //! - **CDR by hand** ([`cdr`], [`msgs`]): the handful of fixed layouts evorec reads (Image,
-//!   CompressedImage, CameraInfo, JointState, TFMessage, String) and writes (PoseStamped,
-//!   String, Float32) take ~300 lines; the serde CDR crates either stopped being maintained
+//!   CompressedImage, CameraInfo, JointState, TFMessage, String) and writes
+//!   ([`write_mcap`]: PoseWithCovarianceStamped, DiagnosticArray, TFMessage, Marker,
+//!   TwistStamped) take ~500 lines; the serde CDR crates either stopped being maintained
 //!   (`cdr`, last release 2021) or belong to a DDS stack (`cdr-encoding`), and going through
 //!   serde would copy each image byte by byte where the reader borrows the pixels.
 //!
@@ -28,8 +29,11 @@ pub mod cdr;
 pub mod images;
 pub mod import;
 pub mod joints;
+pub mod metadata;
 pub mod msgs;
+pub mod out_msgs;
 pub mod pairing;
+pub mod results;
 pub mod rig;
 pub mod rigfile;
 pub mod scan;

@@ -1,5 +1,5 @@
-//! The ROS 2 messages evorec reads from a bag and writes to `estimate.mcap`, in CDR
-//! ([`super::cdr`]), with their `ros2msg` schema texts for the ones written.
+//! The ROS 2 messages evorec reads from a bag, in CDR ([`super::cdr`]), their writers (for test
+//! bags) and the `ros2msg` schema texts (those of the results bag are in [`super::out_msgs`]).
 
 use super::cdr::{Reader, Result, Writer};
 
@@ -23,7 +23,8 @@ fn header(r: &mut Reader<'_>) -> Result<Header> {
     Ok(Header { stamp_ns: i64::from(sec) * 1_000_000_000 + i64::from(nanosec), frame_id })
 }
 
-fn write_header(w: &mut Writer, h: &Header) {
+/// Writes a `std_msgs/Header`.
+pub fn write_header(w: &mut Writer, h: &Header) {
     w.i32(i32::try_from(h.stamp_ns.div_euclid(1_000_000_000)).unwrap_or(i32::MAX));
     w.u32(u32::try_from(h.stamp_ns.rem_euclid(1_000_000_000)).unwrap_or(0));
     w.string(&h.frame_id);
@@ -268,38 +269,18 @@ pub fn write_string(s: &str) -> Vec<u8> {
     w.finish()
 }
 
-/// Encodes a `std_msgs/Float32`.
-pub fn write_float32(v: f32) -> Vec<u8> {
-    let mut w = Writer::new();
-    w.f32(v);
-    w.finish()
-}
-
-/// Encodes a `geometry_msgs/PoseStamped`: position x, y, z (m), orientation x, y, z, w.
-pub fn write_pose_stamped(header: &Header, position: [f64; 3], orientation: [f64; 4]) -> Vec<u8> {
-    let mut w = Writer::new();
-    write_header(&mut w, header);
-    for v in position.iter().chain(&orientation) {
-        w.f64(*v);
-    }
-    w.finish()
-}
-
-/// Decodes a `geometry_msgs/PoseStamped` (for tests reading `estimate.mcap` back).
+/// Decodes a `std_msgs/Header` (for decoders of other messages, e.g. in tests).
 ///
 /// # Errors
 /// A malformed message.
-pub fn pose_stamped(bytes: &[u8]) -> Result<(Header, [f64; 3], [f64; 4])> {
-    let mut r = Reader::new(bytes)?;
-    let h = header(&mut r)?;
-    let p = r.f64_array::<3>("pose.position")?;
-    let q = r.f64_array::<4>("pose.orientation")?;
-    Ok((h, p, q))
+pub fn read_header(r: &mut Reader<'_>) -> Result<Header> {
+    header(r)
 }
 
 const SEPARATOR: &str = "================================================================================\n";
 
-fn schema(top: &str, deps: &[(&str, &str)]) -> String {
+/// A `ros2msg` schema: the message's text, then each dependency's after a separator line.
+pub fn schema(top: &str, deps: &[(&str, &str)]) -> String {
     let mut s = top.to_owned();
     for (name, text) in deps {
         s.push('\n');
@@ -312,28 +293,13 @@ fn schema(top: &str, deps: &[(&str, &str)]) -> String {
     s
 }
 
-const TIME: (&str, &str) = ("builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n");
-const HEADER: (&str, &str) = ("std_msgs/Header", "builtin_interfaces/Time stamp\nstring frame_id\n");
-
-/// The `ros2msg` schema of `geometry_msgs/msg/PoseStamped`, dependencies included.
-pub fn pose_stamped_schema() -> String {
-    schema(
-        "std_msgs/Header header\nPose pose\n",
-        &[
-            HEADER,
-            TIME,
-            ("geometry_msgs/Pose", "Point position\nQuaternion orientation\n"),
-            ("geometry_msgs/Point", "float64 x\nfloat64 y\nfloat64 z\n"),
-            ("geometry_msgs/Quaternion", "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"),
-        ],
-    )
-}
+/// `builtin_interfaces/Time`.
+pub const TIME: (&str, &str) = ("builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n");
+/// `std_msgs/Header`.
+pub const HEADER: (&str, &str) = ("std_msgs/Header", "builtin_interfaces/Time stamp\nstring frame_id\n");
 
 /// The `ros2msg` schema of `std_msgs/msg/String`.
 pub const STRING_SCHEMA: &str = "string data\n";
-
-/// The `ros2msg` schema of `std_msgs/msg/Float32`.
-pub const FLOAT32_SCHEMA: &str = "float32 data\n";
 
 /// The `ros2msg` schemas of the messages a test bag holds (name, text).
 pub fn input_schemas() -> Vec<(&'static str, String)> {
@@ -441,8 +407,6 @@ mod tests {
         };
         assert_eq!(tf_message(&write_tf_message(&[t.clone(), t.clone()])).unwrap(), vec![t.clone(), t]);
         assert_eq!(string(&write_string("<robot/>")).unwrap(), "<robot/>");
-        let (hh, p, q) = pose_stamped(&write_pose_stamped(&h(-1, "r"), [1.0, 2.0, 3.0], [0.0, 0.0, 0.0, 1.0])).unwrap();
-        assert_eq!((hh, p, q), (h(-1, "r"), [1.0, 2.0, 3.0], [0.0, 0.0, 0.0, 1.0]));
     }
 
     proptest::proptest! {
@@ -459,7 +423,6 @@ mod tests {
             let _ = joint_state(&bytes);
             let _ = tf_message(&bytes);
             let _ = string(&bytes);
-            let _ = pose_stamped(&bytes);
         }
     }
 

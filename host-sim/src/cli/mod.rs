@@ -54,9 +54,9 @@ pub enum Command {
     Timing(misc::TimingArgs),
     /// Track a recorded stereo sequence (`evorec-seq/1` directory) or a ROS 2 bag (with
     /// `--rig`): writes DIR/trace.csv, DIR/estimate.tum (TUM format), DIR/summary.json, plots
-    /// and `DIR/overlay_<N>.png`, and for a bag DIR/estimate.mcap (the poses as
-    /// geometry_msgs/PoseStamped, status and fitness). Nothing is written unless the whole
-    /// sequence was tracked.
+    /// and `DIR/overlay_<N>.png`, and for a bag DIR/estimate.mcap + DIR/metadata.yaml, which
+    /// make DIR a rosbag2 bag (pose with covariance, status, /tf, marker, velocity; names from
+    /// the rig file's output table). Nothing is written unless the whole sequence was tracked.
     Track(track::TrackArgs),
     /// Write a ROS 2 bag (MCAP storage: a bag directory or one .mcap file) as a recorded sequence
     /// (`evorec-seq/1`): images paired by stamp, joint states by name, transforms from tf, the URDF

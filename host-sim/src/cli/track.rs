@@ -160,7 +160,8 @@ fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<
 }
 
 /// `evorec track BAG --rig RIG`: the bag read (first pass), tracked while its images stream
-/// (second pass); the outputs of a sequence plus `estimate.mcap`.
+/// (second pass); the outputs of a sequence plus the results bag (`estimate.mcap`,
+/// `metadata.yaml`).
 fn track_bag(
     path: &Path,
     rig: &Path,

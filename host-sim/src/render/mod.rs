@@ -162,7 +162,7 @@ impl ScreenFace {
 }
 
 /// Fully saturated, full-value RGB (0..=1) of a hue in degrees.
-fn hue_rgb(deg: f32) -> [f32; 3] {
+pub(crate) fn hue_rgb(deg: f32) -> [f32; 3] {
     let h = deg.rem_euclid(360.0) / 60.0;
     // `rem_euclid` can round a tiny negative angle up to exactly 360°.
     let h = if h >= 6.0 { 0.0 } else { h };

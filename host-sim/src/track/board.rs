@@ -175,6 +175,8 @@ pub struct TrackedFrame {
     pub fitness: f32,
     /// The tracker's status after this frame.
     pub status: Status,
+    /// The pose the tracker's target filter is fed with ([`Estimate::target_measurement`]).
+    pub target_measurement: Psi,
 }
 
 /// The board over a sequence, delivering frames in pixel format `F`.
@@ -287,6 +289,7 @@ impl<const DOF: usize, F: SensorPixels> CameraController<DOF> for SequenceBoard<
                 estimate: estimate.psi,
                 fitness: estimate.fitness,
                 status: estimate.status,
+                target_measurement: estimate.target_measurement,
             });
         }
         Ok(())

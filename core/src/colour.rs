@@ -239,14 +239,7 @@ impl ColourModel {
     /// of census points within their face's band, at least [`MIN_EXPECTED_FITNESS`] (1 before
     /// anything is learnt).
     pub fn expected_fitness(&self) -> f32 {
-        let f = self.coverage as f32 / COVERAGE_ONE as f32;
-        if f > 1.0 {
-            1.0
-        } else if f > MIN_EXPECTED_FITNESS {
-            f
-        } else {
-            MIN_EXPECTED_FITNESS
-        }
+        crate::math::clamp(self.coverage as f32 / COVERAGE_ONE as f32, MIN_EXPECTED_FITNESS, 1.0)
     }
 
     /// The learnt hue of face `k` in degrees (the configured one before it was seen).

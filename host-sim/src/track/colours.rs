@@ -12,6 +12,7 @@ use std::fmt::Write as _;
 use anyhow::{Result, bail};
 use evorec_core::colour::ColourModel;
 use evorec_core::model::{Block, FACES};
+use evorec_core::status::Status;
 
 use super::TrackOutput;
 
@@ -48,7 +49,7 @@ impl ColourReport {
     /// # Errors
     /// No frame was tracked, so nothing was measured.
     pub fn of(block: &Block, out: &TrackOutput) -> Result<Self> {
-        let tracked = out.tracked.iter().filter(|t| t.status.as_str() == "tracking").count();
+        let tracked = out.tracked.iter().filter(|t| t.status == Status::Tracking).count();
         let model: &ColourModel = &out.colours;
         if tracked == 0 || (0..FACES).all(|k| model.frames_seen(k) == 0) {
             bail!("the block was not found in the {} frames tracked: nothing measured", out.tracked.len());

@@ -95,6 +95,14 @@ pub const CAMERA_ACQUIRE_FITNESS: f32 = 0.9;
 /// [`StatusConfig::lose_fitness`] does.
 pub const CAMERA_LOSE_FITNESS: f32 = 0.75;
 
+/// The smallest ratio of the elite's worse camera's fitness to its better camera's at which
+/// the tracker learns the face colours from it ([`crate::colour`]). Both cameras see the
+/// block under the same light, so a pose in step scores alike in both (a ratio of 0.98 or more
+/// once the block is found, in the public sample sequences); a pose fitted to images out of
+/// step does not, and learning from it would lower the expected fitness, the scale of the
+/// status thresholds, until the wrong pose passed them.
+pub const CAMERA_LEARN_RATIO: f32 = 0.95;
+
 /// Thresholds of the status decision; [`StatusConfig::DEFAULT`] documents the defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StatusConfig {

@@ -20,7 +20,7 @@ pub use crate::kinematics::JointSample;
 use crate::kinematics::{Chain, PA10};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
-use crate::status::{Status, StatusMonitor};
+use crate::status::{CAMERA_LEARN_RATIO, Status, StatusMonitor};
 use crate::target_motion::{Optics, PredictError, Prediction, TargetFilter, TargetVelocity};
 use crate::tuning::{POPULATION_ERROR, Tuning};
 
@@ -549,7 +549,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         if status == Status::Tracking && acquiring {
             self.acquisition.reset();
         }
-        if status == Status::Tracking || relative >= self.config.tuning.status.acquire_fitness {
+        let alike = cameras[0].min(cameras[1]) >= CAMERA_LEARN_RATIO * cameras[0].max(cameras[1]);
+        if alike && (status == Status::Tracking || relative >= self.config.tuning.status.acquire_fitness) {
             self.learn_colours(frame, &best);
         }
         // The target filter (one forward kinematics and a data-dependent update) runs only in the

@@ -109,7 +109,7 @@ impl TrackSummary {
 /// ([`TrackSummary::camera_mismatch_frames`]).
 fn camera_mismatch_frames(out: &TrackOutput) -> usize {
     let floor = evorec_core::status::CAMERA_LOSE_FITNESS * out.colours.expected_fitness();
-    let mismatch = |[l, r]: [f32; 2]| l.max(r) >= SEEN_FITNESS && !(l.min(r) >= floor);
+    let mismatch = |[l, r]: [f32; 2]| l.max(r) >= SEEN_FITNESS && (l.min(r) < floor || l.min(r).is_nan());
     out.tracked.iter().filter(|t| mismatch(t.camera_fitness)).count()
 }
 

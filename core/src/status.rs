@@ -31,7 +31,7 @@
 //! camera, or neither, at a wrong depth, and `F` stays between the thresholds. So a generation
 //! counts toward acquisition only when the elite's worse camera scores at least
 //! [`CAMERA_ACQUIRE_FITNESS`], and as bad when it scores below [`CAMERA_LOSE_FITNESS`]. A tracked
-//! block in step scores 0.83–1.0 in its worse camera (the public sample sequences); 15 frames
+//! block in step scores 0.86–1.0 in its worse camera (the public sample sequences); 15 frames
 //! out of step, below 0.85 in 94–96 % of the frames (`docs/method.md`, "Acquisition and
 //! status").
 //!

@@ -42,6 +42,13 @@ use crate::config::{COLOUR_FRAMES, COLOUR_MIN_SAMPLES, HUE_UNITS, MAX_HUE_SHIFT}
 use crate::hue::{Band, HueLut};
 use crate::model::FACES;
 
+/// The smallest ratio of the best pose's worse camera's fitness to its better camera's at
+/// which the tracker learns the face colours from it. Both cameras see the block under the
+/// same light, so a pose in step scores alike in both; a pose fitted to a stereo pair out of
+/// step does not, and learning from it would lower the expected fitness, the scale of the
+/// status thresholds, until the wrong pose passed them.
+pub const LEARN_CAMERA_RATIO: f32 = 0.95;
+
 /// Fixed-point scale of the learnt offsets and spreads: 1/256 hue unit.
 const Q: i32 = 256;
 

@@ -10,7 +10,7 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 
 use crate::acquire::{self, Acquisition, HueBlobs};
 use crate::camera::{Pinhole, StereoRig};
-use crate::colour::{ColourModel, Colours, Tally};
+use crate::colour::{ColourModel, Colours, LEARN_CAMERA_RATIO, Tally};
 use crate::config::{DEFAULT_GRID, MIN_DEPTH_M, PA10_DOF, POPULATION_CAPACITY};
 use crate::feedforward;
 use crate::fitness::{Evaluator, Fitness};
@@ -63,6 +63,10 @@ pub struct Estimate {
     pub psi: Psi,
     /// The best individual's fitness `F` (0..=1).
     pub fitness: f32,
+    /// The best individual's fitness in the left and in the right camera, `[F_L, F_R]`
+    /// (`fitness` is their mean): a pair whose images do not show the same instant fits one
+    /// camera and not the other ([`crate::status`]).
+    pub camera_fitness: [f32; 2],
     /// Generation number (1 after the first frame).
     pub generation: u32,
     /// Whether the tracker has the block (decided after this generation's evaluation).
@@ -85,6 +89,8 @@ pub use crate::tuning::ConfigError;
 /// What one generation of [`Tracker::step_probed`] gives (see `generation_on`).
 struct Outcome {
     best: Best,
+    /// The best individual's fitness per camera, `[F_L, F_R]`.
+    cameras: [f32; 2],
     estimate: Psi,
     target_measurement: Psi,
 }
@@ -532,16 +538,18 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         for _ in 1..self.config.tuning.generations_per_frame {
             self.generation_on(frame, feedforward, acquiring, false, probe);
         }
-        let Outcome { best, estimate, target_measurement } =
+        let Outcome { best, cameras, estimate, target_measurement } =
             self.generation_on(frame, feedforward, acquiring, true, probe);
         // The status is decided on the fitness relative to what the true pose can score under
         // the current light (`crate::colour`), so that its thresholds mean the same in every light.
-        let relative = best.fitness / self.colours.model().expected_fitness();
+        let expected = self.colours.model().expected_fitness();
+        let relative = best.fitness / expected;
         let status = self.monitor.update(relative, &self.config.tuning.status);
         if status == Status::Tracking && acquiring {
             self.acquisition.reset();
         }
-        if status == Status::Tracking {
+        let alike = cameras[0].min(cameras[1]) >= LEARN_CAMERA_RATIO * cameras[0].max(cameras[1]);
+        if alike && status == Status::Tracking {
             self.learn_colours(frame, &best);
         }
         // The target filter (one forward kinematics and a data-dependent update) runs only in the
@@ -559,6 +567,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         Ok(Estimate {
             psi,
             fitness: best.fitness,
+            camera_fitness: cameras,
             generation: self.generation,
             status,
             capture_time_us: joints.time_us,
@@ -642,8 +651,17 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         probe.mark(Phase::Evaluate);
         let idle = if acquiring { self.config.tuning.acquire.idle_individuals } else { 0 };
         let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
+        // The per-camera scores of the best are kept as the population is evaluated, by
+        // `Ga::evaluate_first`'s own rule (the first strictly larger fitness, NaN as 0), so
+        // that no pose is evaluated twice.
+        let (mut top, mut cameras) = (f32::NEG_INFINITY, [0.0f32; 2]);
         let best: Best = self.ga.evaluate_first(self.ga.len().saturating_sub(idle), |psi| {
-            eval.evaluate_psi(psi, &frame.left, &frame.right).total
+            let f = eval.evaluate_psi(psi, &frame.left, &frame.right);
+            let v = if f.total.is_nan() { 0.0 } else { f.total };
+            if v > top {
+                (top, cameras) = (v, [f.left.score(), f.right.score()]);
+            }
+            f.total
         });
         // The estimate and the filter's measurement are taken from the evaluated population,
         // before breeding.
@@ -668,7 +686,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             self.acquire_step(frame);
         }
         self.generation = self.generation.wrapping_add(1);
-        Outcome { best, estimate, target_measurement }
+        Outcome { best, cameras, estimate, target_measurement }
     }
 
     /// Replaces the last [`DEPTH_PROBES`] bred children before the immigrants by the best

@@ -183,6 +183,7 @@ fn protocol_on_target() -> Outcome {
         message: Message::Estimate(evorec_core::Estimate {
             psi: Psi::new([0.01, -0.02, 0.7], [0.05, 0.1, -0.03]),
             fitness: 0.75,
+            camera_fitness: [0.5, 1.0],
             generation: 10,
             capture_time_us: 0,
             status: evorec_core::status::Status::Tracking,

@@ -16,6 +16,7 @@ use serde::Serialize;
 use crate::occlusion::Initial;
 use crate::scenario::{HOST_POPULATION_CAPACITY, Scenario};
 use crate::sim::{self, Handover, SimBoard, TraceRow, World};
+use crate::track::eval::{self, WrongTracking};
 
 /// The tracker the simulator runs: PA-10, the default population capacity (the size in use is
 /// the scenario's `[tracker] ga.population`) and sample rows.
@@ -338,6 +339,9 @@ pub struct Summary {
     pub rotation: Option<RotationError>,
     /// Frames per tracker status.
     pub status: StatusCounts,
+    /// How often `tracking` was wrong (flattened into the top level).
+    #[serde(flatten)]
+    pub wrong_tracking: WrongTracking,
     /// Frames refused by the tracker (should be 0).
     pub rejected: u32,
     /// The hand-over at the output time (`None` where not simulated).
@@ -356,12 +360,24 @@ impl Summary {
             accuracy: Accuracy::of(rows),
             rotation: RotationError::of_run(rows),
             status: StatusCounts::of(rows),
+            wrong_tracking: wrong_tracking(rows, &scenario.target.face_hues_deg),
             rejected,
             handover: HandoverSummary::of(rows, scenario.start.delay_s),
             scenario: *scenario,
             evorec_version: env!("CARGO_PKG_VERSION"),
         }
     }
+}
+
+/// How often a run's `tracking` was wrong: each frame's estimate against its true pose by the
+/// sequence tracker's rule ([`crate::track::eval::FrameError::within`], modulo the colour
+/// symmetry of the face hues `face_hues_deg`).
+pub fn wrong_tracking(rows: &[TraceRow], face_hues_deg: &[f64; 6]) -> WrongTracking {
+    let syms = eval::colour_symmetries(&face_hues_deg.map(|h| h as f32));
+    WrongTracking::of(rows.iter().map(|r| {
+        let (e, _) = eval::frame_error(&r.estimate, &isometry_of(&r.truth), &syms);
+        (r.status, e.within())
+    }))
 }
 
 /// The outcome of a run.

@@ -12,9 +12,23 @@ use crate::experiment::{self, Accuracy};
 use crate::motion::MotionKind;
 use crate::paper::{Cell, OMEGAS, scenario_of};
 use crate::scenario::{Method, Scenario};
+use crate::track::eval::WrongTracking;
 
 /// Columns of `cells_A_B.csv`.
-pub const COLUMNS: [&str; 10] = ["motion", "omega", "seed", "F", "x_mm", "y_mm", "z_mm", "e1", "e2", "e3"];
+pub const COLUMNS: [&str; 12] = [
+    "motion",
+    "omega",
+    "seed",
+    "F",
+    "x_mm",
+    "y_mm",
+    "z_mm",
+    "e1",
+    "e2",
+    "e3",
+    "tracking_wrong_fraction",
+    "longest_wrong_tracking_frames",
+];
 
 /// The cells of a sweep of `method`: motion A at every ω of the paper, motion B at ω > 0
 /// (motion B at rest is motion A at rest).
@@ -73,6 +87,8 @@ pub struct SeedRun {
     pub seed: u64,
     /// Its accuracy.
     pub accuracy: Accuracy,
+    /// How often its `tracking` was wrong.
+    pub wrong_tracking: WrongTracking,
 }
 
 /// Runs every cell once per seed (in parallel, seed by seed in the order of `cells`), each
@@ -96,7 +112,8 @@ pub fn run(
         let title =
             format!("motion {} / {} / ω = {} rad/s / seed {seed}", cell.motion_name(), cell.method_name(), cell.omega);
         experiment::write_outputs(&output, &out.join("runs").join(format!("{}_s{seed}", cell.slug())), &title)?;
-        Ok(SeedRun { cell: *cell, seed: *seed, accuracy: output.summary.accuracy })
+        let summary = &output.summary;
+        Ok(SeedRun { cell: *cell, seed: *seed, accuracy: summary.accuracy, wrong_tracking: summary.wrong_tracking })
     })?;
     let path = out.join(format!("cells_{}_{}.csv", seeds.start(), seeds.end()));
     crate::io::write_csv(&path, &COLUMNS, &runs.iter().map(record).collect::<Vec<_>>())?;
@@ -104,11 +121,14 @@ pub fn run(
 }
 
 /// One row of the table: motion, ω, seed, then F̄ and the RMS errors in `%g` style with six
-/// significant digits.
+/// significant digits, the fraction of the tracking frames that were wrong (`%g`) and the
+/// longest run of them.
 pub fn record(r: &SeedRun) -> Vec<String> {
     let a = &r.accuracy;
     let mut rec = vec![r.cell.motion_name().to_owned(), format!("{}", r.cell.omega), r.seed.to_string()];
     rec.extend([a.f_mean, a.rms_x_mm, a.rms_y_mm, a.rms_z_mm, a.rms_e1, a.rms_e2, a.rms_e3].map(g6));
+    rec.push(g6(r.wrong_tracking.tracking_wrong_fraction));
+    rec.push(r.wrong_tracking.longest_wrong_tracking_frames.to_string());
     rec
 }
 
@@ -185,10 +205,16 @@ mod tests {
             rms_e3: 0.000_012_3,
             frames: 2182,
         };
-        let rec = record(&SeedRun { cell, seed: 4, accuracy });
-        assert_eq!(rec.join(","), "B,0.125,4,0.9984,0.362515,0.41,1.98,0.00118765,0.0032,1.23e-05");
-        let a0 = record(&SeedRun { cell: Cell { motion: MotionKind::A, omega: 0.0, ..cell }, seed: 1, accuracy });
-        let a1 = record(&SeedRun { cell: Cell { motion: MotionKind::A, omega: 1.0, ..cell }, seed: 1, accuracy });
+        let wrong_tracking = WrongTracking {
+            tracking_frames: 2000,
+            tracking_wrong_frames: 25,
+            tracking_wrong_fraction: 0.0125,
+            longest_wrong_tracking_frames: 7,
+        };
+        let rec = record(&SeedRun { cell, seed: 4, accuracy, wrong_tracking });
+        assert_eq!(rec.join(","), "B,0.125,4,0.9984,0.362515,0.41,1.98,0.00118765,0.0032,1.23e-05,0.0125,7");
+        let run = |motion, omega| SeedRun { cell: Cell { motion, omega, ..cell }, seed: 1, accuracy, wrong_tracking };
+        let (a0, a1) = (record(&run(MotionKind::A, 0.0)), record(&run(MotionKind::A, 1.0)));
         assert_eq!((a0[1].as_str(), a1[1].as_str()), ("0", "1"));
     }
 }

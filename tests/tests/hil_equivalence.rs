@@ -177,9 +177,9 @@ impl CameraController<7> for ReplayBoard<'_> {
     }
 }
 
-/// The estimate bits compared: ψ, F, generation.
-fn bits(e: &Estimate) -> ([u32; 6], u32, u32) {
-    (e.psi.0.map(f32::to_bits), e.fitness.to_bits(), e.generation)
+/// The estimate bits compared: ψ, F, F per camera, generation, status.
+fn bits(e: &Estimate) -> ([u32; 6], u32, [u32; 2], u32, u8) {
+    (e.psi.0.map(f32::to_bits), e.fitness.to_bits(), e.camera_fitness.map(f32::to_bits), e.generation, e.status.code())
 }
 
 #[test]

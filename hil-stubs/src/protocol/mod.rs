@@ -28,8 +28,9 @@
 //! | `FRAME`    2  | h→f | width u16, height u16, joint time u64, q\[7\], q̇\[7\] f32,       |
 //! |               |     | then the left and the right image, `w·h` RGB565 pixels each     |
 //! |               |     | (row-major, 2 bytes per pixel, little-endian `rrrrrggggggbbbbb`) |
-//! | `ESTIMATE` 3  | f→h | ψ\[6\] f32, fitness F f32, generation u32, status u8, the target   |
-//! |               |     | filter's measurement ψ\[6\] f32 (`Estimate::target_measurement`)   |
+//! | `ESTIMATE` 3  | f→h | ψ\[6\] f32, fitness F f32, F_L and F_R f32, generation u32,      |
+//! |               |     | status u8, the target filter's measurement ψ\[6\] f32            |
+//! |               |     | (`Estimate::target_measurement`)                                |
 //! | `END`      4  | h→f | empty: no more frames                                           |
 //! | `ACK`      5  | f→h | status u32 answering CONFIG: 0 = tracker built, else a [`crate::setup::SetupError`] code |
 //! | `REJECTED` 6  | f→h | empty: the tracker refused that frame (size, joints, time step) |
@@ -85,7 +86,7 @@ pub const MAGIC: [u8; 4] = *b"EVRC";
 /// header flags, drop counts in `DONE`; 4: `CONFIG` carries the population size; 3:
 /// estimates carry the tracker's status; 2: frames carry the sensor's RGB565 pixels; 1: hue
 /// frames).
-pub const VERSION: u8 = 11;
+pub const VERSION: u8 = 12;
 /// The pixel format of a frame's images on the link: the camera sensor's own RGB565, so the
 /// hue is computed on the board (see [`evorec_core::image::Rgb565`]).
 pub type LinkFormat = evorec_core::image::Rgb565;
@@ -104,8 +105,9 @@ pub const TUNING_LEN: usize = 4 + 4 + 4 * FIELDS.len();
 pub const CONFIG_LEN: usize = 4 * 4 + 2 * 2 + 4 + 4 * 9 + 4 * 7 + 4 * 6 + 8 + TUNING_LEN + 4 * 12;
 /// `FRAME` payload size before the two images.
 pub const FRAME_FIXED_LEN: usize = 2 + 2 + 8 + 4 * DOF * 2;
-/// `ESTIMATE` payload size: ψ, fitness, generation, status code, the filter's measurement ψ.
-pub const ESTIMATE_LEN: usize = 4 * 6 + 4 + 4 + 1 + 4 * 6;
+/// `ESTIMATE` payload size: ψ, fitness, the fitness per camera, generation, status code, the
+/// filter's measurement ψ.
+pub const ESTIMATE_LEN: usize = 4 * 6 + 4 + 4 * 2 + 4 + 1 + 4 * 6;
 /// `ACK` payload size.
 pub const ACK_LEN: usize = 4;
 /// `DONE` payload size: five counts and the [`DropCounts`].

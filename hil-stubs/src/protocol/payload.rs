@@ -30,6 +30,7 @@ pub(super) fn encode_payload<'m>(
         Message::Estimate(ref est) => {
             e.f32s(&est.psi.0);
             e.f32(est.fitness);
+            e.f32s(&est.camera_fitness);
             e.u32(est.generation);
             e.u8(est.status.code());
             e.f32s(&est.target_measurement.0);
@@ -153,13 +154,22 @@ pub(super) fn decode_small(kind: MsgType, payload: &[u8]) -> Result<Message<'sta
         MsgType::Estimate => {
             let psi = Psi(d.f32s());
             let fitness = d.f32();
+            let camera_fitness = d.f32s();
             let generation = d.u32();
             let status = Status::from_code(d.u8()).ok_or(DecodeError::BadValue)?;
             // The filter's measurement travels whole: its orientation is the best individual's,
             // which differs from ψ's (the mean of the best's neighbours).
             let target_measurement = Psi(d.f32s());
             // The capture time is not in the payload; the host fills it in from its frame.
-            Message::Estimate(Estimate { psi, fitness, generation, capture_time_us: 0, status, target_measurement })
+            Message::Estimate(Estimate {
+                psi,
+                fitness,
+                camera_fitness,
+                generation,
+                capture_time_us: 0,
+                status,
+                target_measurement,
+            })
         }
         MsgType::End => Message::End,
         MsgType::Ack => Message::Ack(d.u32()),

@@ -74,6 +74,7 @@ fn small_messages() -> Vec<Envelope<'static>> {
             message: Message::Estimate(Estimate {
                 psi: Psi::new([0.01, -0.02, 0.7], [f32::MIN_POSITIVE, -0.0, 1.0e-30]),
                 fitness: 0.875,
+                camera_fitness: [0.75, 1.0],
                 generation: 42,
                 capture_time_us: 0,
                 status: evorec_core::status::Status::Lost,
@@ -179,6 +180,7 @@ fn nan_bits_cross_unchanged() {
     let env = Envelope::bare(Message::Estimate(Estimate {
         psi: Psi::new([odd_nan, 0.0, 0.0], [0.0; 3]),
         fitness: f32::from_bits(0xFFA0_0001),
+        camera_fitness: [f32::from_bits(0x7FC0_0002), -0.0],
         generation: 1,
         capture_time_us: 0,
         status: evorec_core::status::Status::Searching,
@@ -189,6 +191,7 @@ fn nan_bits_cross_unchanged() {
     let Message::Estimate(e) = back.message else { panic!("not an estimate") };
     assert_eq!(e.psi.0[0].to_bits(), 0x7FC0_1234);
     assert_eq!(e.fitness.to_bits(), 0xFFA0_0001);
+    assert_eq!(e.camera_fitness.map(f32::to_bits), [0x7FC0_0002, (-0.0f32).to_bits()]);
     assert_eq!(e.target_measurement.0[1].to_bits(), 0xFF80_0007);
 }
 
@@ -369,6 +372,7 @@ mod prop {
                 message: Message::Estimate(Estimate {
                     psi: Psi(psi),
                     fitness,
+                    camera_fitness: [fitness, fitness],
                     generation,
                     capture_time_us: 0,
                     status: evorec_core::status::Status::Tracking,

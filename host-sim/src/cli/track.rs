@@ -153,6 +153,9 @@ fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<
     let output = track::run(&seq, opts)?;
     let ev = track::output::evaluate(&seq, &output);
     track::output::write_all(&seq, &output, &ev, out)?;
+    if let Some(w) = ev.summary.out_of_step_warning() {
+        log::warn!("{}: {w}", dir.display());
+    }
     if opts.progress {
         print_track(&ev.summary, t0, out);
     }
@@ -174,6 +177,9 @@ fn track_bag(
     let b = bag::load(path, &rig, bag_opts, path)?;
     b.report.log();
     let ev = bag::track::track_and_write(&b, opts, out)?;
+    if let Some(w) = ev.summary.out_of_step_warning() {
+        log::warn!("{}: {w}", path.display());
+    }
     // `opts.progress` is off with -q: nothing but errors then.
     if opts.progress {
         println!("{}", b.report.describe());

@@ -173,6 +173,8 @@ pub struct TrackedFrame {
     pub estimate: Psi,
     /// Its fitness.
     pub fitness: f32,
+    /// The best pose's fitness in the left and the right camera (`Estimate::camera_fitness`).
+    pub camera_fitness: [f32; 2],
     /// The tracker's status after this frame.
     pub status: Status,
     /// The pose the tracker's target filter is fed with ([`Estimate::target_measurement`]).
@@ -288,6 +290,7 @@ impl<const DOF: usize, F: SensorPixels> CameraController<DOF> for SequenceBoard<
                 qd,
                 estimate: estimate.psi,
                 fitness: estimate.fitness,
+                camera_fitness: estimate.camera_fitness,
                 status: estimate.status,
                 target_measurement: estimate.target_measurement,
             });

@@ -9,6 +9,7 @@
 
 use evorec_core::hue::degrees_to_units;
 use evorec_core::pose::Psi;
+use evorec_core::status::Status;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
@@ -135,6 +136,42 @@ impl Rms {
     }
 }
 
+/// How often `tracking` was wrong over a run: the frames reported as tracking whose estimate
+/// is not [`FrameError::within`] the truth (more than 10 mm or 5° off, modulo the colour
+/// symmetry). In `evorec run`'s and `evorec track`'s `summary.json` (with ground truth) and in
+/// `evorec paper --seeds`' per-seed table.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct WrongTracking {
+    /// Frames reported as tracking.
+    pub tracking_frames: usize,
+    /// Of those, the frames whose estimate is not within 10 mm and 5° of the truth.
+    pub tracking_wrong_frames: usize,
+    /// `tracking_wrong_frames / tracking_frames` (0 without tracking frames).
+    pub tracking_wrong_fraction: f64,
+    /// The longest run of consecutive frames reported as tracking and wrong.
+    pub longest_wrong_tracking_frames: usize,
+}
+
+impl WrongTracking {
+    /// Of the frames' statuses, each with whether its estimate is within the truth.
+    pub fn of(frames: impl IntoIterator<Item = (Status, bool)>) -> Self {
+        let mut w = Self::default();
+        let mut run = 0usize;
+        for (status, within) in frames {
+            let tracking = status == Status::Tracking;
+            let wrong = tracking && !within;
+            w.tracking_frames += usize::from(tracking);
+            w.tracking_wrong_frames += usize::from(wrong);
+            run = if wrong { run + 1 } else { 0 };
+            w.longest_wrong_tracking_frames = w.longest_wrong_tracking_frames.max(run);
+        }
+        if w.tracking_frames > 0 {
+            w.tracking_wrong_fraction = w.tracking_wrong_frames as f64 / w.tracking_frames as f64;
+        }
+        w
+    }
+}
+
 /// The first position from which every error is [`FrameError::within`] to the end.
 pub fn settled_from(errors: &[FrameError]) -> Option<usize> {
     let last_bad = errors.iter().rposition(|e| !e.within());
@@ -186,6 +223,15 @@ mod tests {
         // Without the symmetry the same estimate is 180° off.
         let (e, _) = frame_error(&est, &truth, &all[..1]);
         assert!((e.rot_deg - 180.0).abs() < 1e-3, "{e:?}");
+    }
+
+    #[test]
+    fn wrong_tracking_counts_tracking_frames_off_the_truth() {
+        let (t, s, l) = (Status::Tracking, Status::Searching, Status::Lost);
+        let w = WrongTracking::of([(s, false), (t, true), (t, false), (t, false), (l, false), (t, false), (t, true)]);
+        assert_eq!((w.tracking_frames, w.tracking_wrong_frames, w.longest_wrong_tracking_frames), (5, 3, 2));
+        assert!((w.tracking_wrong_fraction - 0.6).abs() < 1e-12);
+        assert_eq!(WrongTracking::of([(s, false), (l, true)]), WrongTracking::default());
     }
 
     #[test]

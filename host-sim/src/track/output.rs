@@ -14,7 +14,7 @@ use nalgebra::{Isometry3, Point3};
 use serde::Serialize;
 
 use super::TrackOutput;
-use super::eval::{self, FrameError, Rms};
+use super::eval::{self, FrameError, Rms, WrongTracking};
 use crate::render;
 use crate::sequence::Sequence;
 
@@ -51,8 +51,20 @@ pub struct TrackSummary {
     pub first_tracking_frame: Option<u64>,
     /// Fraction of the frames reported as tracking.
     pub tracking_fraction: f64,
+    /// Frames in which the best pose fits one camera and not the other: its better camera
+    /// scores at least [`SEEN_FITNESS`] and its worse camera below
+    /// [`MISMATCH_FITNESS`] of the expected
+    /// fitness (the colour model's, at the end of the run). Left and right images out of step
+    /// give many; a pair in step, none once the block is found.
+    pub camera_mismatch_frames: usize,
+    /// `camera_mismatch_frames / frames`.
+    pub camera_mismatch_fraction: f64,
     /// Errors over the frames from `within_from_frame` on.
     pub after_within: Option<Rms>,
+    /// How often `tracking` was wrong, over the frames with ground truth (flattened into the
+    /// top level; absent without ground truth).
+    #[serde(flatten)]
+    pub wrong_tracking: Option<WrongTracking>,
     /// The half turns errors are taken modulo (the block's colour symmetry).
     pub symmetries: Vec<&'static str>,
     /// Frames per second of the tracking loop, PNG decoding included.
@@ -67,6 +79,42 @@ pub struct TrackSummary {
     /// before that point only (absent otherwise).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub partial: bool,
+}
+
+/// The better camera's fitness from which the block counts as seen ([`TrackSummary::camera_mismatch_frames`]).
+pub const SEEN_FITNESS: f32 = 0.5;
+
+/// The share of [`TrackSummary::camera_mismatch_frames`] from which `evorec track` warns that
+/// the left and right images look out of step.
+pub const OUT_OF_STEP_WARN_FRACTION: f64 = 0.2;
+
+impl TrackSummary {
+    /// The warning of a run whose left and right images look out of step (at least
+    /// [`OUT_OF_STEP_WARN_FRACTION`] of the frames fit one camera and not the other).
+    pub fn out_of_step_warning(&self) -> Option<String> {
+        (self.camera_mismatch_fraction >= OUT_OF_STEP_WARN_FRACTION).then(|| {
+            format!(
+                "left and right images look out of step: in {} of {} frames ({:.0} %) the best pose fits one camera \
+                 and not the other (a constant offset or a dropped frame between the left and right images, or the \
+                 block hidden from one camera); such frames are never reported as tracking",
+                self.camera_mismatch_frames,
+                self.frames,
+                100.0 * self.camera_mismatch_fraction
+            )
+        })
+    }
+}
+
+/// A camera scoring below this share of the expected fitness while the other fits
+/// ([`SEEN_FITNESS`]) does not see the pose the other sees.
+const MISMATCH_FITNESS: f32 = 0.75;
+
+/// Frames of `out` whose best pose fits one camera and not the other
+/// ([`TrackSummary::camera_mismatch_frames`]).
+fn camera_mismatch_frames(out: &TrackOutput) -> usize {
+    let floor = MISMATCH_FITNESS * out.colours.expected_fitness();
+    let mismatch = |[l, r]: [f32; 2]| l.max(r) >= SEEN_FITNESS && (l.min(r) < floor || l.min(r).is_nan());
+    out.tracked.iter().filter(|t| mismatch(t.camera_fitness)).count()
 }
 
 /// One `trace.csv` row's truth (aligned modulo symmetry) and the errors, per frame.
@@ -84,11 +132,13 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
     let syms = eval::colour_symmetries(&seq.block.face_hues_deg);
     let mut truth = Vec::with_capacity(out.tracked.len());
     let mut errors = Vec::new();
+    let mut checked = Vec::new();
     for t in &out.tracked {
         match seq.groundtruth.as_ref().and_then(|g| g.get(t.i)) {
             Some(gt) => {
                 let (e, aligned) = eval::frame_error(&t.estimate, gt, &syms);
                 errors.push(e);
+                checked.push((t.status, e.within()));
                 truth.push(Some(aligned));
             }
             None => truth.push(None),
@@ -96,6 +146,7 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
     }
     let n = out.tracked.len().max(1) as f64;
     let settled = eval::settled_from(&errors);
+    let mismatch = camera_mismatch_frames(out);
     let settled_frame = settled.map(|k| &seq.frames[out.tracked[k].i]);
     let summary = TrackSummary {
         sequence: seq.name(),
@@ -112,7 +163,10 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
         within_from_t_s: settled_frame.map(|f| f.t_s),
         first_tracking_frame: out.tracked.iter().find(|t| t.status == Status::Tracking).map(|t| seq.frames[t.i].index),
         tracking_fraction: out.tracked.iter().filter(|t| t.status == Status::Tracking).count() as f64 / n,
+        camera_mismatch_frames: mismatch,
+        camera_mismatch_fraction: mismatch as f64 / n,
         after_within: settled.and_then(|k| Rms::of(&errors[k..])),
+        wrong_tracking: (!checked.is_empty()).then(|| WrongTracking::of(checked)),
         symmetries: syms.iter().map(|(n, _)| *n).collect(),
         frames_per_s: out.tracked.len() as f64 / out.seconds.max(1e-9),
         evorec_version: env!("CARGO_PKG_VERSION"),

@@ -126,7 +126,8 @@ fn table_rows(text: &str) -> Vec<(String, String)> {
 fn results_board() -> (Vec<(String, String)>, String) {
     let results = read(RESULTS);
     let stamp = stamp(&results).unwrap_or_else(|| panic!("{RESULTS} names the commit of its runs"));
-    let (_, section) = results.split_once("## Board timing").unwrap_or_else(|| panic!("{RESULTS} has a board timing section"));
+    let (_, section) =
+        results.split_once("## Board timing").unwrap_or_else(|| panic!("{RESULTS} has a board timing section"));
     let section = section.split("\n## ").next().unwrap_or_default();
     let rows = table_rows(section);
     assert!(rows.len() >= 6, "{RESULTS}: the board timing table has {} rows, at least 6", rows.len());
@@ -161,8 +162,7 @@ fn numbers(text: &str) -> Vec<(String, usize)> {
 
 /// The unsigned integer that starts `text` after any `(` and spaces, if any.
 fn leading_number(text: &str) -> Option<u64> {
-    let digits: String =
-        text.trim_start_matches(['(', ' ']).chars().take_while(char::is_ascii_digit).collect();
+    let digits: String = text.trim_start_matches(['(', ' ']).chars().take_while(char::is_ascii_digit).collect();
     digits.parse().ok()
 }
 

@@ -31,9 +31,10 @@
 //!   (the arm moved since capture) and runs the core's `Servo` on it, only while the tracker
 //!   reports `Status::Tracking` and the estimate is fresh; otherwise the servo brakes to a stop
 //!   within its limits.
-//! - **Bounded work per frame.** One copy of a fixed size and one generation, whose work is
-//!   fixed by the population capacity and the sample rows (see the crate documentation); the
-//!   interrupt's work is fixed too (a ring insert, two forward kinematics, one servo step).
+//! - **Bounded work per frame.** One copy of a fixed size and `generations_per_frame`
+//!   generations (the default tuning's 2), whose work is fixed by the population capacity and
+//!   the sample rows (see the crate documentation); the interrupt's work is fixed too (a ring
+//!   insert, two forward kinematics, one servo step).
 //!
 //! # Porting
 //!
@@ -455,7 +456,7 @@ mod firmware {
 
         let mut camera = CameraBoard::new(capture);
         loop {
-            // One generation per frame pair, until the board fails.
+            // `generations_per_frame` generations per frame pair, until the board fails.
             // PORT: log the error, count it, reset the cameras on repeated timeouts.
             if board::run(&mut camera, tracker, left, right, u32::MAX).is_err() {
                 // Stop servoing on an old estimate, then capture again; the tracker keeps its

@@ -3,10 +3,11 @@
 //! On-line evolutionary 3D pose recognition for hand-eye stereo cameras, after
 //! *"On-line Stable Evolutionary Recognition by Quaternion Motion-Feedforward Compensation"*:
 //! a genetic algorithm searches the pose `ψ = [t; ε]` of a known coloured block by projecting a
-//! 3D surface-strips model into both hue images; **one** generation runs per new frame pair
-//! (the "1-step GA"), so recognition converges over the frame sequence, and the apparent
-//! motion caused by the arm carrying the cameras is fed forward from the joint state
-//! (`ψ̇ = J_m(q) q̇`).
+//! 3D surface-strips model into both hue images; the paper runs **one** generation per new
+//! frame pair (the "1-step GA"), this crate
+//! [`Tuning::generations_per_frame`](tuning::Tuning::generations_per_frame) of them (default
+//! 2), so recognition converges over the frame sequence, and the apparent motion caused by the
+//! arm carrying the cameras is fed forward from the joint state (`ψ̇ = J_m(q) q̇`).
 //!
 //! `#![no_std]`, no allocation, no `unsafe`; all storage is sized by const generics.
 //!
@@ -22,10 +23,10 @@
 //!   `J_n` term) and the hand-over of a pose to a later time; [`servo`]: a position-based
 //!   visual servo law on the handed-over pose.
 //! - [`status`]: searching / tracking / lost; [`acquire`]: the colour-blob pose seed.
-//! - [`tracker`]: one generation per frame pair (the paper's 1-step GA), or up to
-//!   [`MAX_GENERATIONS_PER_FRAME`](config::MAX_GENERATIONS_PER_FRAME) where the frame period
-//!   allows; [`board`]: the camera-controller trait and
-//!   the generic loop; [`synth`]: an exact hue rasterizer for tests and bring-up.
+//! - [`tracker`]: `generations_per_frame` generations per frame pair (default 2; 1 is the
+//!   paper's 1-step GA), up to [`MAX_GENERATIONS_PER_FRAME`](config::MAX_GENERATIONS_PER_FRAME)
+//!   where the frame period allows; [`board`]: the camera-controller trait and the generic loop;
+//!   [`synth`]: an exact hue rasterizer for tests and bring-up.
 //!
 //! ## Work per generation
 //! Per individual and camera the fitness walks exactly

@@ -116,8 +116,8 @@ pub struct Tuning {
 
 impl Tuning {
     /// Every default: motion feedforward (`ff`), [`DEFAULT_HUE_TOLERANCE`], `max_dt_s` 0.5 s,
-    /// two generations per frame (the most whose worst case fits a 33 ms frame on the
-    /// Cortex-M4: about 12 ms each with flash wait states), [`GaParams::DEFAULT`], [`AcquireConfig::DEFAULT`], [`StatusConfig::DEFAULT`],
+    /// two generations per frame (the most whose worst case with flash wait states fits a 33 ms
+    /// frame on the Cortex-M4, `docs/results.md`), [`GaParams::DEFAULT`], [`AcquireConfig::DEFAULT`], [`StatusConfig::DEFAULT`],
     /// [`TargetFilterParams::DEFAULT`].
     pub const DEFAULT: Tuning = Tuning {
         feedforward: Feedforward::On,

@@ -1,10 +1,11 @@
 //! The evorec firmware (thumbv7em-none-eabihf, QEMU `mps2-an386`).
 //!
 //! At start the firmware opens the link FIFOs (see `evorec_firmware::rt`) and serves the host
-//! (`evorec_firmware::link_board::serve`): `CONFIG` → tracker, one generation per `FRAME`
-//! through the core's `board::run`, `END` → `DONE` with the stack high-water mark, then exits
-//! QEMU with success. Without a host (no FIFOs in QEMU's working directory) it tracks 30
-//! on-board synthetic frames instead, so `cargo run --release` shows it working.
+//! (`evorec_firmware::link_board::serve`): `CONFIG` → tracker, the configured
+//! `generations_per_frame` generations (default 2) per `FRAME` through the core's `board::run`,
+//! `END` → `DONE` with the stack high-water mark, then exits QEMU with success. Without a host
+//! (no FIFOs in QEMU's working directory) it tracks 30 on-board synthetic frames instead, so
+//! `cargo run --release` shows it working.
 //!
 //! Built for the host, this binary only explains how to build the real one.
 #![cfg_attr(target_os = "none", no_std)]

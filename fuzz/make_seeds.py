@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes the hand-made seed inputs of the fuzz corpora (fuzz/corpus/<target>/seed-*).
 
-Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 11: 24-byte header,
+Link messages follow hil-stubs/src/protocol/mod.rs (protocol version 12: 24-byte header,
 payload, CRC-32/ISO-HDLC trailer = zlib.crc32, the whole COBS-framed between two zero bytes;
 frames carry RGB565 images, 2 bytes a pixel). Run from anywhere: python3 fuzz/make_seeds.py
 """
@@ -11,7 +11,7 @@ import struct
 import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-VERSION = 11
+VERSION = 12
 TABLE = os.path.join(HERE, "..", "core", "src", "tuning", "table.rs")
 
 
@@ -130,7 +130,7 @@ def main():
     damaged[60] ^= 0x10
     write("firmware_serve", "damaged", config + bytes(damaged[: len(damaged) - 40]) + frames + end)
     replies = msg(5, struct.pack("<I", 0))
-    replies += msg(3, f32s(0.01, -0.02, 0.7, 0.05, 0.1, -0.03, 0.9) + struct.pack("<IB", 1, 1) + f32s(0.011, -0.02, 0.7, 0.05, 0.1, -0.03), seq=1, time_us=33_333)
+    replies += msg(3, f32s(0.01, -0.02, 0.7, 0.05, 0.1, -0.03, 0.9, 0.88, 0.92) + struct.pack("<IB", 1, 1) + f32s(0.011, -0.02, 0.7, 0.05, 0.1, -0.03), seq=1, time_us=33_333)
     replies += msg(6, seq=2, time_us=66_666)
     replies += msg(7, struct.pack("<13I", 2, 1, 1, 13_892, 90_000, 1, 0, 0, 2, 0, 1, 0, 0))
     write("host_replies", "conversation", replies)

@@ -171,7 +171,7 @@ fn payload_sizes_match_the_constants() {
     assert_eq!(unframe(&encode(&config)).len(), HEADER_LEN + CONFIG_LEN + CRC_LEN);
     assert_eq!(raw_len(&config.message), HEADER_LEN + CONFIG_LEN + CRC_LEN);
     assert_eq!(FRAME_FIXED_LEN, 68);
-    assert_eq!(ESTIMATE_LEN, 57);
+    assert_eq!(ESTIMATE_LEN, 65);
 }
 
 #[test]

@@ -245,6 +245,9 @@ pub fn trace_header() -> Vec<String> {
             h.push(format!("{prefix}{c}"));
         }
     }
+    // The estimate's fitness per camera.
+    h.push("F_left".to_owned());
+    h.push("F_right".to_owned());
     h
 }
 
@@ -271,7 +274,7 @@ fn write_trace_to(out: &mut dyn Write, rows: &[TraceRow]) -> Result<()> {
 
 /// The fields of one row of `trace.csv` (see [`trace_header`]).
 pub fn trace_record(r: &TraceRow) -> Vec<String> {
-    let mut rec: Vec<String> = Vec::with_capacity(36 + HANDOVER_COLUMNS);
+    let mut rec: Vec<String> = Vec::with_capacity(36 + HANDOVER_COLUMNS + 2);
     rec.push(format!("{:.3}", r.t));
     rec.extend(r.q.iter().chain(r.qd.iter()).map(|v| format!("{v:.6}")));
     for psi in [&r.truth, &r.estimate] {
@@ -295,6 +298,7 @@ pub fn trace_record(r: &TraceRow) -> Vec<String> {
         }
         None => rec.extend(std::iter::repeat_n(String::new(), HANDOVER_COLUMNS)),
     }
+    rec.extend(r.camera_fitness.iter().map(|f| format!("{f:.5}")));
     rec
 }
 

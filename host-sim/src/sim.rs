@@ -268,6 +268,8 @@ pub struct TraceRow {
     pub estimate: Psi,
     /// Its fitness.
     pub fitness: f32,
+    /// Its fitness in the left and the right camera (`fitness` is their mean).
+    pub camera_fitness: [f32; 2],
     /// The tracker's status.
     pub status: Status,
     /// The block was hidden (occluded or removed) in this frame.
@@ -517,6 +519,7 @@ impl<A: ArmController> CameraController<DOF> for SimBoard<A> {
             truth,
             estimate: estimate.psi,
             fitness: estimate.fitness,
+            camera_fitness: estimate.camera_fitness,
             status: estimate.status,
             hidden,
             handover,

@@ -73,8 +73,9 @@ pub enum TargetPath {
 
 /// A conveyor along the unit vector `direction` (world) shuttling back and forth over
 /// `travel_m`: straight runs at `speed_m_s`, reversals with half-cosine velocity profiles of
-/// peak acceleration `accel_m_s2` (a real shuttle's finite deceleration at each end). Its own
-/// clock starts at rest at the `−direction` end.
+/// peak acceleration `accel_m_s2` (a real shuttle's finite deceleration at each end), and a
+/// rest of `dwell_s` at each end (a belt that stops and starts again). Its own clock starts at
+/// rest at the `−direction` end.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Conveyor {
     /// Direction of travel (world, unit): [`Conveyor::WORLD_Y`] unless configured.
@@ -85,6 +86,8 @@ pub struct Conveyor {
     pub travel_m: f64,
     /// Peak acceleration of the reversals (m/s²).
     pub accel_m_s2: f64,
+    /// Rest at each end before the next run (s).
+    pub dwell_s: f64,
 }
 
 impl Conveyor {
@@ -93,19 +96,19 @@ impl Conveyor {
 
     /// A conveyor along world `y` ([`Conveyor::WORLD_Y`]).
     pub fn along_world_y(speed_m_s: f64, travel_m: f64, accel_m_s2: f64) -> Self {
-        Self { direction: Self::WORLD_Y, speed_m_s, travel_m, accel_m_s2 }
+        Self { direction: Self::WORLD_Y, speed_m_s, travel_m, accel_m_s2, dwell_s: 0.0 }
     }
 
     /// `(t_r, d_r, straight, half)`: duration and distance of a whole reversal's half-cosine
     /// (rest → speed takes `t_r/2` over `d_r`), length of the straight run, and the time from
-    /// one end to the other.
+    /// leaving one end to leaving the other (the rest included).
     fn profile(&self) -> (f64, f64, f64, f64) {
         use std::f64::consts::PI;
         let (v, a) = (self.speed_m_s, self.accel_m_s2);
         let t_r = PI * v / a;
         let d_r = v * t_r / PI;
         let straight = (self.travel_m - 2.0 * d_r).max(0.0);
-        (t_r, d_r, straight, t_r + straight / v)
+        (t_r, d_r, straight, t_r + straight / v + self.dwell_s)
     }
 
     /// Position (relative to the shuttle's middle) and velocity along [`Conveyor::direction`]
@@ -116,6 +119,10 @@ impl Conveyor {
         let v = self.speed_m_s;
         let u = t.rem_euclid(2.0 * half);
         let (s, out) = if u < half { (u, true) } else { (u - half, false) };
+        if s < self.dwell_s {
+            return if out { (-0.5 * self.travel_m, 0.0) } else { (0.5 * self.travel_m, 0.0) };
+        }
+        let s = s - self.dwell_s;
         let (y, vy) = if s < 0.5 * t_r {
             (d_r * (1.0 - (PI * s / t_r).cos()), v * (PI * s / t_r).sin())
         } else if s < 0.5 * t_r + straight / v {
@@ -139,14 +146,14 @@ impl Conveyor {
     /// towards +direction: on a straight run, or at the peak of the reversals' profile when
     /// the travel has none).
     pub fn middle_time(&self) -> f64 {
-        0.5 * self.profile().3
+        self.dwell_s + 0.5 * (self.profile().3 - self.dwell_s)
     }
 
     /// Seconds the conveyor has run at constant speed at its own time `t` (0 while it
     /// accelerates or reverses).
     pub fn steady_for(&self, t: f64) -> f64 {
         let (t_r, _, straight, half) = self.profile();
-        let s = t.rem_euclid(half) - 0.5 * t_r;
+        let s = t.rem_euclid(half) - self.dwell_s - 0.5 * t_r;
         if s >= 0.0 && s < straight / self.speed_m_s { s } else { 0.0 }
     }
 }
@@ -188,6 +195,7 @@ impl TargetPath {
                 speed_m_s: t.conveyor_speed_m_s,
                 travel_m: t.conveyor_travel_m,
                 accel_m_s2: t.conveyor_accel_m_s2,
+                dwell_s: t.conveyor_dwell_s,
             };
             let start_s = match t.conveyor_start {
                 ConveyorStart::Rest => 0.0,
@@ -334,6 +342,35 @@ mod tests {
         let c = Conveyor { direction: -slant, ..Conveyor::along_world_y(0.2, 0.05, 10.0) };
         check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: c.middle_time() });
         check_path_twist(&TargetPath::random(7, 0.05, 10f64.to_radians(), 1.0));
+        // A belt that stops at each end and starts again.
+        let c = Conveyor { dwell_s: 0.7, ..Conveyor::along_world_y(0.2, 0.3, 1.6) };
+        check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: 0.0 });
+        check_path_twist(&TargetPath::Conveyor { conveyor: c, start_s: c.middle_time() });
+    }
+
+    #[test]
+    fn conveyor_with_a_dwell_rests_at_each_end_then_starts_within_its_acceleration() {
+        // 0.2 m/s reached within 0.2 s (peak 1.6 m/s², half-cosine of π·0.2/1.6 = 0.39 s).
+        let c = Conveyor { dwell_s: 1.0, ..Conveyor::along_world_y(0.2, 0.3, 1.6) };
+        let path = TargetPath::Conveyor { conveyor: c, start_s: 0.0 };
+        let (mut rest, mut lo, mut hi) = (0usize, 0.0f64, 0.0f64);
+        let dt = 1e-3;
+        // Two round trips: four rests of 1 s each.
+        let period = 2.0 * c.profile().3;
+        let n = (2.0 * period / dt) as usize;
+        for k in 0..n {
+            let o = path.offset(k as f64 * dt);
+            rest += usize::from(o.velocity.y == 0.0);
+            lo = lo.min(o.position.y);
+            hi = hi.max(o.position.y);
+        }
+        assert!((rest as f64 * dt - 4.0).abs() < 0.01, "rested {} s", rest as f64 * dt);
+        assert!((lo + 0.15).abs() < 1e-9 && (hi - 0.15).abs() < 1e-6, "{lo}..{hi}");
+        let o = path.offset(1.0 + 0.2);
+        assert!(o.velocity.y > 0.19, "0.2 s after the start: {} m/s", o.velocity.y);
+        // The middle of the travel is passed at full speed.
+        let m = TargetPath::Conveyor { conveyor: c, start_s: c.middle_time() }.offset(0.0);
+        assert!(m.position.y.abs() < 1e-9 && (m.velocity.y - 0.2).abs() < 1e-9, "{m:?}");
     }
 
     #[test]

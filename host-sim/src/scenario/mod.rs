@@ -272,6 +272,10 @@ pub struct TargetConfig {
     pub conveyor_travel_m: f64,
     /// Peak acceleration of the conveyor's reversals (m/s²).
     pub conveyor_accel_m_s2: f64,
+    /// Rest of the conveyor at each end of its travel (s): a belt that stops and starts
+    /// again; written only when not 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub conveyor_dwell_s: f64,
     /// The conveyor's direction of travel (unit, in [`conveyor_direction_frame`]); written
     /// only when not world `y`, so older scenarios' outputs stay as they were.
     ///
@@ -305,6 +309,7 @@ impl Default for TargetConfig {
             conveyor_speed_m_s: 0.0,
             conveyor_travel_m: 0.2,
             conveyor_accel_m_s2: 0.5,
+            conveyor_dwell_s: 0.0,
             conveyor_direction: WORLD_Y,
             conveyor_direction_frame: ConveyorFrame::World,
             conveyor_start: ConveyorStart::Rest,
@@ -317,6 +322,10 @@ impl Default for TargetConfig {
 
 /// The default `[target] conveyor_direction`: world `y`.
 pub const WORLD_Y: [f64; 3] = [0.0, 1.0, 0.0];
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
 
 fn is_world_y(d: &[f64; 3]) -> bool {
     *d == WORLD_Y
@@ -631,6 +640,7 @@ fn parse_target(s: &Section<'_>) -> Result<TargetConfig> {
         "conveyor_speed_m_s",
         "conveyor_travel_m",
         "conveyor_accel_m_s2",
+        "conveyor_dwell_s",
         "conveyor_direction",
         "conveyor_direction_frame",
         "conveyor_start",
@@ -691,6 +701,7 @@ fn parse_target_path(s: &Section<'_>, base: TargetConfig) -> Result<TargetConfig
             ),
         ));
     }
+    let conveyor_dwell_s = s.float_in("conveyor_dwell_s", d.conveyor_dwell_s, Bound::Closed(0.0), 60.0)?;
     let random_amplitude_m = s.float_in("random_amplitude_m", d.random_amplitude_m, Bound::Closed(0.0), 0.1)?;
     let random_amplitude_deg = s.float_in("random_amplitude_deg", d.random_amplitude_deg, Bound::Closed(0.0), 30.0)?;
     let random_omega_rad_s = s.float_in("random_omega_rad_s", d.random_omega_rad_s, Bound::Open(0.0), 2.0)?;
@@ -726,6 +737,7 @@ fn parse_target_path(s: &Section<'_>, base: TargetConfig) -> Result<TargetConfig
         conveyor_speed_m_s,
         conveyor_travel_m,
         conveyor_accel_m_s2,
+        conveyor_dwell_s,
         conveyor_direction,
         conveyor_direction_frame,
         conveyor_start,

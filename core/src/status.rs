@@ -17,7 +17,8 @@
 //!       │ lost_generations_to_search in Lost                    │   │ F ≥ acquire_fitness for
 //!       │                                                       ▼   │ confirm_generations
 //!       └──────────────────────────────────────────────────── Lost ─┘
-//!                  F < lose_fitness for lose_generations in a row (from Tracking)
+//!        F < lose_fitness for lose_generations in a row, or F < acquire_fitness for
+//!        DOUBT_GENERATIONS in a row (from Tracking)
 //! ```
 //!
 //! `F` is the fraction of the model's inner points that see their face's hue, minus the
@@ -25,7 +26,9 @@
 //! scores above 0, so with the default `lose_generations = 1` the very first frame without
 //! the block is reported as lost. The default thresholds are far apart (0.75 and 0.4): a
 //! tracked block scores 0.9–1.0, a pose a few millimetres off still above 0.75, and a frame
-//! with the block gone scores 0.
+//! with the block gone scores 0. A lock on a wrong pose scores between them (most often
+//! 0.6–0.8), so a tracked block that stays below `acquire_fitness` for [`DOUBT_GENERATIONS`]
+//! frames is no longer confirmed and reported lost.
 //!
 //! Bounded work: the update is a few comparisons per generation.
 
@@ -79,6 +82,15 @@ impl core::fmt::Display for Status {
     }
 }
 
+/// Status decisions (frames) in a row below [`StatusConfig::acquire_fitness`] after which a
+/// tracked block counts as lost even though it stays above [`StatusConfig::lose_fitness`]: a
+/// third of a second at 30 frames/s. A pose that no longer meets the acquisition's own bar for
+/// that long is no longer confirmed: a lock on a wrong pose (most often at a wrong depth, where
+/// part of the model still sees the block's colours) scores between the two thresholds for as
+/// long as it lasts, while the right pose falls below the acquisition's bar only for a few
+/// frames at a time (a sudden start or stop, a pose the GA has not caught up with yet).
+pub const DOUBT_GENERATIONS: u16 = 10;
+
 /// Thresholds of the status decision; [`StatusConfig::DEFAULT`] documents the defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StatusConfig {
@@ -122,6 +134,8 @@ pub struct StatusMonitor {
     good: u16,
     /// Generations in a row below `lose_fitness`.
     bad: u16,
+    /// Generations in a row below `acquire_fitness`.
+    doubt: u16,
     /// Generations since the status became `Lost`.
     lost_for: u16,
 }
@@ -129,7 +143,7 @@ pub struct StatusMonitor {
 impl StatusMonitor {
     /// A monitor in `status` with cleared counters.
     pub fn new(status: Status) -> Self {
-        Self { status, good: 0, bad: 0, lost_for: 0 }
+        Self { status, good: 0, bad: 0, doubt: 0, lost_for: 0 }
     }
 
     /// The current status.
@@ -144,8 +158,9 @@ impl StatusMonitor {
         let bad = !(fitness >= config.lose_fitness);
         self.good = if good { self.good.saturating_add(1) } else { 0 };
         self.bad = if bad { self.bad.saturating_add(1) } else { 0 };
+        self.doubt = if good { 0 } else { self.doubt.saturating_add(1) };
         self.status = match self.status {
-            Status::Tracking if self.bad >= config.lose_generations => {
+            Status::Tracking if self.bad >= config.lose_generations || self.doubt >= DOUBT_GENERATIONS => {
                 self.lost_for = 0;
                 Status::Lost
             }
@@ -184,6 +199,28 @@ mod tests {
             assert_eq!(m.update(0.8, &c), Status::Lost);
         }
         assert_eq!(m.update(0.8, &c), Status::Tracking);
+    }
+
+    #[test]
+    fn a_track_below_the_acquisition_bar_for_long_is_lost() {
+        let c = StatusConfig::DEFAULT;
+        let mut m = StatusMonitor::new(Status::Tracking);
+        // Dips below the acquisition's bar shorter than DOUBT_GENERATIONS keep tracking.
+        for _ in 0..3 {
+            for _ in 0..DOUBT_GENERATIONS - 1 {
+                assert_eq!(m.update(0.7, &c), Status::Tracking);
+            }
+            assert_eq!(m.update(0.8, &c), Status::Tracking);
+        }
+        // A lock that stays between the thresholds is lost at the DOUBT_GENERATIONS-th frame.
+        for _ in 0..DOUBT_GENERATIONS - 1 {
+            assert_eq!(m.update(0.6, &c), Status::Tracking);
+        }
+        assert_eq!(m.update(0.6, &c), Status::Lost);
+        // And needs the confirmation to come back.
+        assert_eq!(m.update(0.9, &c), Status::Lost);
+        assert_eq!(m.update(0.9, &c), Status::Lost);
+        assert_eq!(m.update(0.9, &c), Status::Tracking);
     }
 
     #[test]

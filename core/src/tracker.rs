@@ -1,4 +1,5 @@
-//! The tracker: GA state, configuration, and one generation per frame pair.
+//! The tracker: GA state, configuration, and the generations run on each frame pair
+//! (`generations_per_frame`, default 2).
 //!
 //! [`Tracker::step`] validates its input first and only then touches its state, so an
 //! invalid frame, joint sample or time step returns a [`StepError`] and leaves the population,

@@ -41,11 +41,11 @@ use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 
 /// Position error (mm) within which a pose counts as found: the sequence tracker's
-/// [`WITHIN_POSITION_M`](crate::track::eval::WITHIN_POSITION_M).
-pub const ACQUIRED_MM: f64 = crate::track::eval::WITHIN_POSITION_M * 1e3;
+/// [`WITHIN_POSITION_M`](crate::truth::WITHIN_POSITION_M).
+pub const ACQUIRED_MM: f64 = crate::truth::WITHIN_POSITION_M * 1e3;
 /// Orientation error (degrees, modulo the colour symmetry) within which a pose counts as found:
-/// [`WITHIN_ROTATION_DEG`](crate::track::eval::WITHIN_ROTATION_DEG).
-pub const ACQUIRED_DEG: f64 = crate::track::eval::WITHIN_ROTATION_DEG;
+/// [`WITHIN_ROTATION_DEG`](crate::truth::WITHIN_ROTATION_DEG).
+pub const ACQUIRED_DEG: f64 = crate::truth::WITHIN_ROTATION_DEG;
 /// Consecutive frames within both errors that make a pose acquired.
 pub const ACQUIRED_FRAMES: usize = 30;
 /// Frames within which an unknown start should be acquired (target ≥ 95 %).

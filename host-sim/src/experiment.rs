@@ -10,13 +10,13 @@ use evorec_core::config::{DEFAULT_GRID, PA10_DOF};
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 use evorec_core::tracker::{ConfigError, StepError, Tracker, TrackerConfig};
-use nalgebra::{Isometry3, UnitQuaternion};
 use serde::Serialize;
 
 use crate::occlusion::Initial;
 use crate::scenario::{HOST_POPULATION_CAPACITY, Scenario};
 use crate::sim::{self, Handover, SimBoard, TraceRow, World};
-use crate::track::eval::{self, WrongTracking};
+use crate::truth::{self as eval, WrongTracking};
+pub use crate::truth::{RotationError, isometry_of, rms_columns};
 
 /// The tracker the simulator runs: PA-10, the default population capacity (the size in use is
 /// the scenario's `[tracker] ga.population`) and sample rows.
@@ -181,52 +181,14 @@ impl StatusCounts {
     }
 }
 
-/// Root mean square of each column of `rows` (`None` for no rows): the one RMS of the
-/// simulator's and the sequence tracker's summaries.
-pub fn rms_columns<const N: usize>(rows: impl IntoIterator<Item = [f64; N]>) -> Option<[f64; N]> {
-    let mut sq = [0.0f64; N];
-    let mut n = 0usize;
-    for row in rows {
-        for (acc, d) in sq.iter_mut().zip(row) {
-            *acc += d * d;
-        }
-        n += 1;
-    }
-    (n > 0).then(|| sq.map(|s| (s / n as f64).sqrt()))
-}
-
-/// The rotation error of a run: RMS and largest angle (degrees) between estimate and truth,
-/// in `evorec track`'s, `run`'s and `hil`'s `summary.json`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct RotationError {
-    /// RMS rotation error (degrees).
-    pub rms_rot_deg: f64,
-    /// Largest rotation error (degrees).
-    pub max_rot_deg: f64,
-}
-
+/// A simulated run's rotation error.
 impl RotationError {
-    /// Of the per-frame rotation errors `degrees` (`None` when empty).
-    pub fn of(degrees: impl IntoIterator<Item = f64> + Clone) -> Option<Self> {
-        let [rms] = rms_columns(degrees.clone().into_iter().map(|d| [d]))?;
-        Some(Self { rms_rot_deg: rms, max_rot_deg: degrees.into_iter().fold(0.0, f64::max) })
-    }
-
     /// Of a simulated run: each frame's estimate against its true pose (no symmetry: as the
     /// run's other errors).
     pub fn of_run(rows: &[TraceRow]) -> Option<Self> {
         let angle = |r: &TraceRow| isometry_of(&r.estimate).rotation.angle_to(&isometry_of(&r.truth).rotation);
         Self::of(rows.iter().map(|r| angle(r).to_degrees()))
     }
-}
-
-/// The pose of an estimate (f64).
-pub fn isometry_of(psi: &Psi) -> Isometry3<f64> {
-    let t = psi.translation().cast::<f64>();
-    let e = psi.eps().cast::<f64>();
-    let w = (1.0 - e.norm_squared()).max(0.0).sqrt();
-    let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, e.x, e.y, e.z));
-    Isometry3::from_parts(t.into(), q)
 }
 
 /// RMS errors of one pose series against a truth series.
@@ -370,7 +332,7 @@ impl Summary {
 }
 
 /// How often a run's `tracking` was wrong: each frame's estimate against its true pose by the
-/// sequence tracker's rule ([`crate::track::eval::FrameError::within`], modulo the colour
+/// sequence tracker's rule ([`crate::truth::FrameError::within`], modulo the colour
 /// symmetry of the face hues `face_hues_deg`).
 pub fn wrong_tracking(rows: &[TraceRow], face_hues_deg: &[f64; 6]) -> WrongTracking {
     let syms = eval::colour_symmetries(&face_hues_deg.map(|h| h as f32));

@@ -42,3 +42,4 @@ pub mod target_path;
 pub mod text;
 pub mod timing;
 pub mod track;
+pub mod truth;

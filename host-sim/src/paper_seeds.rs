@@ -12,7 +12,7 @@ use crate::experiment::{self, Accuracy};
 use crate::motion::MotionKind;
 use crate::paper::{Cell, OMEGAS, scenario_of};
 use crate::scenario::{Method, Scenario};
-use crate::track::eval::WrongTracking;
+use crate::truth::WrongTracking;
 
 /// Columns of `cells_A_B.csv`.
 pub const COLUMNS: [&str; 12] = [

@@ -14,7 +14,6 @@
 
 pub mod board;
 pub mod colours;
-pub mod eval;
 pub mod hue_table;
 pub mod output;
 
@@ -39,6 +38,7 @@ use nalgebra::Isometry3;
 use crate::experiment::{Population, SetupError, setup_tracker};
 use crate::sequence::Sequence;
 use crate::sim::search_space;
+pub use crate::truth as eval;
 pub use board::FrameSource;
 use board::{SensorPixels, SequenceBoard, TrackedFrame};
 use evorec_core::image::Rgb565;

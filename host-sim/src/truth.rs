@@ -1,5 +1,7 @@
-//! Accuracy of a tracked sequence against its ground truth, modulo the block's colour
-//! symmetry.
+//! Errors of estimates against the truth, for a simulated run and a recorded sequence alike:
+//! the one RMS ([`rms_columns`]), the rotation error, how often `tracking` was wrong, all
+//! modulo the block's colour symmetry. Uses only the core, so that both the simulator's
+//! experiments and the sequence tracker can use it.
 //!
 //! A half turn about a block axis maps the box onto itself; when it also maps every face onto
 //! a face of the same hue, the two poses give identical images and no tracker can tell them
@@ -13,7 +15,46 @@ use evorec_core::status::Status;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
-pub use crate::experiment::{RotationError, isometry_of};
+/// Root mean square of each column of `rows` (`None` for no rows): the one RMS of the
+/// simulator's and the sequence tracker's summaries.
+pub fn rms_columns<const N: usize>(rows: impl IntoIterator<Item = [f64; N]>) -> Option<[f64; N]> {
+    let mut sq = [0.0f64; N];
+    let mut n = 0usize;
+    for row in rows {
+        for (acc, d) in sq.iter_mut().zip(row) {
+            *acc += d * d;
+        }
+        n += 1;
+    }
+    (n > 0).then(|| sq.map(|s| (s / n as f64).sqrt()))
+}
+
+/// The rotation error of a run: RMS and largest angle (degrees) between estimate and truth,
+/// in `evorec track`'s, `run`'s and `hil`'s `summary.json`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RotationError {
+    /// RMS rotation error (degrees).
+    pub rms_rot_deg: f64,
+    /// Largest rotation error (degrees).
+    pub max_rot_deg: f64,
+}
+
+impl RotationError {
+    /// Of the per-frame rotation errors `degrees` (`None` when empty).
+    pub fn of(degrees: impl IntoIterator<Item = f64> + Clone) -> Option<Self> {
+        let [rms] = rms_columns(degrees.clone().into_iter().map(|d| [d]))?;
+        Some(Self { rms_rot_deg: rms, max_rot_deg: degrees.into_iter().fold(0.0, f64::max) })
+    }
+}
+
+/// The pose of an estimate (f64).
+pub fn isometry_of(psi: &Psi) -> Isometry3<f64> {
+    let t = psi.translation().cast::<f64>();
+    let e = psi.eps().cast::<f64>();
+    let w = (1.0 - e.norm_squared()).max(0.0).sqrt();
+    let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, e.x, e.y, e.z));
+    Isometry3::from_parts(t.into(), q)
+}
 
 /// A frame's estimate stays "within" the truth when its position error is at most this (m)…
 pub const WITHIN_POSITION_M: f64 = 0.010;
@@ -120,7 +161,7 @@ impl Rms {
     /// The RMS of `errors` (`None` when empty).
     pub fn of(errors: &[FrameError]) -> Option<Self> {
         let columns = errors.iter().map(|e| [e.d[0], e.d[1], e.d[2], e.d[3], e.d[4], e.d[5]]);
-        let [x, y, z, e1, e2, e3] = crate::experiment::rms_columns::<6>(columns)?;
+        let [x, y, z, e1, e2, e3] = rms_columns::<6>(columns)?;
         let rot = RotationError::of(errors.iter().map(|e| e.rot_deg))?;
         Some(Self {
             rms_x_mm: x * 1e3,
@@ -196,8 +237,8 @@ mod tests {
         assert!((r.rms_rot_deg - 25.0f64.sqrt()).abs() < 1e-12);
         assert_eq!((r.max_rot_deg, r.frames), (7.0, 2));
         assert_eq!(Rms::of(&[]), None);
-        assert_eq!(crate::experiment::rms_columns([[3.0, -4.0], [-3.0, 4.0]]), Some([3.0, 4.0]));
-        assert_eq!(crate::experiment::rms_columns::<2>([]), None);
+        assert_eq!(rms_columns([[3.0, -4.0], [-3.0, 4.0]]), Some([3.0, 4.0]));
+        assert_eq!(rms_columns::<2>([]), None);
     }
 
     #[test]

@@ -107,7 +107,7 @@ impl TrackSummary {
 
 /// A camera scoring below this share of the expected fitness while the other fits
 /// ([`SEEN_FITNESS`]) does not see the pose the other sees.
-const MISMATCH_FITNESS: f32 = 0.75;
+pub const MISMATCH_FITNESS: f32 = 0.75;
 
 /// Frames of `out` whose best pose fits one camera and not the other
 /// ([`TrackSummary::camera_mismatch_frames`]).

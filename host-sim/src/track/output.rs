@@ -96,7 +96,8 @@ impl TrackSummary {
             format!(
                 "left and right images look out of step: in {} of {} frames ({:.0} %) the best pose fits one camera \
                  and not the other (a constant offset or a dropped frame between the left and right images, or the \
-                 block hidden from one camera); such frames are never reported as tracking",
+                 block hidden from one camera); the status does not check this, so estimates reported as tracking \
+                 on such frames may be wrong",
                 self.camera_mismatch_frames,
                 self.frames,
                 100.0 * self.camera_mismatch_fraction

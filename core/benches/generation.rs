@@ -8,12 +8,12 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use evorec_core::camera::{Distortion, Pinhole, StereoRig};
-use evorec_core::config::{DEFAULT_HUE_TOLERANCE, NO_HUE};
 use evorec_core::fitness::Evaluator;
 use evorec_core::ga::SearchSpace;
 use evorec_core::hue::HueLut;
 use evorec_core::image::HueImage;
 use evorec_core::image::{Rgb565Image, rgb888_to_rgb565};
+use evorec_core::limits::{DEFAULT_HUE_TOLERANCE, NO_HUE};
 use evorec_core::model::{Block, SurfaceStrips};
 use evorec_core::pose::Psi;
 use evorec_core::tracker::{JointSample, StereoFrame, Tracker, TrackerConfig};
@@ -89,7 +89,7 @@ fn benches(c: &mut Criterion) {
     let frame = StereoFrame { left, right };
     let joints =
         JointSample { q: [0.1, 0.5, 0.0, 1.2, 0.0, 0.8, 0.0], qd: [0.1, -0.1, 0.05, 0.2, 0.0, -0.1, 0.1], time_us: 0 };
-    let points = 2 * SurfaceStrips::<{ evorec_core::config::DEFAULT_GRID }>::POINTS_PER_CAMERA;
+    let points = 2 * SurfaceStrips::<{ evorec_core::limits::DEFAULT_GRID }>::POINTS_PER_CAMERA;
     let mut group = c.benchmark_group("generation");
     group.throughput(Throughput::Elements((points * tracker.population().len()) as u64));
     group.bench_function("default_rgb565_ff", |b| {

@@ -56,11 +56,11 @@ mod firmware {
     use critical_section::Mutex;
     use evorec_core::board::{self, CameraController, ErrorKind, ErrorType, FrameInfo};
     use evorec_core::camera::{Pinhole, StereoRig};
-    use evorec_core::config::{DEFAULT_GRID, PA10_DOF, POPULATION_CAPACITY};
     use evorec_core::feedforward::CameraTwist;
     use evorec_core::ga::SearchSpace;
     use evorec_core::image::Rgb565;
     use evorec_core::kinematics::PA10;
+    use evorec_core::limits::{DEFAULT_GRID, PA10_DOF, POPULATION_CAPACITY};
     use evorec_core::model::Block;
     use evorec_core::pose::Psi;
     use evorec_core::servo::{Servo, ServoConfig, ServoInput, ServoLimits};

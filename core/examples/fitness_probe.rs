@@ -9,10 +9,10 @@
 //! six silhouette edges count (the most rows a pose walks).
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, NO_HUE};
 use evorec_core::fitness::Evaluator;
 use evorec_core::hue::HueLut;
 use evorec_core::image::HueImage;
+use evorec_core::limits::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE, NO_HUE};
 use evorec_core::model::{Block, SurfaceStrips};
 use evorec_core::pose::Psi;
 use evorec_core::{quat, synth};

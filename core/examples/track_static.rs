@@ -4,9 +4,9 @@
 //! `cargo run --release -p evorec-core --example track_static`
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::NO_HUE;
 use evorec_core::ga::SearchSpace;
 use evorec_core::image::HueImage;
+use evorec_core::limits::NO_HUE;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};

@@ -25,7 +25,7 @@
 
 use nalgebra::{Isometry3, Matrix3, Point2, Point3, Translation3, UnitQuaternion, Vector3};
 
-use crate::config::{MAX_IMAGE_SIDE, MIN_DEPTH_M};
+use crate::limits::{MAX_IMAGE_SIDE, MIN_DEPTH_M};
 
 /// Why camera parameters were rejected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -38,8 +38,8 @@
 //! per face, and rebuilding the tracking table ([`crate::hue::HueLut::fill_bands`]) a fixed
 //! number of word operations. All integer: host and board agree bit for bit.
 
-use crate::config::{COLOUR_FRAMES, COLOUR_MIN_SAMPLES, HUE_UNITS, MAX_HUE_SHIFT};
 use crate::hue::{Band, HueLut};
+use crate::limits::{COLOUR_FRAMES, COLOUR_MIN_SAMPLES, HUE_UNITS, MAX_HUE_SHIFT};
 use crate::model::FACES;
 
 /// The smallest ratio of the best pose's worse camera's fitness to its better camera's at

@@ -63,12 +63,12 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::camera::{Pinhole, StereoRig};
-use crate::config::{
+use crate::hue::HueLut;
+use crate::image::{Image, PixelFormat};
+use crate::limits::{
     FACE_WEIGHT_ONE, FOLD_INNER_PX, FULL_FACE_PX, FULL_VISIBLE_COS, INNER_INSETS_M, MIN_DEPTH_M, MIN_FACE_PX,
     MIN_VISIBLE_COS, NO_HUE, OUTER_OFFSETS_M, SILHOUETTE_INNER_PX, SILHOUETTE_OUTER_PX,
 };
-use crate::hue::HueLut;
-use crate::image::{Image, PixelFormat};
 use crate::model::{FACES, MAX_OUTER_EDGES, SurfaceStrips};
 use crate::pose::Psi;
 

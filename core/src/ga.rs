@@ -21,7 +21,7 @@
 use nalgebra::Vector3;
 use rand_core::Rng;
 
-use crate::config::DEFAULT_POPULATION;
+use crate::limits::DEFAULT_POPULATION;
 use crate::math;
 use crate::pose::Psi;
 use crate::quat;

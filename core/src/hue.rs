@@ -7,7 +7,7 @@
 //! Images themselves (hue bytes or raw RGB565 sensor pixels, [`HueImage`](crate::image::HueImage))
 //! live in [`crate::image`], which converts pixels with [`rgb_to_hue`].
 
-use crate::config::{HUE_UNITS, MIN_SATURATION, MIN_VALUE, NO_HUE};
+use crate::limits::{HUE_UNITS, MIN_SATURATION, MIN_VALUE, NO_HUE};
 
 /// Converts an 8-bit RGB pixel to a hue byte, with integer arithmetic only (cheap on an MCU).
 ///
@@ -20,7 +20,7 @@ use crate::config::{HUE_UNITS, MIN_SATURATION, MIN_VALUE, NO_HUE};
 ///
 /// # Examples
 /// ```
-/// use evorec_core::{hue::rgb_to_hue, config::NO_HUE};
+/// use evorec_core::{hue::rgb_to_hue, limits::NO_HUE};
 /// assert_eq!(rgb_to_hue(200, 0, 0), 0);     // red, 0°
 /// assert_eq!(rgb_to_hue(0, 200, 0), 60);    // green, 120°
 /// assert_eq!(rgb_to_hue(0, 0, 200), 120);   // blue, 240°

@@ -21,8 +21,8 @@
 use core::fmt::Debug;
 use core::marker::PhantomData;
 
-use crate::config::{MAX_IMAGE_SIDE, NO_HUE};
 use crate::hue::rgb_to_hue;
+use crate::limits::{MAX_IMAGE_SIDE, NO_HUE};
 
 /// How the bytes of an image encode its pixels, and how a pixel becomes a hue byte.
 pub trait PixelFormat: Copy + Debug + Default + PartialEq + Eq + Send + Sync + 'static {
@@ -166,7 +166,7 @@ const fn rgb565_hue_table() -> [u8; 1 << 16] {
 ///
 /// # Examples
 /// ```
-/// use evorec_core::{image::{rgb565_to_hue, rgb888_to_rgb565}, config::NO_HUE};
+/// use evorec_core::{image::{rgb565_to_hue, rgb888_to_rgb565}, limits::NO_HUE};
 /// assert_eq!(rgb565_to_hue(rgb888_to_rgb565(200, 0, 0)), 0);
 /// assert_eq!(rgb565_to_hue(rgb888_to_rgb565(0, 200, 0)), 60);
 /// assert_eq!(rgb565_to_hue(rgb888_to_rgb565(0, 0, 200)), 120);
@@ -197,7 +197,7 @@ const fn hue_rgb565_table() -> [u16; 256] {
     while i < 1 << 16 {
         let (r, g, b) = rgb565_to_rgb888(i as u16);
         let h = rgb_to_hue(r, g, b) as usize;
-        if h < crate::config::HUE_UNITS as usize {
+        if h < crate::limits::HUE_UNITS as usize {
             let (max, min) = (max3(r, g, b) as u32, min3(r, g, b) as u32);
             let s = ((max - min) << 8) | max;
             if s > score[h] {
@@ -225,7 +225,7 @@ const fn min3(a: u8, b: u8, c: u8) -> u8 {
 /// # Examples
 /// ```
 /// use evorec_core::image::{hue_to_rgb565, rgb565_to_hue, RGB565_GREY};
-/// use evorec_core::config::NO_HUE;
+/// use evorec_core::limits::NO_HUE;
 /// for h in 0..180u8 {
 ///     assert_eq!(rgb565_to_hue(hue_to_rgb565(h)), h);
 /// }
@@ -264,7 +264,7 @@ pub fn expand_hue_to_rgb565(buf: &mut [u8], pixels: usize) -> Result<(), ImageEr
     // Back to front: pixel i moves to bytes 2i, 2i+1 ≥ i, so no hue byte is overwritten
     // before it is read.
     for i in (0..pixels).rev() {
-        let h = buf.get(i).copied().unwrap_or(crate::config::NO_HUE);
+        let h = buf.get(i).copied().unwrap_or(crate::limits::NO_HUE);
         if let Some(px) = buf.get_mut(2 * i..2 * i + 2) {
             px.copy_from_slice(&hue_to_rgb565(h).to_le_bytes());
         }
@@ -409,7 +409,7 @@ impl<B: AsRef<[u8]>> Image<B, Rgb565> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::HUE_UNITS;
+    use crate::limits::HUE_UNITS;
 
     #[test]
     fn table_is_rgb_to_hue_of_the_widened_value_everywhere() {

@@ -24,7 +24,7 @@
 //!   visual servo law on the handed-over pose.
 //! - [`status`]: searching / tracking / lost; [`acquire`]: the colour-blob pose seed.
 //! - [`tracker`]: `generations_per_frame` generations per frame pair (default 2; 1 is the
-//!   paper's 1-step GA), up to [`MAX_GENERATIONS_PER_FRAME`](config::MAX_GENERATIONS_PER_FRAME)
+//!   paper's 1-step GA), up to [`MAX_GENERATIONS_PER_FRAME`](limits::MAX_GENERATIONS_PER_FRAME)
 //!   where the frame period allows; [`board`]: the camera-controller trait and the generic loop;
 //!   [`synth`]: an exact hue rasterizer for tests and bring-up.
 //!
@@ -41,7 +41,7 @@
 //! ```
 //! use evorec_core::{camera::{Pinhole, StereoRig}, ga::SearchSpace, model::Block, pose::Psi,
 //!     tracker::{Tracker, TrackerConfig, StereoFrame, JointSample, Feedforward}, image::HueImage,
-//!     synth, config::NO_HUE};
+//!     synth, limits::NO_HUE};
 //! use nalgebra::Isometry3;
 //!
 //! let cam = Pinhole::new_checked(400.0, 400.0, 160.0, 120.0, 320, 240).unwrap();
@@ -91,8 +91,6 @@ pub mod camera;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod colour;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
-pub mod config;
-#[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod feedforward;
 pub mod fitness;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
@@ -101,6 +99,8 @@ pub mod hue;
 pub mod image;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod kinematics;
+#[cfg_attr(not(test), deny(clippy::indexing_slicing))]
+pub mod limits;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod math;
 pub mod model;

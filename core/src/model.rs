@@ -39,8 +39,8 @@
 
 use nalgebra::{Point3, Vector3};
 
-use crate::config::{INNER_INSETS_M, OUTER_OFFSETS_M};
 use crate::hue;
+use crate::limits::{INNER_INSETS_M, OUTER_OFFSETS_M};
 
 /// Number of faces of the block.
 pub const FACES: usize = 6;
@@ -186,8 +186,8 @@ pub struct FaceSamples {
 pub const MAX_OUTER_EDGES: usize = 6;
 
 /// Signed distances of the rows of a strip from its edge (inner positive, outer negative).
-pub const ROW_DISTANCES_M: [f32; crate::config::ROWS_PER_EDGE] = {
-    let mut d = [0.0; crate::config::ROWS_PER_EDGE];
+pub const ROW_DISTANCES_M: [f32; crate::limits::ROWS_PER_EDGE] = {
+    let mut d = [0.0; crate::limits::ROWS_PER_EDGE];
     let mut i = 0;
     while i < INNER_INSETS_M.len() {
         d[i] = INNER_INSETS_M[i];

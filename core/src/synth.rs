@@ -91,7 +91,7 @@ pub(crate) mod test_scene {
     use std::vec::Vec;
 
     use crate::camera::{Pinhole, StereoRig};
-    use crate::config::NO_HUE;
+    use crate::limits::NO_HUE;
     use crate::model::Block;
     use crate::pose::Psi;
 

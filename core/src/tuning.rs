@@ -15,11 +15,11 @@
 //!
 //! What stays compiled: the population capacity `P` and the points per sample row `G` of a
 //! [`Tracker`](crate::tracker::Tracker) (const generics: storage and the model's point arrays
-//! are sized by them), and the model constants of [`crate::config`].
+//! are sized by them), and the model constants of [`crate::limits`].
 
 use crate::acquire::AcquireConfig;
-use crate::config::{DEFAULT_HUE_TOLERANCE, HUE_UNITS, MAX_GENERATIONS_PER_FRAME};
 use crate::ga::GaParams;
+use crate::limits::{DEFAULT_HUE_TOLERANCE, HUE_UNITS, MAX_GENERATIONS_PER_FRAME};
 use crate::status::StatusConfig;
 
 /// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).

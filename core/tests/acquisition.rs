@@ -2,8 +2,8 @@
 //! (`Tracker<7, 40, 8>`, the firmware's planned configuration).
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::NO_HUE;
 use evorec_core::ga::SearchSpace;
+use evorec_core::limits::NO_HUE;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;

@@ -2,8 +2,8 @@
 //! block is found, its colours are learnt, and the status scale follows the light.
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::{DEFAULT_HUE_TOLERANCE, MAX_HUE_SHIFT};
 use evorec_core::ga::SearchSpace;
+use evorec_core::limits::{DEFAULT_HUE_TOLERANCE, MAX_HUE_SHIFT};
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;

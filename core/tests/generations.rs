@@ -3,8 +3,8 @@
 //! itself without any feedforward of its motion.
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::MAX_GENERATIONS_PER_FRAME;
 use evorec_core::ga::SearchSpace;
+use evorec_core::limits::MAX_GENERATIONS_PER_FRAME;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;

@@ -1,8 +1,8 @@
 //! The population size is chosen at run time up to the tracker's compiled capacity `P`.
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::{DEFAULT_POPULATION, POPULATION_CAPACITY};
 use evorec_core::ga::{GaParams, SearchSpace};
+use evorec_core::limits::{DEFAULT_POPULATION, POPULATION_CAPACITY};
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;

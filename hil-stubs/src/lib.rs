@@ -24,10 +24,10 @@
 //! buffers (no second copy). The board computes the hue of the pixels its sample points hit
 //! through the core's 64 KiB `RGB565_HUE` table (one more load per point, read-only data in
 //! flash); no whole frame is converted. The tracker (the core's defaults: 7 DOF,
-//! storage for [`POPULATION_CAPACITY`](evorec_core::config::POPULATION_CAPACITY) individuals of
+//! storage for [`POPULATION_CAPACITY`](evorec_core::limits::POPULATION_CAPACITY) individuals of
 //! which `CONFIG` chooses how many are used,
-//! [`DEFAULT_POPULATION`](evorec_core::config::DEFAULT_POPULATION) by default,
-//! [`DEFAULT_GRID`](evorec_core::config::DEFAULT_GRID) samples per row) lives in a static too
+//! [`DEFAULT_POPULATION`](evorec_core::limits::DEFAULT_POPULATION) by default,
+//! [`DEFAULT_GRID`](evorec_core::limits::DEFAULT_GRID) samples per row) lives in a static too
 //! and is built in place (`Tracker::new_in`: model, hue-match table and population are
 //! written where they live, so no tracker-sized temporary is on the stack). `memory.x` at the
 //! workspace root budgets an STM32F4-class part (1 MiB flash, 128 KiB SRAM); the firmware's

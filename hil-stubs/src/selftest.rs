@@ -10,10 +10,10 @@
 
 use evorec_core::board::{CameraController, ErrorKind, ErrorType, FrameInfo};
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::NO_HUE;
 use evorec_core::ga::SearchSpace;
 use evorec_core::image::{Rgb565Image, expand_hue_to_rgb565};
 use evorec_core::kinematics::PA10;
+use evorec_core::limits::NO_HUE;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;

@@ -274,7 +274,7 @@ mod tests {
         s.tuning.hue_tolerance = 90;
         let r: Result<Tracker, _> = s.build_tracker();
         assert_eq!(r.unwrap_err().code(), 4);
-        for bad in [0, evorec_core::config::POPULATION_CAPACITY + 1] {
+        for bad in [0, evorec_core::limits::POPULATION_CAPACITY + 1] {
             let mut s = sample_setup();
             s.tuning.ga.population = bad;
             let r: Result<Tracker, _> = s.build_tracker();

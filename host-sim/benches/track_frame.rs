@@ -18,10 +18,10 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::{DEFAULT_GRID, POPULATION_CAPACITY};
 use evorec_core::ga::SearchSpace;
 use evorec_core::image::HueImage;
 use evorec_core::image::{Image, Rgb888Image};
+use evorec_core::limits::{DEFAULT_GRID, POPULATION_CAPACITY};
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;

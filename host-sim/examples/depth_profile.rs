@@ -9,8 +9,8 @@
 //!
 //! `cargo run --release -p evorec-sim --example depth_profile -- SCENARIO [OMEGA] [FRAMES] [STEP_S]`
 use evorec_core::camera::StereoRig;
-use evorec_core::config::NO_HUE;
 use evorec_core::image::{HueImage, Image, Rgb565};
+use evorec_core::limits::NO_HUE;
 use evorec_core::pose::Psi;
 use evorec_core::synth::render_block;
 use evorec_core::tracker::StereoFrame;

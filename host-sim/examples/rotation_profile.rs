@@ -30,10 +30,10 @@ use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, bail};
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE};
 use evorec_core::fitness::{Evaluator, Fitness};
 use evorec_core::hue::HueLut;
 use evorec_core::image::{Image, Rgb888};
+use evorec_core::limits::{DEFAULT_GRID, DEFAULT_HUE_TOLERANCE};
 use evorec_core::model::{FACES, SurfaceStrips};
 use evorec_core::pose::Psi;
 use evorec_sim::sequence::Sequence;

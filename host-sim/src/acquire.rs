@@ -62,7 +62,7 @@ pub const OCCLUSION_S: f64 = 1.0;
 pub const RECOVERY_DURATION_S: f64 = 4.0;
 /// Points per sample row of the tracker the statistics use by default: the core's default
 /// (`DEFAULT_GRID`, the firmware's configuration); 5 and 8 are supported.
-pub const DEFAULT_POINTS: usize = evorec_core::config::DEFAULT_GRID;
+pub const DEFAULT_POINTS: usize = evorec_core::limits::DEFAULT_GRID;
 
 /// Motion A's ω in the moving case (rad/s).
 pub const MOTION_OMEGA: f64 = 0.5;

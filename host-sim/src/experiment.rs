@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use evorec_core::board;
-use evorec_core::config::{DEFAULT_GRID, PA10_DOF};
+use evorec_core::limits::{DEFAULT_GRID, PA10_DOF};
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 use evorec_core::tracker::{ConfigError, StepError, Tracker, TrackerConfig};

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use evorec_core::camera::Pinhole;
-use evorec_core::config::DEFAULT_GRID;
+use evorec_core::limits::DEFAULT_GRID;
 use evorec_core::model::SurfaceStrips;
 use nalgebra::{Isometry3, Matrix4, Point3};
 use serde::Serialize;

@@ -204,7 +204,7 @@ mod tests {
             let img = w.render();
             [img.left, img.right]
                 .iter()
-                .map(|i| crate::render::hue_image(i).iter().filter(|h| **h != evorec_core::config::NO_HUE).count())
+                .map(|i| crate::render::hue_image(i).iter().filter(|h| **h != evorec_core::limits::NO_HUE).count())
                 .sum::<usize>()
         };
         assert!(world.occlusion().is_some());

@@ -17,7 +17,7 @@
 
 use std::path::{Path, PathBuf};
 
-use evorec_core::config::DEFAULT_GRID;
+use evorec_core::limits::DEFAULT_GRID;
 use evorec_core::model::SurfaceStrips;
 use evorec_core::tuning::Tuning;
 use evorec_firmware::protocol::{CONFIG_LEN, VERSION};

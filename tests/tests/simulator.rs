@@ -3,11 +3,11 @@
 //! kinematics is the camera pose the renderer used), and scenario validation.
 
 use evorec_core::board::CameraController;
-use evorec_core::config::DEFAULT_GRID;
 use evorec_core::fitness::Evaluator;
 use evorec_core::hue::HueLut;
 use evorec_core::image::Rgb565Image;
 use evorec_core::kinematics::PA10;
+use evorec_core::limits::DEFAULT_GRID;
 use evorec_core::model::SurfaceStrips;
 use evorec_sim::experiment::{self, Accuracy};
 use evorec_sim::motion::MotionKind;
@@ -86,7 +86,7 @@ fn model_at_the_true_pose_fits_clean_rendered_frames() {
         s.duration_s = 2.0;
         let rig = sim::rig(&s).expect("rig");
         let model = SurfaceStrips::<DEFAULT_GRID>::new(&sim::block(&s)).expect("model");
-        let lut = HueLut::new(&model.faces().map(|f| f.hue), evorec_core::config::DEFAULT_HUE_TOLERANCE);
+        let lut = HueLut::new(&model.faces().map(|f| f.hue), evorec_core::limits::DEFAULT_HUE_TOLERANCE);
         let eval = Evaluator::new(&model, &lut, &rig);
         let mut board = SimBoard::new(World::new(&s).expect("world")).expect("board");
         let n = sim::image_bytes(&s);

@@ -55,7 +55,7 @@ fn default_generation_stays_within_the_instruction_budget() -> Result<(), Failur
     );
     assert_eq!(
         (s.population, s.grid),
-        (evorec_core::config::DEFAULT_POPULATION as u32, evorec_core::config::DEFAULT_GRID as u32),
+        (evorec_core::limits::DEFAULT_POPULATION as u32, evorec_core::limits::DEFAULT_GRID as u32),
         "the full run is not the default configuration"
     );
     assert!(s.generations >= 100, "only {} generations measured", s.generations);

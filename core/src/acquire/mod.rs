@@ -67,9 +67,9 @@ mod tests;
 use linalg::column;
 use nalgebra::Point2;
 
-use crate::config::{DEFAULT_SCAN_STRIDE, DEFAULT_SEED_IMMIGRANTS};
 use crate::hue::HueLut;
 use crate::image::{Image, PixelFormat};
+use crate::limits::{DEFAULT_SCAN_STRIDE, DEFAULT_SEED_IMMIGRANTS};
 
 pub use pipeline::{Acquisition, Stage};
 pub use refine::{Measured, REFINE_ITERATIONS, Refinement, best_seed, refine, refine_with_cost};

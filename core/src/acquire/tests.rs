@@ -2,9 +2,9 @@
 
 use super::seed::half_turn;
 use super::*;
-use crate::config::{DEFAULT_HUE_TOLERANCE, NO_HUE};
 use crate::ga::unit_f32;
 use crate::image::HueImage;
+use crate::limits::{DEFAULT_HUE_TOLERANCE, NO_HUE};
 use crate::model::{Block, SurfaceStrips};
 use crate::pose::Psi;
 use crate::synth::test_scene::{H, W, rig, scene};

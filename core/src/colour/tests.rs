@@ -1,5 +1,5 @@
 use super::*;
-use crate::config::DEFAULT_HUE_TOLERANCE;
+use crate::limits::DEFAULT_HUE_TOLERANCE;
 
 const PRIOR: [u8; FACES] = [0, 60, 120, 0, 60, 120];
 
@@ -47,7 +47,7 @@ fn the_first_sighting_sets_the_hue_and_later_ones_refine_it() {
 fn hues_outside_the_search_band_and_without_hue_are_not_learnt() {
     let mut model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
     // Green (60 units) seen as yellow-green 45 and as red 0 (another face's colour) and NO_HUE.
-    let tally = tally_of(&model, 1, &[48, 0, crate::config::NO_HUE], 20);
+    let tally = tally_of(&model, 1, &[48, 0, crate::limits::NO_HUE], 20);
     assert_eq!(tally.points(1), 60);
     assert_eq!(tally.within(1, 60, model.search_half_width()).count, 20);
     assert_eq!(tally.within(1, 60, DEFAULT_HUE_TOLERANCE).count, 0);
@@ -77,7 +77,7 @@ fn the_expected_fitness_is_the_share_of_points_in_band() {
     let mut model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
     // Three of four points of red in band, the fourth a highlight without hue.
     for _ in 0..50 {
-        model.learn(&tally_of(&model, 0, &[0, 1, 179, crate::config::NO_HUE], 10));
+        model.learn(&tally_of(&model, 0, &[0, 1, 179, crate::limits::NO_HUE], 10));
     }
     assert!((model.expected_fitness() - 0.75).abs() < 0.01, "{}", model.expected_fitness());
     // Never below the floor.
@@ -85,7 +85,7 @@ fn the_expected_fitness_is_the_share_of_points_in_band() {
         model.learn(&tally_of(
             &model,
             0,
-            &[0, crate::config::NO_HUE, crate::config::NO_HUE, crate::config::NO_HUE],
+            &[0, crate::limits::NO_HUE, crate::limits::NO_HUE, crate::limits::NO_HUE],
             20,
         ));
     }

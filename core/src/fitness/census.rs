@@ -12,8 +12,8 @@ use nalgebra::{Matrix3, Point3, Vector3};
 
 use super::{View, face_plan};
 use crate::camera::Pinhole;
-use crate::config::{INNER_INSETS_M, NO_HUE};
 use crate::image::{Image, PixelFormat};
+use crate::limits::{INNER_INSETS_M, NO_HUE};
 use crate::model::SurfaceStrips;
 
 /// Points of a census row: every other point of a model row of `G` points.

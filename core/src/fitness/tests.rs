@@ -3,8 +3,8 @@
 //! walks) against the board's.
 
 use super::*;
-use crate::config::DEFAULT_HUE_TOLERANCE;
 use crate::image::HueImage;
+use crate::limits::DEFAULT_HUE_TOLERANCE;
 use crate::model::{Block, ROW_DISTANCES_M};
 use crate::synth::test_scene::{H, W, rig, scene};
 use std::vec;

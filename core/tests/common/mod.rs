@@ -1,8 +1,8 @@
 //! What the integration tests of the core share: synthetic stereo frames of the paper's block.
 
 use evorec_core::camera::StereoRig;
-use evorec_core::config::NO_HUE;
 use evorec_core::image::HueImage;
+use evorec_core::limits::NO_HUE;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::synth;

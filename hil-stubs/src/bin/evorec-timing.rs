@@ -275,7 +275,7 @@ mod firmware {
 
         // The "full" run is the core's default configuration; fail to build if it moves.
         const {
-            assert!(evorec_core::config::DEFAULT_POPULATION == 40 && evorec_core::config::DEFAULT_GRID == 8);
+            assert!(evorec_core::limits::DEFAULT_POPULATION == 40 && evorec_core::limits::DEFAULT_GRID == 8);
         };
         let Some(slot) = SLOT.try_take() else { rt::exit(false) };
         let full = run_config::<P40G8, 40, 8>("full", Feedforward::On, slot, FULL_FRAMES, &timer, left, right)

@@ -49,7 +49,7 @@
 //! firmware needs no second frame buffer. Encoding is [`write_message`]. Both work over the
 //! two small traits [`ByteSource`] and [`ByteSink`].
 
-use evorec_core::config::PA10_DOF;
+use evorec_core::limits::PA10_DOF;
 use evorec_core::pose::Psi;
 use evorec_core::tracker::{Estimate, JointSample};
 use evorec_core::tuning::{FIELDS, Tuning};

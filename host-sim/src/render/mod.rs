@@ -24,9 +24,9 @@
 //! Pixel conventions are the core's (OpenCV's): pixel `(i, j)` covers `[i, i+1) × [j, j+1)`.
 
 use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::config::MIN_DEPTH_M;
 use evorec_core::hue::rgb_to_hue;
 use evorec_core::image::{HueImage, ImageError, rgb565_to_rgb888, rgb888_to_rgb565};
+use evorec_core::limits::MIN_DEPTH_M;
 use evorec_core::model::{Block, FACES};
 use evorec_core::tracker::StereoFrame;
 use image::{Rgb, RgbImage};

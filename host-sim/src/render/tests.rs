@@ -1,8 +1,8 @@
 //! Tests of the renderer (`super`): coverage, shading, noise, the hue and RGB565 conversions.
 
 use super::*;
-use evorec_core::config::NO_HUE;
 use evorec_core::hue::{degrees_to_units, hue_distance};
+use evorec_core::limits::NO_HUE;
 use evorec_core::synth;
 use nalgebra::Vector3;
 use rand_core::SeedableRng;

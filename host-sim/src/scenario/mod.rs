@@ -90,7 +90,7 @@ use crate::render::Light;
 
 /// Population capacity of the host's trackers (simulator and `evorec track`): any population
 /// from 3 up to this is accepted at run time. Larger than the firmware's
-/// [`evorec_core::config::POPULATION_CAPACITY`], whose worst case sets the M4 budget; the same
+/// [`evorec_core::limits::POPULATION_CAPACITY`], whose worst case sets the M4 budget; the same
 /// population gives bit-identical estimates in either capacity (`core/tests/population.rs`).
 pub const HOST_POPULATION_CAPACITY: usize = 64;
 

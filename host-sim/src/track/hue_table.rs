@@ -65,6 +65,6 @@ mod tests {
                 }
             }
         }
-        assert_eq!(Rgb888Table::hue(Rgb888Table::NONE), evorec_core::config::NO_HUE);
+        assert_eq!(Rgb888Table::hue(Rgb888Table::NONE), evorec_core::limits::NO_HUE);
     }
 }

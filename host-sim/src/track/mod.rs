@@ -23,7 +23,7 @@ use std::time::Instant;
 
 use anyhow::{Result, anyhow, bail};
 use evorec_core::colour::ColourModel;
-use evorec_core::config::DEFAULT_GRID;
+use evorec_core::limits::DEFAULT_GRID;
 
 use crate::scenario::HOST_POPULATION_CAPACITY;
 use evorec_core::ga::SearchSpace;

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use evorec_core::camera::Pinhole;
-use evorec_core::config::DEFAULT_GRID;
+use evorec_core::limits::DEFAULT_GRID;
 use evorec_core::model::{Block, SurfaceStrips};
 use evorec_core::status::Status;
 use evorec_core::tracker::Feedforward;

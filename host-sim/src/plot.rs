@@ -253,7 +253,14 @@ pub fn plot_trace(csv_path: &Path, out_dir: &Path, title: &str) -> anyhow::Resul
     )?;
 
     let fitness = out_dir.join("fitness.png");
-    render_png(&fitness, FITNESS_PLOT_SIZE, |root| {
+    fitness_plot(&fitness, &trace, title)?;
+
+    Ok(vec![position, orientation, fitness])
+}
+
+/// `fitness.png`: F over time, with the tracker's status as a coloured strip along the bottom.
+fn fitness_plot(fitness: &Path, trace: &Trace, title: &str) -> anyhow::Result<()> {
+    render_png(fitness, FITNESS_PLOT_SIZE, |root| {
         let body = root.titled(&format!("{title}: fitness"), (FONT, 24)).map_err(draw_err)?;
         let pts = trace.series("F");
         let (t0, t1) = padded_range(trace.column("t").iter(), 1e-3);
@@ -312,9 +319,7 @@ pub fn plot_trace(csv_path: &Path, out_dir: &Path, title: &str) -> anyhow::Resul
                 .map_err(draw_err)?;
         }
         Ok(())
-    })?;
-
-    Ok(vec![position, orientation, fitness])
+    })
 }
 
 #[cfg(test)]

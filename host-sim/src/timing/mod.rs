@@ -151,18 +151,7 @@ pub fn run(out: &Path, board: Board) -> Result<()> {
     let m = measure(&qemu, &board, &timing_elf, out)?;
     eprintln!("timing: {} runs measured in {:.1} s", m.runs.len(), started.elapsed().as_secs_f64());
     let full = m.runs.iter().find(|r| r.name == "full").ok_or_else(|| anyhow!("no full run in the output"))?;
-    let frame = (u32::from(board.profile.frame_width), u32::from(board.profile.frame_height));
-    if full.frame != frame {
-        bail!(
-            "{} ran at {}×{}, not the {} profile's {}: build it with `{}`",
-            timing_elf.display(),
-            full.frame.0,
-            full.frame.1,
-            board.profile.name,
-            board.frame_size(),
-            board.build_hint
-        );
-    }
+    check_frame(full, &board, &timing_elf)?;
     let full = full.stats();
     let target = m.runs.iter().find(|r| r.name == "target").map(Run::stats);
     let sweep: Vec<RunStats> = m.runs.iter().filter(|r| r.name == "sweep").map(Run::stats).collect();
@@ -177,27 +166,7 @@ pub fn run(out: &Path, board: Board) -> Result<()> {
     let fw_mem = memory_use(&sections(&fs::read(&firmware_elf)?)?);
     let timing_mem = memory_use(&sections(&fs::read(&timing_elf)?)?);
 
-    // The `.stack_sizes` build is used only if it is not older than the measured image.
-    let modified = |p: &Path| fs::metadata(p).and_then(|m| m.modified()).ok();
-    let stack_image = find_stack_sizes_image(&board, TIMING_IMAGE).filter(|p| {
-        let fresh = modified(p) >= modified(&timing_elf);
-        if !fresh {
-            eprintln!(
-                "timing: {} is older than {}; not used (rebuild it with {STACK_SIZES_HINT})",
-                p.display(),
-                timing_elf.display()
-            );
-        }
-        fresh
-    });
-    if stack_image.is_none() {
-        eprintln!("timing: static stack from function prologues; for `.stack_sizes` frames run {STACK_SIZES_HINT}");
-    }
-    let stack = analyse_stack(&objdump, stack_image.as_deref().unwrap_or(&timing_elf))?;
-    let stack_prologue = match &stack_image {
-        Some(_) => Some(analyse_stack(&objdump, &timing_elf)?),
-        None => None,
-    };
+    let (stack, stack_prologue) = stack_analyses(&objdump, &board, &timing_elf)?;
     let mix = analyse_mix(&objdump, &timing_elf, &board.memory)?;
     // The points the kernel walks (the cycle model's point mix is one walked point).
     let points = f64::from(full.population) * f64::from(full.walked_per_individual);
@@ -241,6 +210,56 @@ pub fn run(out: &Path, board: Board) -> Result<()> {
     crate::io::write_bytes(&md_path, report::markdown(&r).as_bytes())?;
     println!("{}", report::summary(&r));
     println!("wrote {} and {}", json_path.display(), md_path.display());
+    check_deadlines(&r, &m.missed_lines)
+}
+
+/// The timing image must have run at the profile's frame size.
+fn check_frame(full: &Run, board: &Board, timing_elf: &Path) -> Result<()> {
+    let frame = (u32::from(board.profile.frame_width), u32::from(board.profile.frame_height));
+    if full.frame != frame {
+        bail!(
+            "{} ran at {}×{}, not the {} profile's {}: build it with `{}`",
+            timing_elf.display(),
+            full.frame.0,
+            full.frame.1,
+            board.profile.name,
+            board.frame_size(),
+            board.build_hint
+        );
+    }
+    Ok(())
+}
+
+/// The static stack of the measured image: from its `.stack_sizes` build when that is not older
+/// than the image (then the prologue analysis too, as a cross-check), else from its prologues.
+fn stack_analyses(objdump: &Path, board: &Board, timing_elf: &Path) -> Result<(StackAnalysis, Option<StackAnalysis>)> {
+    // The `.stack_sizes` build is used only if it is not older than the measured image.
+    let modified = |p: &Path| fs::metadata(p).and_then(|m| m.modified()).ok();
+    let stack_image = find_stack_sizes_image(board, TIMING_IMAGE).filter(|p| {
+        let fresh = modified(p) >= modified(timing_elf);
+        if !fresh {
+            eprintln!(
+                "timing: {} is older than {}; not used (rebuild it with {STACK_SIZES_HINT})",
+                p.display(),
+                timing_elf.display()
+            );
+        }
+        fresh
+    });
+    if stack_image.is_none() {
+        eprintln!("timing: static stack from function prologues; for `.stack_sizes` frames run {STACK_SIZES_HINT}");
+    }
+    let stack = analyse_stack(objdump, stack_image.as_deref().unwrap_or(timing_elf))?;
+    let stack_prologue = match &stack_image {
+        Some(_) => Some(analyse_stack(objdump, timing_elf)?),
+        None => None,
+    };
+    Ok((stack, stack_prologue))
+}
+
+/// An error naming every generation of the default configuration (`ff` and `ff+target`) over
+/// the firmware's deadline.
+fn check_deadlines(r: &Results, missed_lines: &[String]) -> Result<()> {
     let (missed, checked) =
         (r.deadline.missed + r.deadline_target.missed, r.deadline.checked + r.deadline_target.checked);
     if missed > 0 {
@@ -251,7 +270,7 @@ pub fn run(out: &Path, board: Board) -> Result<()> {
             checked,
             r.deadline.limit_instructions,
             r.deadline.worst_instructions.max(r.deadline_target.worst_instructions),
-            m.missed_lines.join("; ")
+            missed_lines.join("; ")
         );
     }
     Ok(())

@@ -170,7 +170,6 @@ pub(super) fn json(r: &Results) -> Value {
     let stack_bytes = stack_bytes(r);
     let ram_check_fw = r.demo_stack.map(|(u, _)| r.fw_mem.static_ram_bytes + u64::from(u));
     let ram_check_timing = r.timing_mem.static_ram_bytes + u64::from(stack_bytes);
-    let read_ins = read_instructions(r);
     let ram_bytes = r.board.ram_bytes;
     json!({
         "profile": r.board.profile.name,
@@ -204,23 +203,7 @@ pub(super) fn json(r: &Results) -> Value {
         "point_conventions": "instructions_per_point_eval = Evaluate / (population x model points, 2 x 60 x G: the target's convention, per-pose overhead included); instructions_per_walked_point = Evaluate / (population x points the kernel walks, 2 x 48 x G)",
         "point_eval_target": POINT_TARGET,
         "stack_bytes": stack_bytes,
-        "stack": {
-            "static_generation_bytes": r.stack.generation.bytes,
-            "static_callers_bytes": r.stack.callers.bytes,
-            "static_total_bytes": r.stack.total(),
-            "static_path": r.stack.callers.frames.iter().chain(r.stack.generation.frames.iter())
-                .map(|(function, bytes)| json!({ "function": function, "bytes": bytes }))
-                .collect::<Vec<_>>(),
-            "static_method": r.stack.method,
-            "static_image": r.stack.image.display().to_string(),
-            "static_prologue_total_bytes": r.stack_prologue.as_ref().map(StackAnalysis::total),
-            "indirect_calls_in_generation": r.stack.indirect_calls,
-            "recursion": r.stack.recursion,
-            "stack_sizes_vs_prologue_mismatches": r.stack.prologue_mismatches.len(),
-            "painted_generation_bytes": r.full.stack,
-            "firmware_painted_bytes": r.demo_stack.map(|(u, _)| u),
-            "firmware_stack_region_bytes": r.demo_stack.map(|(_, s)| s),
-        },
+        "stack": stack_json(r),
         "deadline": {
             "limit_instructions": r.deadline.limit_instructions.round(),
             "generations_checked": r.deadline.checked,
@@ -241,15 +224,41 @@ pub(super) fn json(r: &Results) -> Value {
         "sweep": r.sweep.iter().map(sweep_json).collect::<Vec<_>>(),
         "cycle_estimate": cycle_json(r),
         "ff_target": target_json(r),
-        "measurement": {
-            "qemu": format!("qemu-system-arm {} -icount shift=10 (1 instruction = 1024 ns virtual)", r.board.qemu_machine().join(" ")),
-            "timer": format!("CMSDK APB TIMER0 @ 0x40000000, SYSCLK 25 MHz ({NS_PER_TICK} ns/tick): instructions = ticks * 40 / 1024"),
-            "timer_read_pair_ticks": r.read_pair_ticks,
-            "timer_read_instructions": round2(read_ins),
-            "window": "instructions_per_generation = the whole Tracker::step_probed call (input checks, 4 probe marks of ~4 instructions each included); phases between probe marks",
-            "timing_image": r.timing_elf.display().to_string(),
-            "firmware_image": r.firmware_elf.display().to_string(),
-        },
+        "measurement": measurement_json(r),
+    })
+}
+
+/// `timing.json`'s `stack`: static and painted stack.
+fn stack_json(r: &Results) -> Value {
+    json!({
+        "static_generation_bytes": r.stack.generation.bytes,
+        "static_callers_bytes": r.stack.callers.bytes,
+        "static_total_bytes": r.stack.total(),
+        "static_path": r.stack.callers.frames.iter().chain(r.stack.generation.frames.iter())
+            .map(|(function, bytes)| json!({ "function": function, "bytes": bytes }))
+            .collect::<Vec<_>>(),
+        "static_method": r.stack.method,
+        "static_image": r.stack.image.display().to_string(),
+        "static_prologue_total_bytes": r.stack_prologue.as_ref().map(StackAnalysis::total),
+        "indirect_calls_in_generation": r.stack.indirect_calls,
+        "recursion": r.stack.recursion,
+        "stack_sizes_vs_prologue_mismatches": r.stack.prologue_mismatches.len(),
+        "painted_generation_bytes": r.full.stack,
+        "firmware_painted_bytes": r.demo_stack.map(|(u, _)| u),
+        "firmware_stack_region_bytes": r.demo_stack.map(|(_, s)| s),
+    })
+}
+
+/// `timing.json`'s `measurement`: how the instructions were counted.
+fn measurement_json(r: &Results) -> Value {
+    json!({
+        "qemu": format!("qemu-system-arm {} -icount shift=10 (1 instruction = 1024 ns virtual)", r.board.qemu_machine().join(" ")),
+        "timer": format!("CMSDK APB TIMER0 @ 0x40000000, SYSCLK 25 MHz ({NS_PER_TICK} ns/tick): instructions = ticks * 40 / 1024"),
+        "timer_read_pair_ticks": r.read_pair_ticks,
+        "timer_read_instructions": round2(read_instructions(r)),
+        "window": "instructions_per_generation = the whole Tracker::step_probed call (input checks, 4 probe marks of ~4 instructions each included); phases between probe marks",
+        "timing_image": r.timing_elf.display().to_string(),
+        "firmware_image": r.firmware_elf.display().to_string(),
     })
 }
 
@@ -347,11 +356,32 @@ fn flash_section(s: &mut String, r: &Results) {
 
 /// `timing.md`.
 pub(super) fn markdown(r: &Results) -> String {
-    let (full, sweep, stack, mix) = (&r.full, &r.sweep, &r.stack, &r.mix);
-    let (stack_prologue, cyc, cyc_b2, marginal) = (r.stack_prologue.as_ref(), &r.cyc, &r.cyc_b2, r.marginal);
-    let (fw, timing, demo_stack, read_ins) = (r.fw_mem, r.timing_mem, r.demo_stack, read_instructions(r));
     let mut s = String::new();
+    heading(&mut s, r);
+    budget_table(&mut s, r);
+    target_section(&mut s, r);
+    by_kind_and_status(&mut s, &r.full);
+    if r.sweep.is_empty() {
+        let _ = writeln!(s, "\n(No sweep on this profile: the configuration is chosen on the M4.)");
+    } else {
+        sweep_table(&mut s, &r.full, &r.sweep);
+    }
+    cycle_estimate(&mut s, r);
+    flash_section(&mut s, r);
+    stack_and_memory(&mut s, r);
     let b = &r.board;
+    let _ = writeln!(
+        s,
+        "\nReproduce: `{}` (and optionally `{STACK_SIZES_HINT}`), then \
+         `cargo run --release -p evorec-sim -- timing --out DIR --profile {}`.",
+        b.build_hint, b.profile.name
+    );
+    s
+}
+
+/// The heading and the firmware configuration the counts are of.
+fn heading(s: &mut String, r: &Results) {
+    let (full, b) = (&r.full, &r.board);
     let _ = writeln!(
         s,
         "# Worst-case timing and memory of one GA generation ({}, profile `{}`, QEMU `{}`, `-icount shift=10`)\n",
@@ -371,11 +401,16 @@ pub(super) fn markdown(r: &Results) -> String {
         b.frame_size(),
         full.generations
     );
+}
+
+/// The instructions per generation against the budget, by phase and per point.
+fn budget_table(s: &mut String, r: &Results) {
+    let (full, marginal, read_ins) = (&r.full, r.marginal, read_instructions(r));
     let _ = writeln!(s, "| quantity | min | max | mean | target |\n|---|---:|---:|---:|---|");
     let row = |s: &mut String, name: &str, r: &Range, target: &str| {
         let _ = writeln!(s, "| {name} | {:.0} | {:.0} | {:.0} | {target} |", r.min, r.max, r.mean);
     };
-    row(&mut s, "instructions per generation", &full.call, &format!("≤ {GENERATION_BUDGET:.0}"));
+    row(s, "instructions per generation", &full.call, &format!("≤ {GENERATION_BUDGET:.0}"));
     let d = &r.deadline;
     let _ = writeln!(
         s,
@@ -388,9 +423,9 @@ pub(super) fn markdown(r: &Results) -> String {
         r.deadline_sweep.missed,
         r.deadline_sweep.checked
     );
-    row(&mut s, "— feedforward", &full.feedforward, "");
-    row(&mut s, "— projection + fitness (Evaluate)", &full.evaluate, "");
-    row(&mut s, "— selection/crossover/mutation (Breed)", &full.breed, "");
+    row(s, "— feedforward", &full.feedforward, "");
+    row(s, "— projection + fitness (Evaluate)", &full.evaluate, "");
+    row(s, "— selection/crossover/mutation (Breed)", &full.breed, "");
     let _ = writeln!(
         s,
         "| instructions per model point (Evaluate / ({} · {}), the target's convention) | {:.2} | {:.2} | {:.2} | ≤ {POINT_TARGET} |",
@@ -425,7 +460,10 @@ pub(super) fn markdown(r: &Results) -> String {
         s,
         "- one TIMER0 read costs {read_ins:.2} instructions; the 4 probe marks add ≈ 16 to a generation.\n"
     );
-    target_section(&mut s, r);
+}
+
+/// The whole call by kind of frame and by tracker status.
+fn by_kind_and_status(s: &mut String, full: &RunStats) {
     let _ = writeln!(
         s,
         "## By kind of frame (whole call, instructions)\n\n| frames | n | min | max |\n|---|---:|---:|---:|"
@@ -443,11 +481,11 @@ pub(super) fn markdown(r: &Results) -> String {
     for (st, n, r) in &full.by_status {
         let _ = writeln!(s, "| {} | {n} | {:.0} | {:.0} |", st.as_str(), r.min, r.max);
     }
-    if sweep.is_empty() {
-        let _ = writeln!(s, "\n(No sweep on this profile: the configuration is chosen on the M4.)");
-    } else {
-        sweep_table(&mut s, full, sweep);
-    }
+}
+
+/// The cycle estimate of the worst generation from the instruction mix.
+fn cycle_estimate(s: &mut String, r: &Results) {
+    let (full, cyc, cyc_b2, mix, b) = (&r.full, &r.cyc, &r.cyc_b2, &r.mix, &r.board);
     let _ = writeln!(
         s,
         "\n## Cycle ESTIMATE for a {:.0} MHz {} (not a measurement)\n\n\
@@ -481,7 +519,12 @@ pub(super) fn markdown(r: &Results) -> String {
     for a in assumptions(b) {
         let _ = writeln!(s, "- {a}");
     }
-    flash_section(&mut s, r);
+}
+
+/// Static and painted stack, flash and static RAM, and the deepest static path.
+fn stack_and_memory(s: &mut String, r: &Results) {
+    let (full, stack, stack_prologue, b) = (&r.full, &r.stack, r.stack_prologue.as_ref(), &r.board);
+    let (fw, timing, demo_stack) = (r.fw_mem, r.timing_mem, r.demo_stack);
     let _ = writeln!(s, "\n## Stack and memory\n");
     let _ = writeln!(s, "| quantity | bytes | how |\n|---|---:|---|");
     let _ = writeln!(
@@ -533,13 +576,6 @@ pub(super) fn markdown(r: &Results) -> String {
     for (name, frame) in stack.callers.frames.iter().chain(stack.generation.frames.iter()) {
         let _ = writeln!(s, "- {frame:>6} B  `{name}`");
     }
-    let _ = writeln!(
-        s,
-        "\nReproduce: `{}` (and optionally `{STACK_SIZES_HINT}`), then \
-         `cargo run --release -p evorec-sim -- timing --out DIR --profile {}`.",
-        b.build_hint, b.profile.name
-    );
-    s
 }
 
 /// The sweep's table (the `full` run is its population-40, rows-of-8 line).

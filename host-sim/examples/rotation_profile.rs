@@ -200,7 +200,17 @@ impl Check {
     }
 }
 
-fn main() -> Result<()> {
+/// The command line: the sequence, every k-th frame, the trace to check, the hue tolerance and
+/// the principal points' shift.
+struct Args {
+    dir: String,
+    every: usize,
+    trace_path: Option<String>,
+    tol: u8,
+    shift: f32,
+}
+
+fn parse_args() -> Result<Args> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let usage = "usage: rotation_profile SEQ_DIR [EVERY_K] [--trace TRACE_CSV] [--tol HUE_TOL] [--shift CXY_PX]";
     let (mut pos, mut trace_path, mut tol, mut shift) = (Vec::new(), None, DEFAULT_HUE_TOLERANCE, 0.0f32);
@@ -219,6 +229,77 @@ fn main() -> Result<()> {
         Some(v) => v.parse::<usize>().with_context(|| format!("EVERY_K \"{v}\" is not a count; {usage}"))?.max(1),
         None => 5,
     };
+    Ok(Args { dir: dir.clone(), every, trace_path, tol, shift })
+}
+
+/// The 6-D plateau: a walk from the truth that accepts any step not lowering F; the mean offset
+/// (turn in degrees, shift in millimetres) of its poses at the highest F it reaches.
+fn plateau_walk(f: &impl Fn(&Psi) -> [f32; 3], t: &Isometry3<f32>, uniform: &mut impl FnMut() -> f32) -> [f32; 6] {
+    let pose_at = |o: &[f32; 6]| {
+        let q = UnitQuaternion::from_scaled_axis(Vector3::new(o[0], o[1], o[2]).map(f32::to_radians)) * t.rotation;
+        Psi::from_parts(&(t.translation.vector + Vector3::new(o[3], o[4], o[5]) * 1e-3), &q)
+    };
+    let (mut at, mut f_at) = ([0.0f32; 6], f(&pose_at(&[0.0; 6]))[0]);
+    let (mut sum, mut count) = ([0.0f32; 6], 0usize);
+    for _ in 0..WALK_STEPS {
+        let o: [f32; 6] = std::array::from_fn(|k| at[k] + uniform() * WALK_STEP);
+        let fo = f(&pose_at(&o))[0];
+        if fo > f_at + 1e-6 {
+            (sum, count) = ([0.0; 6], 0);
+        }
+        if fo >= f_at - 1e-6 {
+            (at, f_at) = (o, f_at.max(fo));
+        }
+        sum.iter_mut().zip(at).for_each(|(s, v)| *s += v);
+        count += 1;
+    }
+    sum.map(|s| s / count as f32)
+}
+
+/// F along the truth's own turn from frame `i` to the next, added to `along`; the turn in
+/// degrees per frame, or `None` where the truth does not turn.
+fn along_motion(
+    f: &impl Fn(&Psi) -> [f32; 3],
+    t: &Isometry3<f32>,
+    truth: &[Isometry3<f64>],
+    i: usize,
+    rot: &[f32],
+    along: &mut [Acc; 3],
+) -> Option<f32> {
+    let next = if i + 1 < truth.len() { truth[i + 1] } else { truth[i] };
+    let motion = (next.rotation * truth[i].rotation.inverse()).cast::<f32>().scaled_axis();
+    if motion.norm() <= 1e-7 {
+        return None;
+    }
+    let axis = motion.normalize();
+    let s: Vec<[f32; 3]> = rot
+        .iter()
+        .map(|d| {
+            let q = UnitQuaternion::from_scaled_axis(axis * d.to_radians()) * t.rotation;
+            f(&Psi::from_parts(&t.translation.vector, &q))
+        })
+        .collect();
+    for (c, acc) in along.iter_mut().enumerate() {
+        acc.add(rot, &s.iter().map(|v| v[c]).collect::<Vec<_>>());
+    }
+    Some(motion.norm().to_degrees())
+}
+
+/// F, F_R and F_L along each axis of turn and shift about the truth, added to `acc`.
+fn profile_axes(f: &impl Fn(&Psi) -> [f32; 3], t: &Isometry3<f32>, rot: &[f32], tr: &[f32], acc: &mut [[Acc; 3]; 6]) {
+    for (a, accs) in acc.iter_mut().enumerate() {
+        let (offsets, pose): (&[f32], Box<dyn Fn(f32) -> Psi>) =
+            if a < 3 { (rot, Box::new(|d| turned(t, a, d))) } else { (tr, Box::new(|d| shifted(t, a - 3, d))) };
+        let s: Vec<[f32; 3]> = offsets.iter().map(|&d| f(&pose(d))).collect();
+        for (c, acc) in accs.iter_mut().enumerate() {
+            acc.add(offsets, &s.iter().map(|v| v[c]).collect::<Vec<_>>());
+        }
+    }
+}
+
+fn main() -> Result<()> {
+    let Args { dir, every, trace_path, tol, shift } = parse_args()?;
+    let dir = dir.as_str();
     let seq = Sequence::load(Path::new(dir)).with_context(|| format!("loading the sequence {dir}"))?;
     let Some(truth) = seq.groundtruth.clone() else {
         bail!("{dir}: no groundtruth.tum: the profile needs the true poses");
@@ -248,54 +329,13 @@ fn main() -> Result<()> {
         let right = Image::<&[u8], Rgb888>::new_checked(r.as_raw().as_slice(), w, h)?;
         let f = |p: &Psi| scores(&eval.evaluate_psi(p, &left, &right));
         let t: Isometry3<f32> = truth[i].cast();
-        for (a, accs) in acc.iter_mut().enumerate() {
-            let (offsets, pose): (&[f32], Box<dyn Fn(f32) -> Psi>) =
-                if a < 3 { (&rot, Box::new(|d| turned(&t, a, d))) } else { (&tr, Box::new(|d| shifted(&t, a - 3, d))) };
-            let s: Vec<[f32; 3]> = offsets.iter().map(|&d| f(&pose(d))).collect();
-            for (c, acc) in accs.iter_mut().enumerate() {
-                acc.add(offsets, &s.iter().map(|v| v[c]).collect::<Vec<_>>());
-            }
-        }
-        // The 6-D plateau: a walk from the truth that accepts any step not lowering F; the
-        // mean offset of its poses at the highest F it reaches.
-        let pose_at = |o: &[f32; 6]| {
-            let q = UnitQuaternion::from_scaled_axis(Vector3::new(o[0], o[1], o[2]).map(f32::to_radians)) * t.rotation;
-            Psi::from_parts(&(t.translation.vector + Vector3::new(o[3], o[4], o[5]) * 1e-3), &q)
-        };
-        let (mut at, mut f_at) = ([0.0f32; 6], f(&pose_at(&[0.0; 6]))[0]);
-        let (mut sum, mut count) = ([0.0f32; 6], 0usize);
-        for _ in 0..WALK_STEPS {
-            let o: [f32; 6] = std::array::from_fn(|k| at[k] + uniform() * WALK_STEP);
-            let fo = f(&pose_at(&o))[0];
-            if fo > f_at + 1e-6 {
-                (sum, count) = ([0.0; 6], 0);
-            }
-            if fo >= f_at - 1e-6 {
-                (at, f_at) = (o, f_at.max(fo));
-            }
-            sum.iter_mut().zip(at).for_each(|(s, v)| *s += v);
-            count += 1;
-        }
-        joint.push(sum.map(|s| s / count as f32));
+        profile_axes(&f, &t, &rot, &tr, &mut acc);
+        joint.push(plateau_walk(&f, &t, &mut uniform));
         if let Some(tr) = &trace {
             check.add(&eval, &left, &right, &t, tr, seq.frames[i].t_s);
         }
-        // The turn along the truth's own motion (this frame to the next), positive = ahead.
-        let next = if i + 1 < truth.len() { truth[i + 1] } else { truth[i] };
-        let motion = (next.rotation * truth[i].rotation.inverse()).cast::<f32>().scaled_axis();
-        if motion.norm() > 1e-7 {
-            let axis = motion.normalize();
-            let s: Vec<[f32; 3]> = rot
-                .iter()
-                .map(|d| {
-                    let q = UnitQuaternion::from_scaled_axis(axis * d.to_radians()) * t.rotation;
-                    f(&Psi::from_parts(&t.translation.vector, &q))
-                })
-                .collect();
-            for (c, acc) in along.iter_mut().enumerate() {
-                acc.add(&rot, &s.iter().map(|v| v[c]).collect::<Vec<_>>());
-            }
-            speed.push(motion.norm().to_degrees());
+        if let Some(deg) = along_motion(&f, &t, &truth, i, &rot, &mut along) {
+            speed.push(deg);
         }
         n += 1;
     }

@@ -57,6 +57,11 @@ pub struct TrackArgs {
     /// frame (a bag, or a sequence imported from one).
     #[arg(long)]
     absolute_stamps: bool,
+    /// Track even when the two cameras' images look out of step (by default the run stops
+    /// with an error naming the offset: each left image would be paired with a right one
+    /// taken at another time).
+    #[arg(long)]
+    no_pairing_check: bool,
     /// A TOML file holding a `[tracker]` table (as `evorec config` prints it, or a run's
     /// `config.toml`): its keys replace the defaults; `--method`, `--no-ff` and `--population`
     /// replace its keys.
@@ -109,6 +114,7 @@ impl TrackArgs {
             progress,
             pixels: self.pixels.into(),
             absolute_stamps: self.absolute_stamps,
+            check_pairing: !self.no_pairing_check,
         })
     }
 

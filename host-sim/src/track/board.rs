@@ -20,6 +20,7 @@ use image::RgbImage;
 use indicatif::ProgressBar;
 
 use super::hue_table::Rgb888Table;
+use super::out_of_step::{MotionMeter, OutOfStep, PairingCheck};
 use crate::render;
 use crate::sequence::{self, FrameRow, JointTable, SequenceError};
 
@@ -64,6 +65,9 @@ pub struct Decoded {
     pub right: Vec<u8>,
     /// The RGB images, kept for frames that get an overlay.
     pub rgb: Option<(RgbImage, RgbImage)>,
+    /// The change since the previous frame in the left and the right image
+    /// ([`super::out_of_step::MotionMeter`]).
+    pub motion: [f32; 2],
 }
 
 /// Where the tracker's frames come from: RGB image pairs, in frame order (the PNGs of a
@@ -115,10 +119,12 @@ pub fn spawn_reader<F: SensorPixels>(
 ) -> (Receiver<Result<Decoded, SequenceError>>, JoinHandle<()>) {
     let (tx, rx): (SyncSender<_>, _) = sync_channel(READ_AHEAD);
     let handle = std::thread::spawn(move || {
+        let mut meters = [MotionMeter::default(), MotionMeter::default()];
         let mut emit = |i: usize, l: RgbImage, r: RgbImage| {
             let (left, right) = rayon::join(|| F::pixels(&l), || F::pixels(&r));
+            let motion = [meters[0].measure(&l), meters[1].measure(&r)];
             let rgb = keep_rgb(i).then_some((l, r));
-            tx.send(Ok(Decoded { i, left, right, rgb })).is_ok()
+            tx.send(Ok(Decoded { i, left, right, rgb, motion })).is_ok()
         };
         if let Err(e) = source.stream(end, &mut emit) {
             let _ = tx.send(Err(e));
@@ -138,13 +144,15 @@ pub enum SeqBoardError {
     ReaderGone,
     /// The caller's buffers are smaller than a frame.
     BufferTooSmall,
+    /// The images of the two cameras do not belong together.
+    OutOfStep(OutOfStep),
 }
 
 impl BoardError for SeqBoardError {
     fn kind(&self) -> ErrorKind {
         match self {
             Self::EndOfStream => ErrorKind::EndOfStream,
-            Self::Decode(_) | Self::ReaderGone | Self::BufferTooSmall => ErrorKind::Other,
+            Self::Decode(_) | Self::ReaderGone | Self::BufferTooSmall | Self::OutOfStep(_) => ErrorKind::Other,
         }
     }
 }
@@ -156,6 +164,7 @@ impl std::fmt::Display for SeqBoardError {
             Self::Decode(e) => write!(f, "{e}"),
             Self::ReaderGone => f.write_str("the image reader thread stopped"),
             Self::BufferTooSmall => f.write_str("frame buffers are too small"),
+            Self::OutOfStep(v) => write!(f, "{v}"),
         }
     }
 }
@@ -196,18 +205,22 @@ pub struct SequenceBoard<'a, F> {
     /// RGB images kept for overlays: (position in frames.csv, left, right).
     pub kept: Vec<(usize, RgbImage, RgbImage)>,
     progress: Option<ProgressBar>,
+    /// The check of the stereo pairing, unless switched off.
+    pairing: Option<PairingCheck>,
     format: PhantomData<F>,
 }
 
 impl<'a, F> SequenceBoard<'a, F> {
     /// A board delivering frames `0..end`: `first` is frame 0, already decoded, and `rx` the
-    /// reader thread's channel for the others.
+    /// reader thread's channel for the others. With `check_pairing` it stops with
+    /// [`SeqBoardError::OutOfStep`] when the two cameras' images do not belong together.
     pub fn new(
         seq: &'a sequence::Sequence,
         first: Decoded,
         rx: Receiver<Result<Decoded, SequenceError>>,
         end: usize,
         progress: Option<ProgressBar>,
+        check_pairing: bool,
     ) -> Self {
         Self {
             frames: &seq.frames,
@@ -221,8 +234,15 @@ impl<'a, F> SequenceBoard<'a, F> {
             tracked: Vec::with_capacity(end),
             kept: Vec::new(),
             progress,
+            pairing: check_pairing.then(PairingCheck::default),
             format: PhantomData,
         }
+    }
+
+    /// The published frames and the kept RGB images. The rest goes, the reader's channel
+    /// with it, so a reader still waiting to send a frame stops.
+    pub fn into_outputs(self) -> (Vec<TrackedFrame>, Vec<(usize, RgbImage, RgbImage)>) {
+        (self.tracked, self.kept)
     }
 
     fn capture_time_us(&self, i: usize) -> u64 {
@@ -252,6 +272,9 @@ impl<const DOF: usize, F: SensorPixels> CameraController<DOF> for SequenceBoard<
         }
         left[..n].copy_from_slice(&d.left);
         right[..n].copy_from_slice(&d.right);
+        if let Some(v) = self.pairing.as_mut().and_then(|c| c.push(d.i, d.motion[0], d.motion[1])) {
+            return Err(SeqBoardError::OutOfStep(v));
+        }
         if let Some((l, r)) = d.rgb {
             self.kept.push((d.i, l, r));
         }

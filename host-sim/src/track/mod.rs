@@ -15,6 +15,7 @@
 pub mod board;
 pub mod colours;
 pub mod hue_table;
+pub mod out_of_step;
 pub mod output;
 
 use std::collections::BTreeSet;
@@ -65,6 +66,8 @@ pub struct TrackOptions {
     /// `estimate.tum` gives each frame's ROS stamp instead of the time since the origin
     /// (a bag, or a sequence with `stamp_origin_s`).
     pub absolute_stamps: bool,
+    /// Stop with an error when the two cameras' images are out of step ([`out_of_step`]).
+    pub check_pairing: bool,
 }
 
 /// The pixel format `evorec track` hands the decoded PNGs to the tracker in.
@@ -99,6 +102,7 @@ impl Default for TrackOptions {
             progress: false,
             pixels: Pixels::default(),
             absolute_stamps: false,
+            check_pairing: true,
         }
     }
 }
@@ -235,14 +239,14 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
         Err(_) => bail!("the image reader stopped before the first frame"),
     };
     let progress = opts.progress.then(|| progress_bar(end as u64));
-    let mut b = SequenceBoard::<F>::new(seq, first, rx, end, progress.clone());
+    let mut b = SequenceBoard::<F>::new(seq, first, rx, end, progress.clone(), opts.check_pairing);
     F::prepare();
     let n = F::BYTES_PER_PIXEL * usize::from(seq.rig.right.width()) * usize::from(seq.rig.right.height());
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let t0 = Instant::now();
     let stats = evorec_core::board::run(&mut b, &mut tracker, &mut left, &mut right, u32::MAX);
     let seconds = t0.elapsed().as_secs_f64();
-    let SequenceBoard { tracked, kept, .. } = b;
+    let (tracked, kept) = b.into_outputs();
     reader.join().map_err(|_| anyhow!("the image reader thread panicked"))?;
     if let Some(p) = progress {
         p.finish_and_clear();

@@ -11,8 +11,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
-use evorec_sim::io;
-use evorec_sim::scenario::{Method, Scenario, with_config_file};
+use evorec_sim::output::io;
+use evorec_sim::sim::scenario::{Method, Scenario, with_config_file};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]

@@ -270,12 +270,15 @@ pub fn sequence_files(data: &[u8]) {
             Ok((_, cam)) => assert!(cam.fx() > 0.0 && cam.fy() > 0.0, "accepted camera has a bad focal length"),
             Err(e) => one_line(&e),
         },
-        2 => match evorec_sim::recording::robot::ArmModel::from_urdf_str(text, "base_link", "flange_link", "fuzz-input") {
-            Ok(arm) => {
-                let _ = arm.to_chain::<7>();
+        2 => {
+            match evorec_sim::recording::robot::ArmModel::from_urdf_str(text, "base_link", "flange_link", "fuzz-input")
+            {
+                Ok(arm) => {
+                    let _ = arm.to_chain::<7>();
+                }
+                Err(e) => one_line(&e),
             }
-            Err(e) => one_line(&e),
-        },
+        }
         3 => match tables::parse_frames(text.as_bytes(), path, std::path::Path::new("seq")) {
             Ok(rows) => {
                 assert!(!rows.is_empty(), "no frames accepted as a sequence");

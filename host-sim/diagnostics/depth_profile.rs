@@ -15,9 +15,9 @@ use evorec_core::pose::Psi;
 use evorec_core::synth::render_block;
 use evorec_core::tracker::StereoFrame;
 use evorec_sim::experiments::experiment::{SimTracker, tracker_config};
+use evorec_sim::sim::board::World;
 use evorec_sim::sim::render;
 use evorec_sim::sim::scenario::Scenario;
-use evorec_sim::sim::board::World;
 
 const HALF_STEPS: i32 = 60;
 const STEP_M: f32 = 0.0001;

@@ -4,8 +4,8 @@
 //!
 //! `cargo run --release -p evorec-sim --example depth_scan -- SCENARIO [TIME_S]`
 use evorec_sim::experiments::experiment::{SimTracker, tracker_config};
-use evorec_sim::sim::scenario::Scenario;
 use evorec_sim::sim::board::World;
+use evorec_sim::sim::scenario::Scenario;
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();

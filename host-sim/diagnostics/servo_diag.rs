@@ -1,8 +1,8 @@
 //! Per-axis tracker error of one closed-loop servo cell (conveyor, ff+target), frame by frame.
 //! `cargo run --release -p evorec-sim --example servo_diag -- SEED GAIN [SPEED] [FRAMES]`
 use evorec_sim::experiments::closed_loop;
-use evorec_sim::sim::scenario::Method;
 use evorec_sim::experiments::servo::{Cell, GridSettings, TargetCase, scenario_of};
+use evorec_sim::sim::scenario::Method;
 
 fn main() -> anyhow::Result<()> {
     let a: Vec<String> = std::env::args().collect();

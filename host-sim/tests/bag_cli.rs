@@ -6,10 +6,10 @@
 
 use std::path::{Path, PathBuf};
 
+use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::bag::testbag::{self, TestBag, Transforms};
 use evorec_sim::rig::export;
 use evorec_sim::sim::scenario::Scenario;
-use evorec_sim::recording::sequence::Sequence;
 
 /// A short exported scenario (1 s of 160x120 frames).
 mod common;

@@ -5,11 +5,11 @@
 
 use std::path::{Path, PathBuf};
 
+use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::bag::testbag::{self, TestBag};
 use evorec_sim::rig::bag::{self, BagOptions, Rig};
-use evorec_sim::sim::scenario::{Method, Scenario};
-use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::{export, track};
+use evorec_sim::sim::scenario::{Method, Scenario};
 
 fn work_dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("evorec-bags-{tag}-{}", std::process::id()));

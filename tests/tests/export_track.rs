@@ -11,10 +11,10 @@ use std::path::PathBuf;
 
 use evorec_core::tracker::Feedforward;
 use evorec_core::tuning::Tuning;
-use evorec_sim::sim::scenario::{Method, Scenario};
-use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::experiments::experiment;
+use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::{export, track};
+use evorec_sim::sim::scenario::{Method, Scenario};
 
 fn scenario(method: Method) -> Scenario {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");

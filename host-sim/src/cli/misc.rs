@@ -5,11 +5,11 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use evorec_core::tuning::Tuning;
-use evorec_sim::sim::render::Light;
-use evorec_sim::sim::scenario::{Method, Scenario, TrackerTable, load_light, with_config_file};
 use evorec_sim::experiments::servo;
 use evorec_sim::output::frame;
 use evorec_sim::rig::export;
+use evorec_sim::sim::render::Light;
+use evorec_sim::sim::scenario::{Method, Scenario, TrackerTable, load_light, with_config_file};
 
 use super::{OutArgs, load};
 
@@ -101,7 +101,8 @@ impl ExportArgs {
     pub fn run(self, progress: bool) -> Result<()> {
         let s = load(&self.scenario)?;
         let name = self.scenario.file_stem().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-        let bar = progress.then(|| evorec_sim::output::logging::progress_bar(u64::from(evorec_sim::sim::board::frame_total(&s))));
+        let bar = progress
+            .then(|| evorec_sim::output::logging::progress_bar(u64::from(evorec_sim::sim::board::frame_total(&s))));
         let stats = export::export(&s, &name, &self.out, bar.clone())?;
         if let Some(b) = bar {
             b.finish_and_clear();
@@ -145,8 +146,15 @@ impl AcquireArgs {
             Some(path) => load_light(path, frame_period_s)?,
             None => Light::default(),
         };
-        let report =
-            evorec_sim::experiments::acquire::run(self.trials, self.first_seed, self.points, &tuning, &light, out, progress)?;
+        let report = evorec_sim::experiments::acquire::run(
+            self.trials,
+            self.first_seed,
+            self.points,
+            &tuning,
+            &light,
+            out,
+            progress,
+        )?;
         println!("{}", evorec_sim::experiments::acquire::markdown(&report));
         println!("{} trials per case in {:.1} s; wrote {}", self.trials, t0.elapsed().as_secs_f64(), out.display());
         Ok(())

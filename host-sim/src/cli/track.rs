@@ -7,9 +7,9 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::ValueEnum;
 use evorec_core::tuning::Tuning;
-use evorec_sim::sim::scenario::{HOST_POPULATION_CAPACITY, Method, with_config_file};
 use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::{bag, track};
+use evorec_sim::sim::scenario::{HOST_POPULATION_CAPACITY, Method, with_config_file};
 
 use super::OutArgs;
 

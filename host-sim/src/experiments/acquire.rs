@@ -32,11 +32,11 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::experiments::experiment;
+use crate::sim::board::TraceRow;
 use crate::sim::motion::MotionKind;
 use crate::sim::occlusion::{Initial, Occlusion, OcclusionKind, Occlusions, Placement};
 use crate::sim::render::Light;
 use crate::sim::scenario::{Method, Scenario};
-use crate::sim::board::TraceRow;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
 
@@ -330,7 +330,8 @@ pub fn run(
         .iter()
         .map(|(s, c)| {
             u64::from(
-                crate::sim::board::frame_total(&scenario(*s, *c, false)) + crate::sim::board::frame_total(&scenario(*s, *c, true)),
+                crate::sim::board::frame_total(&scenario(*s, *c, false))
+                    + crate::sim::board::frame_total(&scenario(*s, *c, true)),
             )
         })
         .sum();

@@ -32,12 +32,12 @@ use evorec_core::tracker::{Estimate, Feedforward, JointSample};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
-use crate::sim::arm::{ArmSim, CONTROL_PERIOD_S, DOF};
 use crate::experiments::experiment::{self, Population, ProgressBoard, RunOutput, SimTracker, Summary};
+use crate::sim::arm::{ArmSim, CONTROL_PERIOD_S, DOF};
+use crate::sim::board::{ArmController, Capture, Handover, SimBoard, World, frame_total};
 use crate::sim::motion::Twist;
 use crate::sim::motion::flange_to_camera_f64;
 use crate::sim::scenario::{Scenario, ServoSection};
-use crate::sim::board::{ArmController, Capture, Handover, SimBoard, World, frame_total};
 use crate::sim::target_path::{Conveyor, TargetPath};
 
 mod compare;

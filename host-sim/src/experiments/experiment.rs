@@ -12,11 +12,11 @@ use evorec_core::status::Status;
 use evorec_core::tracker::{ConfigError, StepError, Tracker, TrackerConfig};
 use serde::Serialize;
 
-use crate::sim::occlusion::Initial;
-use crate::sim::scenario::{HOST_POPULATION_CAPACITY, Scenario};
-use crate::sim::board::{self as sim, Handover, SimBoard, TraceRow, World};
 use crate::experiments::truth::{self as eval, WrongTracking};
 pub use crate::experiments::truth::{RotationError, isometry_of, rms_columns};
+use crate::sim::board::{self as sim, Handover, SimBoard, TraceRow, World};
+use crate::sim::occlusion::Initial;
+use crate::sim::scenario::{HOST_POPULATION_CAPACITY, Scenario};
 
 /// The tracker the simulator runs: PA-10, the default population capacity (the size in use is
 /// the scenario's `[tracker] ga.population`) and sample rows.

@@ -9,10 +9,10 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 
 use crate::experiments::experiment::{self, Accuracy};
-use crate::sim::motion::MotionKind;
 use crate::experiments::paper::{Cell, OMEGAS, scenario_of};
-use crate::sim::scenario::{Method, Scenario};
 use crate::experiments::truth::WrongTracking;
+use crate::sim::motion::MotionKind;
+use crate::sim::scenario::{Method, Scenario};
 
 /// Columns of `cells_A_B.csv`.
 pub const COLUMNS: [&str; 12] = [

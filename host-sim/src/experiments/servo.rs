@@ -13,8 +13,8 @@ use serde::Serialize;
 use crate::experiments::closed_loop::{self, LoopOptions, Outcome, ServoSummary};
 use crate::output::io;
 use crate::output::plot::{FONT, draw_err, ensure_font, render_png};
-use crate::sim::scenario::{Method, Scenario, ServoSection, TrackerTable};
 use crate::sim::board::frame_total;
+use crate::sim::scenario::{Method, Scenario, ServoSection, TrackerTable};
 use crate::sim::target_path::Conveyor;
 
 /// What the block does.

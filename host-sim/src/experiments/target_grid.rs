@@ -14,8 +14,8 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::experiments::experiment::{self, Summary};
-use crate::sim::motion::MotionKind;
 use crate::experiments::paper::DURATION_S;
+use crate::sim::motion::MotionKind;
 use crate::sim::scenario::{ConveyorFrame, ConveyorStart, Method, Scenario, WORLD_Y};
 
 /// Conveyor speeds (m/s).
@@ -409,7 +409,8 @@ mod tests {
         let c = &s.camera;
         let block = crate::sim::board::block(s);
         let (path, motion) = (TargetPath::from_scenario(s), crate::sim::board::target_motion(s));
-        let (flange, mount) = (crate::sim::board::flange_trajectory(s), crate::sim::motion::flange_to_camera_f64(c.baseline_m));
+        let (flange, mount) =
+            (crate::sim::board::flange_trajectory(s), crate::sim::motion::flange_to_camera_f64(c.baseline_m));
         let points: Vec<Vector3<f64>> = if centre {
             vec![Vector3::zeros()]
         } else {

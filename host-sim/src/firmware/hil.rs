@@ -23,8 +23,8 @@ use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, IMAGE_BYTES};
 
 use crate::experiments::closed_loop::{ClosedLoopOutput, LoopOptions, ServoBoard};
 use crate::experiments::experiment::{self, INITIAL_SPREAD, RunOutput, Summary};
-use crate::sim::scenario::Scenario;
 use crate::sim::board::{SimBoard, World};
+use crate::sim::scenario::Scenario;
 
 /// Runs `s` with the tracker in the firmware at `firmware` (an ELF), QEMU's working files in
 /// `workdir`. `on_frame` is called after every frame.

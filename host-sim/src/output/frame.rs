@@ -11,9 +11,9 @@ use evorec_core::model::SurfaceStrips;
 use nalgebra::{Isometry3, Matrix4, Point3};
 use serde::Serialize;
 
+use crate::sim::board::{self as sim, world_at_frame};
 use crate::sim::render;
 use crate::sim::scenario::Scenario;
-use crate::sim::board::{self as sim, world_at_frame};
 
 #[derive(Serialize)]
 struct Intrinsics {

@@ -15,7 +15,7 @@ use evorec_core::kinematics::{AXIS_TOLERANCE, Chain, ChainError, ChainPart, Fram
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 /// The PA-10 as a URDF, written from its DH table (`robots/pa10.urdf`).
-pub const PA10_URDF: &str = include_str!("../../robots/pa10.urdf");
+pub const PA10_URDF: &str = include_str!("../../../robots/pa10.urdf");
 /// Base link of [`PA10_URDF`].
 pub const PA10_BASE_LINK: &str = "base_link";
 /// Flange link of [`PA10_URDF`].
@@ -128,8 +128,10 @@ impl ArmModel {
         source_name: &str,
     ) -> Result<Self, RobotError> {
         let file = source_name.to_string();
-        let robot = urdf_rs::read_from_string(text)
-            .map_err(|e| RobotError::Parse { file: file.clone(), message: crate::recording::text::one_line(&e.to_string()) })?;
+        let robot = urdf_rs::read_from_string(text).map_err(|e| RobotError::Parse {
+            file: file.clone(),
+            message: crate::recording::text::one_line(&e.to_string()),
+        })?;
         plain_names(&robot, &file)?;
         let path = chain_joints(&robot, base_link, flange_link, &file)?;
         let mut joint_names = Vec::new();

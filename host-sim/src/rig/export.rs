@@ -27,14 +27,14 @@ use std::path::Path;
 use anyhow::Result;
 use indicatif::ProgressBar;
 
-use crate::sim::arm::CONTROL_PERIOD_S;
-use crate::sim::motion;
-use crate::sim::render;
 use crate::recording::robot::{ArmModel, PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF};
-use crate::sim::scenario::Scenario;
 use crate::recording::sequence::write::{ManifestFields, joints_header, joints_row, manifest_text};
 use crate::recording::sequence::{camera_info, tum};
+use crate::sim::arm::CONTROL_PERIOD_S;
 use crate::sim::board::{self as sim, World, search_space};
+use crate::sim::motion;
+use crate::sim::render;
+use crate::sim::scenario::Scenario;
 
 /// What an export wrote.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -186,8 +186,8 @@ mod tests {
 
     #[test]
     fn a_hidden_block_has_no_hue_and_random_poses_differ() {
-        use crate::sim::scenario::{Method, Scenario};
         use crate::sim::board::World;
+        use crate::sim::scenario::{Method, Scenario};
         let mut s = Scenario::new(5, 3.0, Method::Ff);
         s.camera.width = 160;
         s.camera.height = 120;

@@ -20,8 +20,8 @@ use image::RgbImage;
 use indicatif::ProgressBar;
 
 use super::hue_table::Rgb888Table;
-use crate::sim::render;
 use crate::recording::sequence::{self, FrameRow, JointTable, SequenceError};
+use crate::sim::render;
 
 /// Frames decoded ahead of the tracker at most.
 pub const READ_AHEAD: usize = 8;

@@ -36,9 +36,9 @@ use indicatif::ProgressBar;
 use nalgebra::Isometry3;
 
 use crate::experiments::experiment::{Population, SetupError, setup_tracker};
+pub use crate::experiments::truth as eval;
 use crate::recording::sequence::Sequence;
 use crate::sim::board::search_space;
-pub use crate::experiments::truth as eval;
 pub use board::FrameSource;
 use board::{SensorPixels, SequenceBoard, TrackedFrame};
 use evorec_core::image::Rgb565;

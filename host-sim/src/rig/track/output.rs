@@ -15,8 +15,8 @@ use serde::Serialize;
 
 use super::TrackOutput;
 use super::eval::{self, FrameError, Rms, WrongTracking};
-use crate::sim::render;
 use crate::recording::sequence::Sequence;
+use crate::sim::render;
 
 /// `summary.json` of a tracked sequence.
 #[derive(Debug, Clone, Serialize)]

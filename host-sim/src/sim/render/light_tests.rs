@@ -5,8 +5,8 @@ use super::tests::{cam, pose, rng};
 use super::*;
 use nalgebra::Vector3;
 
-use crate::sim::scenario::Scenario;
 use crate::sim::board::world_at_frame;
+use crate::sim::scenario::Scenario;
 
 fn image_with(light: Light, block: &Block) -> RgbImage {
     render(&cam(), &pose(), block, &RenderOptions::default().with_light(light), &mut rng())

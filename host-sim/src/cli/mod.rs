@@ -1,5 +1,8 @@
 //! The command line: one [`clap::Args`] struct per subcommand, each with its `run`, and the
 //! arguments they share.
+//!
+//! Layer `cli`, on top of the library's layers (see the crate doc of `evorec_sim`): the
+//! `evorec` binary's own modules, which may use every layer; no layer uses them.
 
 mod colours;
 mod misc;

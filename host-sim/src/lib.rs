@@ -4,8 +4,8 @@
 //! coloured block and the simulated camera-controller board through which the core's tracker
 //! sees the world — the same trait and loop as on the firmware —, and the commands around it.
 //!
-//! The crate is split into layers, one folder each; a layer uses only the layers below it
-//! (lowest first; `tests/tests/module_cycles.rs` checks that no two layers name each other):
+//! The crate is split into layers, one folder each, lowest first; a layer uses only the layers
+//! it lists, all below it (`tests/tests/module_cycles.rs` checks this):
 //!
 //! - [`sim`]: the simulated world — the arm and its motions, the block's paths, the renderer,
 //!   occlusions, scenario files, the simulated board. Uses no other layer.

@@ -223,7 +223,7 @@ pub fn tracker_step(data: &[u8]) {
 /// scenario that serialises to TOML which parses back to the same scenario.
 pub fn scenario_toml(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else { return };
-    let scenario = match evorec_sim::scenario::Scenario::from_toml_str(text) {
+    let scenario = match evorec_sim::sim::scenario::Scenario::from_toml_str(text) {
         Ok(s) => s,
         Err(e) => {
             let _ = (e.to_string(), e.field());
@@ -233,7 +233,7 @@ pub fn scenario_toml(data: &[u8]) {
     let _ = scenario.frame_count();
     let written = scenario.to_toml_string();
     let Ok(toml) = written else { panic!("a valid scenario does not serialise: {written:?}") };
-    let back = evorec_sim::scenario::Scenario::from_toml_str(&toml);
+    let back = evorec_sim::sim::scenario::Scenario::from_toml_str(&toml);
     let Ok(back) = back else { panic!("serialised scenario does not parse: {back:?}\n{toml}") };
     assert_eq!(back.to_toml_string().ok(), Some(toml), "serialise∘parse is not the identity");
 }
@@ -242,14 +242,14 @@ pub fn scenario_toml(data: &[u8]) {
 /// header short enough for the fuzzer to find).
 const FUZZ_JOINTS: [&str; 2] = ["j1", "j2"];
 
-/// The recorded-sequence reader (`evorec_sim::sequence`): the first byte picks the file kind,
+/// The recorded-sequence reader (`evorec_sim::recording::sequence`): the first byte picks the file kind,
 /// the rest is that file's text — `sequence.toml`, camera_info YAML, URDF (chain `base_link` →
 /// `flange_link`), `frames.csv`, `joints.csv` (joints `j1`, `j2`) or a TUM trajectory.
 /// Properties: every error is one line naming the file; every accepted file satisfies the
 /// reader's documented invariants (strictly increasing times, finite values, a rigid hand-eye
 /// transform, a joint state inside the sampled span).
 pub fn sequence_files(data: &[u8]) {
-    use evorec_sim::sequence::{camera_info, manifest, tables, tum};
+    use evorec_sim::recording::sequence::{camera_info, manifest, tables, tum};
     let Some((&kind, rest)) = data.split_first() else { return };
     let Ok(text) = std::str::from_utf8(rest) else { return };
     let path = std::path::Path::new("fuzz-input");
@@ -270,12 +270,15 @@ pub fn sequence_files(data: &[u8]) {
             Ok((_, cam)) => assert!(cam.fx() > 0.0 && cam.fy() > 0.0, "accepted camera has a bad focal length"),
             Err(e) => one_line(&e),
         },
-        2 => match evorec_sim::robot::ArmModel::from_urdf_str(text, "base_link", "flange_link", "fuzz-input") {
-            Ok(arm) => {
-                let _ = arm.to_chain::<7>();
+        2 => {
+            match evorec_sim::recording::robot::ArmModel::from_urdf_str(text, "base_link", "flange_link", "fuzz-input")
+            {
+                Ok(arm) => {
+                    let _ = arm.to_chain::<7>();
+                }
+                Err(e) => one_line(&e),
             }
-            Err(e) => one_line(&e),
-        },
+        }
         3 => match tables::parse_frames(text.as_bytes(), path, std::path::Path::new("seq")) {
             Ok(rows) => {
                 assert!(!rows.is_empty(), "no frames accepted as a sequence");

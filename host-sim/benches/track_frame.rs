@@ -9,7 +9,7 @@
 //! hue computed only at the pixels the sample points hit (`evorec_core::image::Rgb888`), and
 //! `frame/rgb888-frame` the default tuning's `generations_per_frame` generations of it.
 //! `frame/table-generation` and `frame/table-frame` are the same with the hue of a sample read
-//! from the table of every colour (`evorec_sim::track::hue_table::Rgb888Table`, the same hue
+//! from the table of every colour (`evorec_sim::rig::track::hue_table::Rgb888Table`, the same hue
 //! bytes): `frame/table-frame` is what `evorec track` does per frame.
 //!
 //! `cargo bench -p evorec-sim --bench track_frame`. Target: ≤ 1 ms per frame.
@@ -26,8 +26,8 @@ use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
 use evorec_core::tracker::{JointSample, StereoFrame, Tracker, TrackerConfig};
-use evorec_sim::render::{self, RenderOptions};
-use evorec_sim::track::hue_table::{self, Rgb888Table};
+use evorec_sim::rig::track::hue_table::{self, Rgb888Table};
+use evorec_sim::sim::render::{self, RenderOptions};
 use nalgebra::{Isometry3, Vector3};
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;

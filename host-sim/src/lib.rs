@@ -1,45 +1,34 @@
 //! # evorec-sim
 //!
-//! The host simulator of evorec: a PA-10 arm carrying a stereo camera pair ([`arm`],
-//! [`motion`]), a renderer of the coloured block ([`render`]), scenario files ([`scenario`]),
-//! the simulated camera-controller board ([`sim`]) through which the core's tracker sees the
-//! world — the same trait and loop as on the firmware —, runs and their summaries
-//! ([`experiment`]), the paper's experiment grid ([`paper`]) and its seed sweeps
-//! ([`paper_seeds`]), single-frame rendering
-//! ([`frame`]), the same runs with the tracker in the firmware on QEMU ([`hil`]), output
-//! files ([`io`]) and plots ([`plot`]); arms from URDF ([`robot`]); recorded stereo sequences
-//! (`evorec-seq/1`): the reader ([`sequence`]), tracking them ([`track`]) and writing a
-//! scenario as one ([`export`]), and ROS 2 bags read as one ([`bag`]); the host's logger
-//! ([`logging`]); unknown starts and occlusions ([`occlusion`]) and the
-//! acquisition statistics ([`acquire`]); the block's own paths beyond the paper
-//! ([`target_path`]) and their grid ([`target_grid`]); the parallel grid runner ([`grid`]).
+//! The host simulator of evorec: a PA-10 arm carrying a stereo camera pair, a renderer of the
+//! coloured block and the simulated camera-controller board through which the core's tracker
+//! sees the world — the same trait and loop as on the firmware —, and the commands around it.
+//!
+//! The crate is split into layers, one folder each, lowest first; a layer uses only the layers
+//! it lists, all below it (`tests/tests/module_cycles.rs` checks this):
+//!
+//! - [`sim`]: the simulated world — the arm and its motions, the block's paths, the renderer,
+//!   occlusions, scenario files, the simulated board. Uses no other layer.
+//! - [`recording`]: the recorded stereo sequence format `evorec-seq/1` (reader, writer's
+//!   pieces, TUM trajectories), arms from URDF. Uses no other layer.
+//! - [`output`]: output files (all written through [`output::io`]), plots, the logger and
+//!   progress bars, the row-size dispatch, one rendered frame (`evorec render`). Uses `sim`
+//!   and `recording`.
+//! - [`experiments`]: runs of the tracker on the simulator and their summaries, the errors
+//!   against the truth, the closed loop, the paper's grid and seed sweeps, the target grid,
+//!   acquisition statistics. Uses `sim` and `output`.
+//! - [`rig`]: real-rig input — tracking recorded sequences, ROS 2 bags (read, tracked,
+//!   imported, rig files), a scenario exported as a sequence. Uses `sim`, `recording`,
+//!   `output` and `experiments`.
+//! - [`firmware`]: firmware tooling — timing and memory on QEMU, runs with the tracker in the
+//!   firmware. Uses `sim`, `output` and `experiments`.
+//!
+//! The `evorec` binary's command line (`src/cli/`, one module per group of subcommands) sits
+//! on top and may use every layer.
 
-pub mod acquire;
-pub mod arm;
-pub mod bag;
-pub mod closed_loop;
-pub mod experiment;
-pub mod export;
-pub mod frame;
-pub mod grid;
-pub mod hil;
-pub mod io;
-pub mod logging;
-pub mod motion;
-pub mod occlusion;
-pub mod paper;
-pub mod paper_seeds;
-pub mod plot;
-pub mod render;
-pub mod robot;
-pub mod rows;
-pub mod scenario;
-pub mod sequence;
-pub mod servo;
+pub mod experiments;
+pub mod firmware;
+pub mod output;
+pub mod recording;
+pub mod rig;
 pub mod sim;
-pub mod target_grid;
-pub mod target_path;
-pub mod text;
-pub mod timing;
-pub mod track;
-pub mod truth;

@@ -11,7 +11,7 @@ use clap::Parser;
 /// `Debug` output (which `fn main() -> Result` would use) is not involved.
 fn main() -> ExitCode {
     let cli = cli::Cli::parse();
-    evorec_sim::logging::init(evorec_sim::logging::level(cli.verbose, cli.quiet));
+    evorec_sim::output::logging::init(evorec_sim::output::logging::level(cli.verbose, cli.quiet));
     match cli.command.run(!cli.quiet) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -2,14 +2,14 @@
 //! message or key, exit status 1, and nothing at `--out` — except for a bag that cannot be
 //! read to its end (truncated or corrupt), whose frames before that point are tracked and
 //! written. The bags are written by the test
-//! from an exported simulator scenario (`evorec_sim::bag::testbag`), then spoiled.
+//! from an exported simulator scenario (`evorec_sim::rig::bag::testbag`), then spoiled.
 
 use std::path::{Path, PathBuf};
 
-use evorec_sim::bag::testbag::{self, TestBag, Transforms};
-use evorec_sim::export;
-use evorec_sim::scenario::Scenario;
-use evorec_sim::sequence::Sequence;
+use evorec_sim::recording::sequence::Sequence;
+use evorec_sim::rig::bag::testbag::{self, TestBag, Transforms};
+use evorec_sim::rig::export;
+use evorec_sim::sim::scenario::Scenario;
 
 /// A short exported scenario (1 s of 160x120 frames).
 mod common;

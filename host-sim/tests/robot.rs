@@ -3,7 +3,7 @@
 //! differences, prismatic and continuous joints, and one clear error per bad file.
 
 use evorec_core::kinematics::{Chain, PA10};
-use evorec_sim::robot::{ArmModel, PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF, RobotError};
+use evorec_sim::recording::robot::{ArmModel, PA10_BASE_LINK, PA10_FLANGE_LINK, PA10_URDF, RobotError};
 use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Vector3};
 
 const IIWA_URDF: &str = include_str!("data/iiwa.urdf");

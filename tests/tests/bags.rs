@@ -1,15 +1,15 @@
 //! ROS 2 bags: the project's own small bags, written with the `mcap` crate from an exported
-//! simulator scenario (`evorec_sim::bag::testbag`), read by `evorec import` and
+//! simulator scenario (`evorec_sim::rig::bag::testbag`), read by `evorec import` and
 //! `evorec track BAG` (the library calls behind them; the command line's bad-input failures
 //! are checked in `host-sim/tests/bag_cli.rs`). Needs nothing outside the repository.
 
 use std::path::{Path, PathBuf};
 
-use evorec_sim::bag::testbag::{self, TestBag};
-use evorec_sim::bag::{self, BagOptions, Rig};
-use evorec_sim::scenario::{Method, Scenario};
-use evorec_sim::sequence::Sequence;
-use evorec_sim::{export, track};
+use evorec_sim::recording::sequence::Sequence;
+use evorec_sim::rig::bag::testbag::{self, TestBag};
+use evorec_sim::rig::bag::{self, BagOptions, Rig};
+use evorec_sim::rig::{export, track};
+use evorec_sim::sim::scenario::{Method, Scenario};
 
 fn work_dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("evorec-bags-{tag}-{}", std::process::id()));

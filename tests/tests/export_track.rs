@@ -2,7 +2,7 @@
 //! as `evorec-seq/1` (`evorec export`) and tracked from the files (`evorec track`) gives the
 //! very estimates `evorec run` gives on the simulator, bit for bit, with and without
 //! feedforward (the export writes capture times on control steps and joint values that read
-//! back exactly, see `evorec_sim::export`), reading the PNGs as 8-bit RGB (the default) and
+//! back exactly, see `evorec_sim::rig::export`), reading the PNGs as 8-bit RGB (the default) and
 //! as RGB565 (the board's path): the exported PNGs hold the simulated sensor's RGB565 pixels
 //! widened to 8 bits, whose hue is the RGB565 table's.
 
@@ -11,9 +11,10 @@ use std::path::PathBuf;
 
 use evorec_core::tracker::Feedforward;
 use evorec_core::tuning::Tuning;
-use evorec_sim::scenario::{Method, Scenario};
-use evorec_sim::sequence::Sequence;
-use evorec_sim::{experiment, export, track};
+use evorec_sim::experiments::experiment;
+use evorec_sim::recording::sequence::Sequence;
+use evorec_sim::rig::{export, track};
+use evorec_sim::sim::scenario::{Method, Scenario};
 
 fn scenario(method: Method) -> Scenario {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");

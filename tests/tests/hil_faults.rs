@@ -14,7 +14,9 @@ use std::time::Duration;
 use evorec_firmware::BoardProfile;
 use evorec_firmware::faults::FaultConfig;
 use evorec_firmware::host::{HilOptions, build_firmware};
-use evorec_sim::{experiment, hil, scenario::Scenario};
+use evorec_sim::experiments::experiment;
+use evorec_sim::firmware::hil;
+use evorec_sim::sim::scenario::Scenario;
 
 fn scenario(seconds: f64) -> Scenario {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
@@ -73,7 +75,7 @@ fn the_firmware_keeps_running_and_reports_at_1_and_10_percent_faults() {
         return;
     }
     let s = scenario(4.0);
-    let frames = evorec_sim::sim::frame_total(&s);
+    let frames = evorec_sim::sim::board::frame_total(&s);
     let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));
     for (rate, seed) in [(0.01, 3), (0.10, 5)] {
         let work = std::env::temp_dir().join(format!("evorec-hil-faults-{seed}-{}", std::process::id()));

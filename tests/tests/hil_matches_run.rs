@@ -10,7 +10,9 @@ use evorec_core::board::CameraController;
 use evorec_core::image::{PixelFormat, Rgb565};
 use evorec_firmware::BoardProfile;
 use evorec_firmware::host::build_firmware;
-use evorec_sim::{experiment, hil, scenario::Scenario};
+use evorec_sim::experiments::experiment;
+use evorec_sim::firmware::hil;
+use evorec_sim::sim::scenario::Scenario;
 
 #[test]
 fn hil_trace_equals_host_trace() {
@@ -18,7 +20,7 @@ fn hil_trace_equals_host_trace() {
         return;
     }
     // The simulated board (behind `evorec run` and `evorec hil`) delivers RGB565.
-    type SimFormat = <evorec_sim::sim::SimBoard as CameraController<7>>::Format;
+    type SimFormat = <evorec_sim::sim::board::SimBoard as CameraController<7>>::Format;
     assert_eq!(SimFormat::NAME, Rgb565::NAME);
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_b_ff.toml");
     let text = std::fs::read_to_string(path).expect("scenario");
@@ -84,7 +86,7 @@ fn hil_runs_a_configuration_file() {
         return;
     }
     use evorec_core::tuning::Tuning;
-    use evorec_sim::scenario::TrackerTable;
+    use evorec_sim::sim::scenario::TrackerTable;
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
     let mut s = Scenario::load(path).expect("valid scenario");
     s.duration_s = 2.0;

@@ -39,9 +39,9 @@ use evorec_firmware::BoardProfile;
 use evorec_firmware::host::{HilOptions, HilSession, Reply, build_firmware};
 use evorec_firmware::protocol::{DOF, Frame, Setup};
 use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, IMAGE_BYTES};
-use evorec_sim::experiment::{self, INITIAL_SPREAD};
-use evorec_sim::scenario::Scenario;
-use evorec_sim::sim::{SimBoard, World};
+use evorec_sim::experiments::experiment::{self, INITIAL_SPREAD};
+use evorec_sim::sim::board::{SimBoard, World};
+use evorec_sim::sim::scenario::Scenario;
 
 /// Frames tracked in lock-step to measure the sustainable period.
 const WARMUP: usize = 12;

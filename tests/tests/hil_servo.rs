@@ -10,9 +10,9 @@
 
 use evorec_firmware::BoardProfile;
 use evorec_firmware::host::{HilOptions, build_firmware};
-use evorec_sim::closed_loop::{self, ClosedLoopOutput, LoopOptions};
-use evorec_sim::hil;
-use evorec_sim::scenario::{Method, Scenario};
+use evorec_sim::experiments::closed_loop::{self, ClosedLoopOutput, LoopOptions};
+use evorec_sim::firmware::hil;
+use evorec_sim::sim::scenario::{Method, Scenario};
 
 /// `scenarios/hil_servo.toml` cut to 3 s (92 frames) with `method`.
 fn scenario(method: Method) -> Scenario {

@@ -14,6 +14,9 @@
 //! the top-level modules do. Comments, string and character literals and `#[cfg(test)]` items
 //! (with the files of `#[cfg(test)] mod NAME;`) do not count: tests may reach anywhere. Any
 //! cycle fails the test, with its modules in order.
+//!
+//! `host-sim/src` is also split into layers (see its `lib.rs`): each top-level module may name
+//! only the layers below it ([`HOST_SIM_LAYERS`]).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -359,6 +362,35 @@ fn no_import_cycles_between_modules_at_any_level() {
         cycles.extend(cycles_of(&src).into_iter().map(|c| format!("{krate}/src: {c}")));
     }
     assert!(cycles.is_empty(), "import cycles between modules:\n{}", cycles.join("\n"));
+}
+
+/// The layers of `host-sim/src` (its `lib.rs` and each layer's `mod.rs` say the same), lowest
+/// first: each top-level module and the layers it may name. `cli` is the binary's command line,
+/// which reaches the layers as `evorec_sim::…`, not through `crate::`.
+const HOST_SIM_LAYERS: [(&str, &[&str]); 7] = [
+    ("sim", &[]),
+    ("recording", &[]),
+    ("output", &["sim", "recording"]),
+    ("experiments", &["sim", "output"]),
+    ("rig", &["sim", "recording", "output", "experiments"]),
+    ("firmware", &["sim", "output", "experiments"]),
+    ("cli", &[]),
+];
+
+#[test]
+fn host_sim_layers_name_only_the_layers_below_them() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../host-sim/src");
+    let graphs = module_graphs(&src);
+    let top = graphs.get("").expect("host-sim/src has top-level modules");
+    let mut wrong = Vec::new();
+    for (layer, named) in top {
+        let Some((_, may)) = HOST_SIM_LAYERS.iter().find(|(l, _)| l == layer) else {
+            wrong.push(format!("{layer}: not a layer of HOST_SIM_LAYERS"));
+            continue;
+        };
+        wrong.extend(named.iter().filter(|n| !may.contains(&n.as_str())).map(|n| format!("{layer} -> {n}")));
+    }
+    assert!(wrong.is_empty(), "host-sim/src: a layer names a layer it may not use:\n{}", wrong.join("\n"));
 }
 
 fn strings(paths: &[&[&str]]) -> Vec<ModPath> {

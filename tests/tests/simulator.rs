@@ -9,10 +9,10 @@ use evorec_core::image::Rgb565Image;
 use evorec_core::kinematics::PA10;
 use evorec_core::limits::DEFAULT_GRID;
 use evorec_core::model::SurfaceStrips;
-use evorec_sim::experiment::{self, Accuracy};
-use evorec_sim::motion::MotionKind;
-use evorec_sim::scenario::{Method, Scenario};
-use evorec_sim::sim::{self, SimBoard, World};
+use evorec_sim::experiments::experiment::{self, Accuracy};
+use evorec_sim::sim::board::{self as sim, SimBoard, World};
+use evorec_sim::sim::motion::MotionKind;
+use evorec_sim::sim::scenario::{Method, Scenario};
 use nalgebra::Isometry3;
 
 /// 5 s of a motion at ω = 0.5 rad/s (4× the paper's base speed), default camera and target.

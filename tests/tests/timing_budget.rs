@@ -1,6 +1,6 @@
 //! The default configuration's instructions per GA generation stay under the budget on the
 //! Cortex-M4: counted under QEMU `-icount shift=10` with TIMER0 by the timing firmware
-//! (`hil-stubs/src/bin/evorec-timing.rs`, run through `evorec_sim::timing::measure`), so the
+//! (`hil-stubs/src/bin/evorec-timing.rs`, run through `evorec_sim::firmware::timing::measure`), so the
 //! count is deterministic — never wall time.
 //!
 //! Population 40, 8 points per row (the core's defaults, `DEFAULT_GRID`), feedforward on, ≥ 100 frames of every kind (blank, target
@@ -22,7 +22,7 @@ use std::path::Path;
 use evorec_core::status::Status;
 use evorec_core::tracker::Feedforward;
 use evorec_firmware::timing::CaseKind;
-use evorec_sim::timing::{self, GENERATION_BUDGET, RATIO_TARGET};
+use evorec_sim::firmware::timing::{self, GENERATION_BUDGET, RATIO_TARGET};
 use evorec_tests::Failure;
 
 #[test]

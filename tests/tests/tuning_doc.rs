@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use evorec_core::tuning::{FIELDS, Tuning};
-use evorec_sim::scenario::TrackerTable;
+use evorec_sim::sim::scenario::TrackerTable;
 
 /// `name → default` of every row of a Markdown table whose first cell is a backticked name.
 fn documented(text: &str) -> BTreeMap<String, String> {

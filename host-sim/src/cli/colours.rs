@@ -3,9 +3,9 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use evorec_sim::sequence::Sequence;
-use evorec_sim::track::colours::ColourReport;
-use evorec_sim::{bag, track};
+use evorec_sim::recording::sequence::Sequence;
+use evorec_sim::rig::track::colours::ColourReport;
+use evorec_sim::rig::{bag, track};
 
 use super::track::TrackArgs;
 

@@ -5,9 +5,11 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use evorec_core::tuning::Tuning;
-use evorec_sim::render::Light;
-use evorec_sim::scenario::{Method, Scenario, TrackerTable, load_light, with_config_file};
-use evorec_sim::{export, frame, servo};
+use evorec_sim::experiments::servo;
+use evorec_sim::output::frame;
+use evorec_sim::rig::export;
+use evorec_sim::sim::render::Light;
+use evorec_sim::sim::scenario::{Method, Scenario, TrackerTable, load_light, with_config_file};
 
 use super::{OutArgs, load};
 
@@ -80,9 +82,9 @@ pub struct TimingArgs {
 
 impl TimingArgs {
     pub fn run(self) -> Result<()> {
-        let board = evorec_sim::timing::Board::by_name(&self.profile)
+        let board = evorec_sim::firmware::timing::Board::by_name(&self.profile)
             .ok_or_else(|| anyhow::anyhow!("--profile {}: expected m4 or m7", self.profile))?;
-        evorec_sim::timing::run(self.out.create()?, board)
+        evorec_sim::firmware::timing::run(self.out.create()?, board)
     }
 }
 
@@ -99,7 +101,8 @@ impl ExportArgs {
     pub fn run(self, progress: bool) -> Result<()> {
         let s = load(&self.scenario)?;
         let name = self.scenario.file_stem().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-        let bar = progress.then(|| evorec_sim::logging::progress_bar(u64::from(evorec_sim::sim::frame_total(&s))));
+        let bar = progress
+            .then(|| evorec_sim::output::logging::progress_bar(u64::from(evorec_sim::sim::board::frame_total(&s))));
         let stats = export::export(&s, &name, &self.out, bar.clone())?;
         if let Some(b) = bar {
             b.finish_and_clear();
@@ -118,7 +121,7 @@ pub struct AcquireArgs {
     #[arg(long, default_value_t = 1)]
     first_seed: u64,
     /// Points per sample row of the tracker (5, 6, 7 or 8).
-    #[arg(long, default_value_t = evorec_sim::acquire::DEFAULT_POINTS)]
+    #[arg(long, default_value_t = evorec_sim::experiments::acquire::DEFAULT_POINTS)]
     points: usize,
     #[command(flatten)]
     out: OutArgs,
@@ -143,9 +146,16 @@ impl AcquireArgs {
             Some(path) => load_light(path, frame_period_s)?,
             None => Light::default(),
         };
-        let report =
-            evorec_sim::acquire::run(self.trials, self.first_seed, self.points, &tuning, &light, out, progress)?;
-        println!("{}", evorec_sim::acquire::markdown(&report));
+        let report = evorec_sim::experiments::acquire::run(
+            self.trials,
+            self.first_seed,
+            self.points,
+            &tuning,
+            &light,
+            out,
+            progress,
+        )?;
+        println!("{}", evorec_sim::experiments::acquire::markdown(&report));
         println!("{} trials per case in {:.1} s; wrote {}", self.trials, t0.elapsed().as_secs_f64(), out.display());
         Ok(())
     }

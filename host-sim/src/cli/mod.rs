@@ -1,5 +1,8 @@
 //! The command line: one [`clap::Args`] struct per subcommand, each with its `run`, and the
 //! arguments they share.
+//!
+//! Layer `cli`, on top of the library's layers (see the crate doc of `evorec_sim`): the
+//! `evorec` binary's own modules, which may use every layer; no layer uses them.
 
 mod colours;
 mod misc;
@@ -11,8 +14,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
-use evorec_sim::io;
-use evorec_sim::scenario::{Method, Scenario, with_config_file};
+use evorec_sim::output::io;
+use evorec_sim::sim::scenario::{Method, Scenario, with_config_file};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]

@@ -6,9 +6,9 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::ValueEnum;
-use evorec_sim::motion::MotionKind;
-use evorec_sim::scenario::{Method, Scenario, load_light};
-use evorec_sim::{paper, paper_seeds, target_grid};
+use evorec_sim::experiments::{paper, paper_seeds, target_grid};
+use evorec_sim::sim::motion::MotionKind;
+use evorec_sim::sim::scenario::{Method, Scenario, load_light};
 
 use super::{OutArgs, load};
 

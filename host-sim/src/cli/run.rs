@@ -5,9 +5,11 @@ use std::time::Instant;
 
 use anyhow::Result;
 use evorec_firmware::faults::FaultConfig;
-use evorec_sim::experiment::{self, RunOutput};
-use evorec_sim::scenario::Scenario;
-use evorec_sim::{closed_loop, hil, io};
+use evorec_sim::experiments::closed_loop;
+use evorec_sim::experiments::experiment::{self, RunOutput};
+use evorec_sim::firmware::hil;
+use evorec_sim::output::io;
+use evorec_sim::sim::scenario::Scenario;
 
 use super::{OutArgs, Overrides};
 

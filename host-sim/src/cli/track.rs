@@ -7,9 +7,9 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::ValueEnum;
 use evorec_core::tuning::Tuning;
-use evorec_sim::scenario::{HOST_POPULATION_CAPACITY, Method, with_config_file};
-use evorec_sim::sequence::Sequence;
-use evorec_sim::{bag, track};
+use evorec_sim::recording::sequence::Sequence;
+use evorec_sim::rig::{bag, track};
+use evorec_sim::sim::scenario::{HOST_POPULATION_CAPACITY, Method, with_config_file};
 
 use super::OutArgs;
 
@@ -268,7 +268,7 @@ impl ImportArgs {
         let rig = bag::Rig::load(&self.rig)?;
         let b = bag::load(&self.bag, &rig, &self.bag_args.options(), &self.out)?;
         b.report.log();
-        let bar = progress.then(|| evorec_sim::logging::progress_bar_of(b.pairs.len() as u64, "pairs"));
+        let bar = progress.then(|| evorec_sim::output::logging::progress_bar_of(b.pairs.len() as u64, "pairs"));
         bag::import::import(&b, &self.out, bar.as_ref())?;
         if let Some(bar) = bar {
             bar.finish_and_clear();
@@ -312,7 +312,7 @@ impl RigArgs {
             anyhow::bail!("{}: exists; evorec rig does not overwrite a rig file", self.out.display());
         }
         let draft = bag::rigfile::draft(&self.bag)?;
-        evorec_sim::io::write_bytes(&self.out, draft.text.as_bytes())?;
+        evorec_sim::output::io::write_bytes(&self.out, draft.text.as_bytes())?;
         for key in &draft.open {
             log::warn!("{}: left to you: {key}", self.out.display());
         }

@@ -6,11 +6,11 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use evorec_sim::bag::metadata::Metadata;
-use evorec_sim::bag::msgs;
-use evorec_sim::bag::out_msgs::{level, marker, read};
-use evorec_sim::bag::rig::{Output, Rig};
-use evorec_sim::bag::testbag::RIGHT_FRAME;
+use evorec_sim::rig::bag::metadata::Metadata;
+use evorec_sim::rig::bag::msgs;
+use evorec_sim::rig::bag::out_msgs::{level, marker, read};
+use evorec_sim::rig::bag::rig::{Output, Rig};
+use evorec_sim::rig::bag::testbag::RIGHT_FRAME;
 
 /// Per topic of the results bag: (schema name, log times).
 type Topics = BTreeMap<String, (String, Vec<u64>)>;

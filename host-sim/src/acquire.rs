@@ -35,10 +35,11 @@ use crate::experiment;
 use crate::motion::MotionKind;
 use crate::occlusion::{Initial, Occlusion, OcclusionKind, Occlusions, Placement};
 use crate::render::Light;
-use crate::scenario::{Method, Scenario};
+use crate::scenario::Scenario;
 use crate::sim::TraceRow;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
+use evorec_core::tuning::Feedforward;
 
 /// Position error (mm) within which a pose counts as found: the sequence tracker's
 /// [`WITHIN_POSITION_M`](crate::truth::WITHIN_POSITION_M).
@@ -94,7 +95,7 @@ impl Case {
 /// The scenario of trial `seed` in `case`; `recovery` selects the occlusion run.
 pub fn scenario(seed: u64, case: Case, recovery: bool) -> Scenario {
     let duration = if recovery { RECOVERY_DURATION_S } else { ACQUIRE_DURATION_S };
-    let mut s = Scenario::new(seed, duration, Method::Ff);
+    let mut s = Scenario::new(seed, duration, Feedforward::On);
     s.target.placement = Placement::Random;
     s.target.omega_rad_s = 0.0;
     match case {

@@ -186,9 +186,10 @@ mod tests {
 
     #[test]
     fn a_hidden_block_has_no_hue_and_random_poses_differ() {
-        use crate::scenario::{Method, Scenario};
+        use crate::scenario::Scenario;
         use crate::sim::World;
-        let mut s = Scenario::new(5, 3.0, Method::Ff);
+        use evorec_core::tuning::Feedforward;
+        let mut s = Scenario::new(5, 3.0, Feedforward::On);
         s.camera.width = 160;
         s.camera.height = 120;
         s.camera.fx = 200.0;

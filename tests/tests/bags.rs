@@ -5,9 +5,10 @@
 
 use std::path::{Path, PathBuf};
 
+use evorec_core::tuning::Feedforward;
 use evorec_sim::bag::testbag::{self, TestBag};
 use evorec_sim::bag::{self, BagOptions, Rig};
-use evorec_sim::scenario::{Method, Scenario};
+use evorec_sim::scenario::Scenario;
 use evorec_sim::sequence::Sequence;
 use evorec_sim::{export, track};
 
@@ -24,7 +25,7 @@ fn exported(dir: &Path) -> Sequence {
     let mut s = Scenario::from_toml_str(&std::fs::read_to_string(path).expect("scenario")).expect("valid");
     s.duration_s = 2.0;
     s.robot.omega_rad_s = 0.5;
-    s.set_method(Method::Ff);
+    s.set_method(Feedforward::On);
     export::export(&s, "sway", &dir.join("seq"), None).unwrap_or_else(|e| panic!("{e:#}"));
     Sequence::load(&dir.join("seq")).unwrap_or_else(|e| panic!("{e}"))
 }

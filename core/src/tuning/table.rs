@@ -1,6 +1,6 @@
 //! The table of [`Tuning`]'s fields, in the order every serialization uses.
 
-use super::{Field, Kind, METHODS, Rule, Tuning, Value, count, int, method_name, real, set_method};
+use super::{Feedforward, Field, Kind, Rule, Tuning, Value, count, int, method_name, real, set_method};
 
 /// Every tuning field, in order: the run's mode and limits, the GA, the acquisition, the
 /// status thresholds, the target motion model.
@@ -9,7 +9,7 @@ pub const FIELDS: [Field; 55] = [
         name: "method",
         unit: "",
         meaning: "what is fed forward: ga (nothing), ff (the arm's motion), ff+target (also the block's own)",
-        kind: Kind::Name(&METHODS),
+        kind: Kind::Name(&Feedforward::NAMES),
         rule: Rule::Any,
         get: |t: &Tuning| method_name(t.feedforward),
         set: set_method,

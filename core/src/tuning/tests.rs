@@ -80,11 +80,26 @@ fn wrong_kinds_and_ranges_are_refused_by_the_setters() {
 
 #[test]
 fn the_method_names_the_feedforward_mode() {
-    for (name, mode) in METHODS.iter().zip([Feedforward::Off, Feedforward::On, Feedforward::OnWithTarget]) {
+    for (name, mode) in Feedforward::NAMES.iter().zip([Feedforward::Off, Feedforward::On, Feedforward::OnWithTarget]) {
         let t = with("method", Value::Name(name));
         assert_eq!(t.feedforward, mode);
         assert_eq!(t.get("method"), Some(Value::Name(name)));
     }
+}
+
+#[test]
+fn a_feedforward_mode_reads_back_from_its_name() {
+    for (mode, name) in Feedforward::ALL.into_iter().zip(Feedforward::NAMES) {
+        assert_eq!(format!("{mode}"), name);
+        assert_eq!(name.parse::<Feedforward>(), Ok(mode));
+    }
+    assert_eq!(Feedforward::OnWithTarget.name(), "ff+target");
+    let e = "FF".parse::<Feedforward>().unwrap_err();
+    assert_eq!((e.text(), format!("{e}").as_str()), ("FF", "expected \"ga\", \"ff\" or \"ff+target\", got \"FF\""));
+    let long = "é".repeat(20);
+    let e = long.parse::<Feedforward>().unwrap_err();
+    assert_eq!(e.text(), "é".repeat(16));
+    assert!(format!("{e}").ends_with("ééé…\""));
 }
 
 #[test]

@@ -4,9 +4,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use evorec_core::tuning::Feedforward;
 use evorec_core::tuning::Tuning;
 use evorec_sim::render::Light;
-use evorec_sim::scenario::{Method, Scenario, TrackerTable, load_light, with_config_file};
+use evorec_sim::scenario::{Scenario, TrackerTable, load_light, with_config_file};
 use evorec_sim::{export, frame, servo};
 
 use super::{OutArgs, load};
@@ -138,7 +139,7 @@ impl AcquireArgs {
         let t0 = Instant::now();
         let out = &self.out.out;
         let tuning = with_config_file(Tuning::DEFAULT, self.config.as_deref())?;
-        let frame_period_s = Scenario::new(0, 1.0, Method::Ff).frame_period_s;
+        let frame_period_s = Scenario::new(0, 1.0, Feedforward::On).frame_period_s;
         let light = match &self.light {
             Some(path) => load_light(path, frame_period_s)?,
             None => Light::default(),

@@ -11,8 +11,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
+use evorec_core::tuning::Feedforward;
 use evorec_sim::io;
-use evorec_sim::scenario::{Method, Scenario, with_config_file};
+use evorec_sim::scenario::{Scenario, with_config_file};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -136,8 +137,8 @@ pub struct Overrides {
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// Override the scenario's method: ga, ff or ff+target.
-    #[arg(long, value_parser = Method::parse)]
-    pub method: Option<Method>,
+    #[arg(long, value_parser = str::parse::<Feedforward>)]
+    pub method: Option<Feedforward>,
     /// Override the scenario's seed (GA and image noise), 0 ..= 2^63−1: for seed sweeps.
     #[arg(long, value_parser = clap::value_parser!(u64).range(0..=i64::MAX as u64))]
     pub seed: Option<u64>,

@@ -263,11 +263,11 @@ pub const FIELDS: [Field; 55] = [
         status.acquire_fitness
     ),
     int!(
-        "status.confirm_generations",
+        "status.confirm_frames",
         "frames",
         AtLeastOne,
         "frames in a row found before tracking (one status decision per frame)",
-        status.confirm_generations
+        status.confirm_frames
     ),
     real!(
         "status.lose_fitness",
@@ -276,13 +276,13 @@ pub const FIELDS: [Field; 55] = [
         "fitness relative to the expected score in the current light below which a tracked block counts as gone",
         status.lose_fitness
     ),
-    int!("status.lose_generations", "frames", AtLeastOne, "frames in a row gone before lost", status.lose_generations),
+    int!("status.lose_frames", "frames", AtLeastOne, "frames in a row gone before lost", status.lose_frames),
     int!(
-        "status.lost_generations_to_search",
+        "status.lost_frames_to_search",
         "frames",
         AtLeastOne,
         "frames lost before searching again",
-        status.lost_generations_to_search
+        status.lost_frames_to_search
     ),
     real!(
         "target.acceleration_m_s2",

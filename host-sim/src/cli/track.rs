@@ -6,13 +6,12 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::ValueEnum;
-use evorec_core::tuning::Feedforward;
-use evorec_core::tuning::Tuning;
+use evorec_core::tuning::{Feedforward, Tuning};
 use evorec_sim::scenario::{HOST_POPULATION_CAPACITY, with_config_file};
 use evorec_sim::sequence::Sequence;
 use evorec_sim::{bag, track};
 
-use super::OutArgs;
+use super::{ConfigArg, OutArgs};
 
 #[derive(clap::Args, Debug)]
 pub struct TrackArgs {
@@ -58,11 +57,10 @@ pub struct TrackArgs {
     /// frame (a bag, or a sequence imported from one).
     #[arg(long)]
     absolute_stamps: bool,
-    /// A TOML file holding a `[tracker]` table (as `evorec config` prints it, or a run's
-    /// `config.toml`): its keys replace the defaults; `--method`, `--no-ff` and `--population`
-    /// replace its keys.
-    #[arg(long, value_name = "FILE")]
-    config: Option<PathBuf>,
+    /// Over the defaults (`ff+target`); `--method`, `--no-ff` and `--population` replace its
+    /// keys.
+    #[command(flatten)]
+    config: ConfigArg,
 }
 
 /// `evorec track --pixels`.
@@ -122,7 +120,7 @@ impl TrackArgs {
     /// The tuning: `ff+target` over the defaults, then the `--config` file, then `--method`
     /// (or `--no-ff`) and `--population`.
     fn tuning(&self) -> Result<Tuning> {
-        let mut t = base_tuning(self.config.as_deref())?;
+        let mut t = base_tuning(self.config.path())?;
         if let Some(m) = if self.no_ff { Some(Feedforward::Off) } else { self.method } {
             t.feedforward = m.into();
         }

@@ -153,7 +153,7 @@ pub fn scenario_of(g: &GridSettings, cell: &Cell) -> (Scenario, LoopOptions) {
     let mut opts = LoopOptions {
         occlusion: None,
         conveyor: None,
-        feedforward: Some(cell.method.into()),
+        feedforward: Some(cell.method),
         target_velocity: cell.method == Feedforward::OnWithTarget,
     };
     match cell.target {

@@ -122,7 +122,7 @@ impl TrackArgs {
     fn tuning(&self) -> Result<Tuning> {
         let mut t = base_tuning(self.config.path())?;
         if let Some(m) = if self.no_ff { Some(Feedforward::Off) } else { self.method } {
-            t.feedforward = m.into();
+            t.feedforward = m;
         }
         if let Some(p) = self.population {
             t.ga.population = p;
@@ -136,7 +136,7 @@ impl TrackArgs {
 
 /// `ff+target` over the defaults, then the `config` file's keys.
 fn base_tuning(config: Option<&Path>) -> Result<Tuning> {
-    let base = Tuning { feedforward: Feedforward::OnWithTarget.into(), ..Tuning::DEFAULT };
+    let base = Tuning { feedforward: Feedforward::OnWithTarget, ..Tuning::DEFAULT };
     Ok(with_config_file(base, config)?)
 }
 

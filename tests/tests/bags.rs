@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use evorec_core::tuning::Feedforward;
 use evorec_sim::bag::testbag::{self, TestBag};
 use evorec_sim::bag::{self, BagOptions, Rig};
-use evorec_sim::scenario::Scenario;
+use evorec_sim::scenario::fixture;
 use evorec_sim::sequence::Sequence;
 use evorec_sim::{export, track};
 
@@ -21,10 +21,7 @@ fn work_dir(tag: &str) -> PathBuf {
 
 /// About 2 s of 160x120 frames of the arm swaying, exported as a sequence into `dir/seq`.
 fn exported(dir: &Path) -> Sequence {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
-    let mut s = Scenario::from_toml_str(&std::fs::read_to_string(path).expect("scenario")).expect("valid");
-    s.duration_s = 2.0;
-    s.robot.omega_rad_s = 0.5;
+    let mut s = fixture::sway_160x120(2.0);
     s.set_method(Feedforward::On);
     export::export(&s, "sway", &dir.join("seq"), None).unwrap_or_else(|e| panic!("{e:#}"));
     Sequence::load(&dir.join("seq")).unwrap_or_else(|e| panic!("{e}"))

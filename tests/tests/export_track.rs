@@ -11,17 +11,13 @@ use std::path::PathBuf;
 
 use evorec_core::tracker::Feedforward;
 use evorec_core::tuning::Tuning;
-use evorec_sim::scenario::Scenario;
+use evorec_sim::scenario::{Scenario, fixture};
 use evorec_sim::sequence::Sequence;
 use evorec_sim::{experiment, export, track};
 
 fn scenario(method: Feedforward) -> Scenario {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
-    let text = std::fs::read_to_string(path).expect("scenario");
-    let mut s = Scenario::from_toml_str(&text).expect("valid scenario");
     // About 2 s of 160x120 frames, the arm swaying fast enough for the feedforward to matter.
-    s.duration_s = 2.0;
-    s.robot.omega_rad_s = 0.5;
+    let mut s = fixture::sway_160x120(2.0);
     s.set_method(method);
     s
 }

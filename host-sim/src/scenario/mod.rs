@@ -816,6 +816,7 @@ fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
 }
 
 mod acquisition;
+pub mod fixture;
 mod render_table;
 mod section;
 mod tracker_table;

@@ -121,6 +121,8 @@ pub const MUTATION_LEVELS: usize = 3;
 pub struct GaParams {
     /// Individuals evaluated and bred per generation, chosen at run time: at least 2 and at
     /// most the capacity `P` of the [`Ga`] (storage is sized for `P`, the work follows this).
+    /// The one source of a GA's size: [`Ga::set_population`] takes it from here (the tracker
+    /// when it is built), and [`Ga::len`] reports it.
     pub population: usize,
     /// Probability that a child is a blend of its two parents (else a copy of the first).
     pub crossover_prob: f32,
@@ -339,12 +341,15 @@ impl<const P: usize> Ga<P> {
         self.len == 0
     }
 
-    /// Uses `n` individuals from now on. New members (when growing) are copies of the first
-    /// one; re-seed with [`Ga::reset_around`] or [`Ga::reset_uniform`] afterwards.
+    /// Uses `params.population` individuals from now on. New members (when growing) are
+    /// copies of the first one; re-seed with [`Ga::reset_around`] or [`Ga::reset_uniform`]
+    /// afterwards.
     ///
     /// # Errors
-    /// [`GaError::PopulationSize`] unless `2 ≤ n ≤ P` (the population is then unchanged).
-    pub fn set_len(&mut self, n: usize) -> Result<(), GaError> {
+    /// [`GaError::PopulationSize`] unless `2 ≤ params.population ≤ P` (the population is then
+    /// unchanged).
+    pub fn set_population(&mut self, params: &GaParams) -> Result<(), GaError> {
+        let n = params.population;
         if !(2..=P).contains(&n) {
             return Err(GaError::PopulationSize { got: n, capacity: P });
         }
@@ -730,10 +735,11 @@ mod tests {
         let s = space();
         let mut ga = Ga::<16>::new(Psi::IDENTITY);
         assert_eq!(ga.len(), 16);
-        assert_eq!(ga.set_len(0), Err(GaError::PopulationSize { got: 0, capacity: 16 }));
-        assert_eq!(ga.set_len(17), Err(GaError::PopulationSize { got: 17, capacity: 16 }));
+        let sized = |n| GaParams::DEFAULT.with_population(n);
+        assert_eq!(ga.set_population(&sized(0)), Err(GaError::PopulationSize { got: 0, capacity: 16 }));
+        assert_eq!(ga.set_population(&sized(17)), Err(GaError::PopulationSize { got: 17, capacity: 16 }));
         assert_eq!(ga.len(), 16, "a refused size leaves the population as it was");
-        ga.set_len(6).unwrap();
+        ga.set_population(&sized(6)).unwrap();
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(5);
         ga.reset_uniform(&s, &mut rng);
         let mut calls = 0;
@@ -755,7 +761,7 @@ mod tests {
         let (mut r1, mut r2) = (Xoshiro128PlusPlus::seed_from_u64(3), Xoshiro128PlusPlus::seed_from_u64(3));
         let mut small = Ga::<10>::new(Psi::IDENTITY);
         let mut large = Ga::<32>::new(Psi::IDENTITY);
-        large.set_len(10).unwrap();
+        large.set_population(&GaParams::DEFAULT.with_population(10)).unwrap();
         small.reset_uniform(&s, &mut r1);
         large.reset_uniform(&s, &mut r2);
         for _ in 0..40 {

@@ -5,32 +5,32 @@
 //! **tracking** (the elite fits the images), or has **lost** the block (it was tracking, and the
 //! elite no longer fits: occlusion, the block left the view, a burst of bad frames).
 //!
-//! The decision uses only the elite's fitness `F` of the current generation, relative to what
+//! The decision, once per frame, uses only the elite's fitness `F` of the frame's last generation, relative to what
 //! the colour model expects the true pose to score under the current light
 //! ([`crate::colour::ColourModel::expected_fitness`], 1 on a flat image), and its short history
 //! (two counters), with hysteresis:
 //!
 //! ```text
-//!              F ≥ acquire_fitness for confirm_generations in a row
+//!              F ≥ acquire_fitness for confirm_frames in a row
 //!   Searching ───────────────────────────────────────────────────▶ Tracking
 //!       ▲                                                       │   ▲
-//!       │ lost_generations_to_search in Lost                    │   │ F ≥ acquire_fitness for
-//!       │                                                       ▼   │ confirm_generations
+//!       │ lost_frames_to_search in Lost                         │   │ F ≥ acquire_fitness for
+//!       │                                                       ▼   │ confirm_frames
 //!       └──────────────────────────────────────────────────── Lost ─┘
-//!        F < lose_fitness for lose_generations in a row, or F < acquire_fitness for
-//!        DOUBT_GENERATIONS in a row (from Tracking)
+//!        F < lose_fitness for lose_frames in a row, or F < acquire_fitness for
+//!        DOUBT_FRAMES in a row (from Tracking)
 //! ```
 //!
 //! `F` is the fraction of the model's inner points that see their face's hue, minus the
 //! contour points that see a face hue (eq. 34–35). Without the block in the images no pose
-//! scores above 0, so with the default `lose_generations = 1` the very first frame without
+//! scores above 0, so with the default `lose_frames = 1` the very first frame without
 //! the block is reported as lost. The default thresholds are far apart (0.75 and 0.4): a
 //! tracked block scores 0.9–1.0, a pose a few millimetres off still above 0.75, and a frame
 //! with the block gone scores 0. A lock on a wrong pose scores between them (most often
-//! 0.6–0.8), so a tracked block that stays below `acquire_fitness` for [`DOUBT_GENERATIONS`]
+//! 0.6–0.8), so a tracked block that stays below `acquire_fitness` for [`DOUBT_FRAMES`]
 //! frames is no longer confirmed and reported lost.
 //!
-//! Bounded work: the update is a few comparisons per generation.
+//! Bounded work: the update is a few comparisons per frame.
 
 // `!(x > y)` on purpose: true for NaN too, so a NaN never passes a check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -89,7 +89,7 @@ impl core::fmt::Display for Status {
 /// part of the model still sees the block's colours) scores between the two thresholds for as
 /// long as it lasts, while the right pose falls below the acquisition's bar only for a few
 /// frames at a time (a sudden start or stop, a pose the GA has not caught up with yet).
-pub const DOUBT_GENERATIONS: u16 = 10;
+pub const DOUBT_FRAMES: u16 = 10;
 
 /// Thresholds of the status decision; [`StatusConfig::DEFAULT`] documents the defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -98,25 +98,25 @@ pub struct StatusConfig {
     pub acquire_fitness: f32,
     /// Status decisions (one per frame) in a row at or above `acquire_fitness` before
     /// reporting `Tracking`.
-    pub confirm_generations: u16,
+    pub confirm_frames: u16,
     /// Elite fitness below which a tracked block counts as gone.
     pub lose_fitness: f32,
     /// Status decisions (one per frame) in a row below `lose_fitness` before reporting `Lost`.
-    pub lose_generations: u16,
+    pub lose_frames: u16,
     /// Status decisions (frames) in `Lost` after which the status falls back to `Searching` (the last pose
     /// is then no better than any other).
-    pub lost_generations_to_search: u16,
+    pub lost_frames_to_search: u16,
 }
 
 impl StatusConfig {
-    /// Defaults: found at `F ≥ 0.75` for 3 generations, lost at the first generation with
-    /// `F < 0.4`, back to searching after 150 generations (5 s at 30 frames/s) lost.
+    /// Defaults: found at `F ≥ 0.75` for 3 frames, lost at the first frame with `F < 0.4`,
+    /// back to searching after 150 frames (5 s at 30 frames/s) lost.
     pub const DEFAULT: StatusConfig = StatusConfig {
         acquire_fitness: 0.75,
-        confirm_generations: 3,
+        confirm_frames: 3,
         lose_fitness: 0.4,
-        lose_generations: 1,
-        lost_generations_to_search: 150,
+        lose_frames: 1,
+        lost_frames_to_search: 150,
     };
 }
 
@@ -130,13 +130,13 @@ impl Default for StatusConfig {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct StatusMonitor {
     status: Status,
-    /// Generations in a row at or above `acquire_fitness`.
+    /// Frames in a row at or above `acquire_fitness`.
     good: u16,
-    /// Generations in a row below `lose_fitness`.
+    /// Frames in a row below `lose_fitness`.
     bad: u16,
-    /// Generations in a row below `acquire_fitness`.
+    /// Frames in a row below `acquire_fitness`.
     doubt: u16,
-    /// Generations since the status became `Lost`.
+    /// Frames since the status became `Lost`.
     lost_for: u16,
 }
 
@@ -151,7 +151,7 @@ impl StatusMonitor {
         self.status
     }
 
-    /// Feeds the elite fitness of one generation and returns the new status.
+    /// Feeds the elite fitness of one frame (its last generation) and returns the new status.
     pub fn update(&mut self, fitness: f32, config: &StatusConfig) -> Status {
         // NaN counts as bad (it is neither ≥ nor < a threshold otherwise).
         let good = fitness >= config.acquire_fitness;
@@ -160,15 +160,15 @@ impl StatusMonitor {
         self.bad = if bad { self.bad.saturating_add(1) } else { 0 };
         self.doubt = if good { 0 } else { self.doubt.saturating_add(1) };
         self.status = match self.status {
-            Status::Tracking if self.bad >= config.lose_generations || self.doubt >= DOUBT_GENERATIONS => {
+            Status::Tracking if self.bad >= config.lose_frames || self.doubt >= DOUBT_FRAMES => {
                 self.lost_for = 0;
                 Status::Lost
             }
             Status::Tracking => Status::Tracking,
-            Status::Searching | Status::Lost if self.good >= config.confirm_generations => Status::Tracking,
+            Status::Searching | Status::Lost if self.good >= config.confirm_frames => Status::Tracking,
             Status::Lost => {
                 self.lost_for = self.lost_for.saturating_add(1);
-                if self.lost_for >= config.lost_generations_to_search { Status::Searching } else { Status::Lost }
+                if self.lost_for >= config.lost_frames_to_search { Status::Searching } else { Status::Lost }
             }
             Status::Searching => Status::Searching,
         };
@@ -205,15 +205,15 @@ mod tests {
     fn a_track_below_the_acquisition_bar_for_long_is_lost() {
         let c = StatusConfig::DEFAULT;
         let mut m = StatusMonitor::new(Status::Tracking);
-        // Dips below the acquisition's bar shorter than DOUBT_GENERATIONS keep tracking.
+        // Dips below the acquisition's bar shorter than DOUBT_FRAMES keep tracking.
         for _ in 0..3 {
-            for _ in 0..DOUBT_GENERATIONS - 1 {
+            for _ in 0..DOUBT_FRAMES - 1 {
                 assert_eq!(m.update(0.7, &c), Status::Tracking);
             }
             assert_eq!(m.update(0.8, &c), Status::Tracking);
         }
-        // A lock that stays between the thresholds is lost at the DOUBT_GENERATIONS-th frame.
-        for _ in 0..DOUBT_GENERATIONS - 1 {
+        // A lock that stays between the thresholds is lost at the DOUBT_FRAMES-th frame.
+        for _ in 0..DOUBT_FRAMES - 1 {
             assert_eq!(m.update(0.6, &c), Status::Tracking);
         }
         assert_eq!(m.update(0.6, &c), Status::Lost);
@@ -225,7 +225,7 @@ mod tests {
 
     #[test]
     fn long_loss_falls_back_to_searching() {
-        let c = StatusConfig { lost_generations_to_search: 4, ..StatusConfig::DEFAULT };
+        let c = StatusConfig { lost_frames_to_search: 4, ..StatusConfig::DEFAULT };
         let mut m = StatusMonitor::new(Status::Tracking);
         assert_eq!(m.update(0.1, &c), Status::Lost);
         for _ in 0..3 {

@@ -274,7 +274,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let (model, colours) = Self::checked_parts(&config)?;
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(config.seed);
         let mut ga = Ga::new(Psi::IDENTITY);
-        ga.set_len(config.tuning.ga.population).map_err(|_| POPULATION_ERROR)?;
+        ga.set_population(&config.tuning.ga).map_err(|_| POPULATION_ERROR)?;
         ga.reset_uniform(&config.search, &mut rng);
         Ok(Self {
             config,
@@ -316,7 +316,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         t.acquisition.reset();
         t.target = TargetFilter::tuned(t.config.tuning.target, Optics::of(&t.config.rig, &t.config.block));
         // Checked by `check_config` (2 ≤ population ≤ P), so this cannot fail.
-        t.ga.set_len(t.config.tuning.ga.population).map_err(|_| POPULATION_ERROR)?;
+        t.ga.set_population(&t.config.tuning.ga).map_err(|_| POPULATION_ERROR)?;
         t.ga.reset_uniform(&t.config.search, &mut t.rng);
         Ok(t)
     }

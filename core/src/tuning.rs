@@ -35,6 +35,90 @@ pub enum Feedforward {
     OnWithTarget,
 }
 
+impl Feedforward {
+    /// Every mode, in the order of [`Feedforward::NAMES`].
+    pub const ALL: [Feedforward; 3] = [Feedforward::Off, Feedforward::On, Feedforward::OnWithTarget];
+
+    /// The modes' names, in [`Feedforward::ALL`]'s order: the spellings of a scenario's or
+    /// configuration file's `[tracker] method`, of `--method`, of the `CONFIG` message and of
+    /// the firmware's timing lines.
+    pub const NAMES: [&'static str; 3] = ["ga", "ff", "ff+target"];
+
+    /// The mode's name ([`Feedforward::NAMES`]): `ga`, `ff` or `ff+target`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Off => Self::NAMES[0],
+            Self::On => Self::NAMES[1],
+            Self::OnWithTarget => Self::NAMES[2],
+        }
+    }
+}
+
+/// The mode's name ([`Feedforward::name`]).
+impl core::fmt::Display for Feedforward {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.pad(self.name())
+    }
+}
+
+/// Parses a name of [`Feedforward::NAMES`] (exactly, case included).
+impl core::str::FromStr for Feedforward {
+    type Err = UnknownFeedforward;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let found = Self::ALL.into_iter().find(|f| f.name() == text);
+        found.ok_or_else(|| UnknownFeedforward::new(text))
+    }
+}
+
+/// A text that names no [`Feedforward`] mode. It keeps the text (its first
+/// [`UnknownFeedforward::KEPT`] bytes, cut at a character boundary, without allocating) and
+/// displays as `expected "ga", "ff" or "ff+target", got "<text>"`.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct UnknownFeedforward {
+    bytes: [u8; Self::KEPT],
+    len: u8,
+    cut: bool,
+}
+
+impl UnknownFeedforward {
+    /// The most bytes of the bad text kept (a longer text is shown cut, ending in `…`).
+    pub const KEPT: usize = 32;
+
+    fn new(text: &str) -> Self {
+        let mut len = text.len().min(Self::KEPT);
+        while !text.is_char_boundary(len) {
+            len -= 1;
+        }
+        let mut bytes = [0; Self::KEPT];
+        bytes[..len].copy_from_slice(&text.as_bytes()[..len]);
+        // `len` ≤ KEPT = 32 fits a u8.
+        Self { bytes, len: len as u8, cut: len < text.len() }
+    }
+
+    /// The bad text as kept (cut to [`UnknownFeedforward::KEPT`] bytes).
+    pub fn text(&self) -> &str {
+        // Cut at a character boundary of a `str`, so always valid UTF-8.
+        core::str::from_utf8(&self.bytes[..usize::from(self.len)]).unwrap_or("")
+    }
+}
+
+impl core::fmt::Debug for UnknownFeedforward {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("UnknownFeedforward").field("text", &self.text()).field("cut", &self.cut).finish()
+    }
+}
+
+impl core::fmt::Display for UnknownFeedforward {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let [ga, ff, ff_target] = Feedforward::NAMES;
+        let more = if self.cut { "…" } else { "" };
+        write!(f, "expected \"{ga}\", \"{ff}\" or \"{ff_target}\", got \"{}{more}\"", self.text())
+    }
+}
+
+impl core::error::Error for UnknownFeedforward {}
+
 /// The target motion model's parameters (see [`crate::target_motion`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TargetFilterParams {
@@ -271,23 +355,13 @@ fn count<T: TryInto<u32>>(n: T) -> Value {
     Value::Int(n.try_into().unwrap_or(u32::MAX))
 }
 
-/// The spellings of the feedforward modes (`method`), in [`Feedforward`]'s order.
-pub const METHODS: [&str; 3] = ["ga", "ff", "ff+target"];
-
 fn method_name(f: Feedforward) -> Value {
-    Value::Name(match f {
-        Feedforward::Off => METHODS[0],
-        Feedforward::On => METHODS[1],
-        Feedforward::OnWithTarget => METHODS[2],
-    })
+    Value::Name(f.name())
 }
 
 fn set_method(t: &mut Tuning, v: Value) -> Result<(), &'static str> {
     t.feedforward = match v {
-        Value::Name("ga") => Feedforward::Off,
-        Value::Name("ff") => Feedforward::On,
-        Value::Name("ff+target") => Feedforward::OnWithTarget,
-        Value::Name(_) => return Err("must be \"ga\", \"ff\" or \"ff+target\""),
+        Value::Name(name) => name.parse().map_err(|_| "must be \"ga\", \"ff\" or \"ff+target\"")?,
         _ => return Err(WRONG_KIND),
     };
     Ok(())

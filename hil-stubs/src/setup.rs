@@ -214,7 +214,7 @@ mod tests {
         config.tuning.max_dt_s = 0.25;
         config.tuning.feedforward = Feedforward::OnWithTarget;
         config.tuning.acquire.scan_stride = 4;
-        config.tuning.status.lose_generations = 3;
+        config.tuning.status.lose_frames = 3;
         config.tuning.target.max_gap_s = 0.3;
         let psi = Psi::new([0.0, 0.01, 0.7], [0.1, 0.0, -0.2]);
         let setup = Setup::from_tracker_config(&config, &psi, &[0.01; 6]).unwrap();

@@ -237,21 +237,6 @@ const SLOTS: [CaseKind; 15] = [
     CaseKind::FastArm,
 ];
 
-/// The name of a feedforward mode in [`GenLine`]s and reports (`ga`, `ff`, `ff+target`, as the
-/// scenarios' `method`).
-pub fn method_name(feedforward: Feedforward) -> &'static str {
-    match feedforward {
-        Feedforward::Off => "ga",
-        Feedforward::On => "ff",
-        Feedforward::OnWithTarget => "ff+target",
-    }
-}
-
-/// The feedforward mode named `name` by [`method_name`].
-pub fn method_from_name(name: &str) -> Option<Feedforward> {
-    [Feedforward::Off, Feedforward::On, Feedforward::OnWithTarget].into_iter().find(|f| method_name(*f) == name)
-}
-
 /// The pixels of [`CaseKind::Rgb565Extremes`]: black and white (the hue table's first and last
 /// entries, no hue) and pure red, green and blue (every colour field at its extreme).
 pub const RGB565_EXTREMES: [u16; 5] = [0x0000, 0xFFFF, 0xF800, 0x07E0, 0x001F];
@@ -622,7 +607,7 @@ impl fmt::Display for DeadlineReport {
 ///
 /// `GEN p=40 g=8 k=3 kind=blank status=lost method=ff+target tshift=1 call=… ff=… eval=… breed=…
 /// stack=… fitness=…`: the status the generation started in, the feedforward mode
-/// ([`method_name`]) and whether the generation fed a non-zero target velocity forward
+/// ([`Feedforward::name`]) and whether the generation fed a non-zero target velocity forward
 /// (`tshift`: `Tracker::target_feedforward_velocity`, the target motion model's velocity, which
 /// the generation adds to every individual's shift, is not zero), ticks of the whole `step_probed` call and of its three phases, the painted
 /// stack high-water mark of the generation (bytes below the top of RAM) and the estimate's
@@ -664,7 +649,7 @@ impl fmt::Display for GenLine {
             self.frame,
             self.kind.name(),
             self.status.as_str(),
-            method_name(self.method),
+            self.method,
             u8::from(self.target_shift),
             self.call,
             self.phases.feedforward,
@@ -724,7 +709,7 @@ impl GenLine {
                     continue;
                 }
                 "method" => {
-                    g.method = method_from_name(value)?;
+                    g.method = value.parse().ok()?;
                     seen |= 1 << 11;
                     continue;
                 }

@@ -1,8 +1,8 @@
 //! Per-axis tracker error of one closed-loop servo cell (conveyor, ff+target), frame by frame.
 //! `cargo run --release -p evorec-sim --example servo_diag -- SEED GAIN [SPEED] [FRAMES]`
+use evorec_core::tuning::Feedforward;
 use evorec_sim::experiments::closed_loop;
 use evorec_sim::experiments::servo::{Cell, GridSettings, TargetCase, scenario_of};
-use evorec_sim::sim::scenario::Method;
 
 fn main() -> anyhow::Result<()> {
     let a: Vec<String> = std::env::args().collect();
@@ -11,8 +11,12 @@ fn main() -> anyhow::Result<()> {
     let speed: f64 = a.get(3).map_or(Ok(0.1), |s| s.parse())?;
     let frames: usize = a.get(4).map_or(Ok(60), |s| s.parse())?;
     let g = GridSettings { seed, ..GridSettings::default() };
-    let cell =
-        Cell { target: TargetCase::Conveyor { speed_m_s: speed }, method: Method::FfTarget, gain, delay_frames: 1 };
+    let cell = Cell {
+        target: TargetCase::Conveyor { speed_m_s: speed },
+        method: Feedforward::OnWithTarget,
+        gain,
+        delay_frames: 1,
+    };
     let (s, opts) = scenario_of(&g, &cell);
     let out = closed_loop::run(&s, &opts, || {})?;
     println!("t dx dy dz(mm) de1 de2 de3 tz F status");

@@ -9,7 +9,6 @@ use std::path::{Path, PathBuf};
 use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::bag::testbag::{self, TestBag, Transforms};
 use evorec_sim::rig::export;
-use evorec_sim::sim::scenario::Scenario;
 
 /// A short exported scenario (1 s of 160x120 frames).
 mod common;
@@ -22,9 +21,7 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn sequence(dir: &Path) -> Sequence {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
-    let mut s = Scenario::from_toml_str(&std::fs::read_to_string(path).expect("scenario")).expect("valid");
-    s.duration_s = 1.0;
+    let s = evorec_sim::sim::scenario::fixture::hil_motion_a_ff(1.0);
     export::export(&s, "short", &dir.join("seq"), None).unwrap_or_else(|e| panic!("{e:#}"));
     Sequence::load(&dir.join("seq")).unwrap_or_else(|e| panic!("{e}"))
 }

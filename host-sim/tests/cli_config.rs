@@ -12,8 +12,11 @@ fn path_str(p: &Path) -> &str {
 }
 
 /// A short motion A run with motion feedforward (the default method) at 160x120.
-const SCENARIO: &str = "seed = 2\nduration_s = 0.5\n[camera]\nwidth = 160\nheight = 120\nfx = 200.0\nfy = 200.0\n\
-                        cx = 80.0\ncy = 60.0\n[robot]\nmotion = \"A\"\nomega_rad_s = 0.5\n";
+fn scenario() -> String {
+    let mut s = evorec_sim::sim::scenario::fixture::sway_160x120(0.5);
+    s.seed = 2;
+    s.to_toml_string().unwrap_or_else(|e| panic!("{e}"))
+}
 
 fn run(dir: &Path, out: &str, extra: &[&str]) -> Vec<u8> {
     let scenario = dir.join("scenario.toml");
@@ -28,7 +31,7 @@ fn run(dir: &Path, out: &str, extra: &[&str]) -> Vec<u8> {
 #[test]
 fn the_printed_defaults_reproduce_the_run_and_a_changed_value_changes_it() {
     let dir: PathBuf = common::scratch("cli-config", "run");
-    std::fs::write(dir.join("scenario.toml"), SCENARIO).unwrap_or_else(|e| panic!("{e}"));
+    std::fs::write(dir.join("scenario.toml"), scenario()).unwrap_or_else(|e| panic!("{e}"));
     let o = evorec(&["config"]);
     assert!(o.status.success(), "{o:?}");
     let defaults = String::from_utf8(o.stdout).unwrap_or_else(|e| panic!("{e}"));

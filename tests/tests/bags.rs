@@ -5,11 +5,12 @@
 
 use std::path::{Path, PathBuf};
 
+use evorec_core::tuning::Feedforward;
 use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::bag::testbag::{self, TestBag};
 use evorec_sim::rig::bag::{self, BagOptions, Rig};
 use evorec_sim::rig::{export, track};
-use evorec_sim::sim::scenario::{Method, Scenario};
+use evorec_sim::sim::scenario::fixture;
 
 fn work_dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("evorec-bags-{tag}-{}", std::process::id()));
@@ -20,11 +21,8 @@ fn work_dir(tag: &str) -> PathBuf {
 
 /// About 2 s of 160x120 frames of the arm swaying, exported as a sequence into `dir/seq`.
 fn exported(dir: &Path) -> Sequence {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
-    let mut s = Scenario::from_toml_str(&std::fs::read_to_string(path).expect("scenario")).expect("valid");
-    s.duration_s = 2.0;
-    s.robot.omega_rad_s = 0.5;
-    s.set_method(Method::Ff);
+    let mut s = fixture::sway_160x120(2.0);
+    s.set_method(Feedforward::On);
     export::export(&s, "sway", &dir.join("seq"), None).unwrap_or_else(|e| panic!("{e:#}"));
     Sequence::load(&dir.join("seq")).unwrap_or_else(|e| panic!("{e}"))
 }

@@ -14,15 +14,12 @@ use evorec_core::tuning::Tuning;
 use evorec_sim::experiments::experiment;
 use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::{export, track};
-use evorec_sim::sim::scenario::{Method, Scenario};
+use evorec_sim::sim::scenario::Scenario;
+use evorec_sim::sim::scenario::fixture;
 
-fn scenario(method: Method) -> Scenario {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
-    let text = std::fs::read_to_string(path).expect("scenario");
-    let mut s = Scenario::from_toml_str(&text).expect("valid scenario");
+fn scenario(method: Feedforward) -> Scenario {
     // About 2 s of 160x120 frames, the arm swaying fast enough for the feedforward to matter.
-    s.duration_s = 2.0;
-    s.robot.omega_rad_s = 0.5;
+    let mut s = fixture::sway_160x120(2.0);
     s.set_method(method);
     s
 }
@@ -33,7 +30,7 @@ fn work_dir(tag: &str) -> PathBuf {
     d
 }
 
-fn check(method: Method, ff: Feedforward, pixels: track::Pixels, tag: &str) {
+fn check(method: Feedforward, ff: Feedforward, pixels: track::Pixels, tag: &str) {
     let s = scenario(method);
     let dir = work_dir(tag);
     let seq_dir = dir.join("seq");
@@ -70,17 +67,17 @@ fn check(method: Method, ff: Feedforward, pixels: track::Pixels, tag: &str) {
 
 #[test]
 fn tracking_an_exported_scenario_equals_run_with_feedforward() {
-    check(Method::Ff, Feedforward::On, track::Pixels::Rgb888, "ff");
+    check(Feedforward::On, Feedforward::On, track::Pixels::Rgb888, "ff");
 }
 
 #[test]
 fn tracking_an_exported_scenario_equals_run_without_feedforward_read_as_rgb565() {
-    check(Method::Ga, Feedforward::Off, track::Pixels::Rgb565, "ga");
+    check(Feedforward::Off, Feedforward::Off, track::Pixels::Rgb565, "ga");
 }
 
 #[test]
 fn a_bad_png_found_while_tracking_is_named_and_nothing_is_written() {
-    let s = scenario(Method::Ff);
+    let s = scenario(Feedforward::On);
     let dir = work_dir("bad-png");
     let seq_dir = dir.join("seq");
     export::export(&s, "bad", &seq_dir, None).unwrap_or_else(|e| panic!("{e:#}"));
@@ -102,7 +99,7 @@ fn a_bad_png_found_while_tracking_is_named_and_nothing_is_written() {
 /// tuning changed them (so it reached both trackers).
 #[test]
 fn a_tuned_target_filter_tracks_as_in_run() {
-    let mut s = scenario(Method::FfTarget);
+    let mut s = scenario(Feedforward::OnWithTarget);
     s.target.conveyor_speed_m_s = 0.1;
     let default_run = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("{e:#}"));
     s.tracker.0.target.acceleration_m_s2 = 0.3;
@@ -144,7 +141,7 @@ fn pair_out_of_step(dir: &std::path::Path, offset: usize) {
 /// gives no warning. (The status does not yet refuse such pairs: `tracking` on every frame here.)
 #[test]
 fn out_of_step_pairs_are_named() {
-    let mut s = scenario(Method::Ff);
+    let mut s = scenario(Feedforward::On);
     s.duration_s = 4.0;
     let dir = work_dir("out-of-step");
     let seq_dir = dir.join("seq");

@@ -19,11 +19,7 @@ use evorec_sim::firmware::hil;
 use evorec_sim::sim::scenario::Scenario;
 
 fn scenario(seconds: f64) -> Scenario {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
-    let text = std::fs::read_to_string(path).expect("scenario");
-    let mut s = Scenario::from_toml_str(&text).expect("valid scenario");
-    s.duration_s = seconds;
-    s
+    evorec_sim::sim::scenario::fixture::hil_motion_a_ff(seconds)
 }
 
 fn skip() -> bool {

@@ -41,7 +41,6 @@ use evorec_firmware::protocol::{DOF, Frame, Setup};
 use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, IMAGE_BYTES};
 use evorec_sim::experiments::experiment::{self, INITIAL_SPREAD};
 use evorec_sim::sim::board::{SimBoard, World};
-use evorec_sim::sim::scenario::Scenario;
 
 /// Frames tracked in lock-step to measure the sustainable period.
 const WARMUP: usize = 12;
@@ -79,10 +78,7 @@ impl Recorded {
 /// `hil_motion_a_ff` cut to `seconds`: its firmware setup and every frame, rendered up front
 /// so that rendering takes no time from the camera clock.
 fn scene(seconds: f64) -> (Setup, Vec<Recorded>) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
-    let text = std::fs::read_to_string(path).expect("scenario");
-    let mut s = Scenario::from_toml_str(&text).expect("valid scenario");
-    s.duration_s = seconds;
+    let s = evorec_sim::sim::scenario::fixture::hil_motion_a_ff(seconds);
     let world = World::new(&s).expect("world");
     let config = experiment::tracker_config(&s).expect("tracker config");
     let setup = Setup::from_tracker_config(&config, &world.truth(), &INITIAL_SPREAD).expect("firmware setup");

@@ -8,14 +8,15 @@
 //! Builds the firmware first (`cd hil-stubs && cargo build --release`, a no-op when up to
 //! date) and needs qemu-system-arm; `EVOREC_SKIP_HIL=1` skips.
 
+use evorec_core::tuning::Feedforward;
 use evorec_firmware::BoardProfile;
 use evorec_firmware::host::{HilOptions, build_firmware};
 use evorec_sim::experiments::closed_loop::{self, ClosedLoopOutput, LoopOptions};
 use evorec_sim::firmware::hil;
-use evorec_sim::sim::scenario::{Method, Scenario};
+use evorec_sim::sim::scenario::Scenario;
 
 /// `scenarios/hil_servo.toml` cut to 3 s (92 frames) with `method`.
-fn scenario(method: Method) -> Scenario {
+fn scenario(method: Feedforward) -> Scenario {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_servo.toml");
     let text = std::fs::read_to_string(path).expect("scenario");
     let mut s = Scenario::from_toml_str(&text).expect("valid scenario");
@@ -24,10 +25,10 @@ fn scenario(method: Method) -> Scenario {
     s
 }
 
-fn run_both(method: Method, firmware: &std::path::Path) -> (ClosedLoopOutput, ClosedLoopOutput) {
+fn run_both(method: Feedforward, firmware: &std::path::Path) -> (ClosedLoopOutput, ClosedLoopOutput) {
     let s = scenario(method);
     let opts = LoopOptions::for_scenario(&s);
-    let work = std::env::temp_dir().join(format!("evorec-hil-servo-{}-{}", method.as_str(), std::process::id()));
+    let work = std::env::temp_dir().join(format!("evorec-hil-servo-{}-{}", method.name(), std::process::id()));
     let (on_board, link) = hil::run_closed_loop(&s, &opts, firmware, &work, &HilOptions::default(), || {})
         .unwrap_or_else(|e| panic!("{e:#}"));
     let _ = std::fs::remove_dir_all(&work);
@@ -36,9 +37,9 @@ fn run_both(method: Method, firmware: &std::path::Path) -> (ClosedLoopOutput, Cl
     (on_board, on_host)
 }
 
-fn assert_identical(method: Method, on_board: &ClosedLoopOutput, on_host: &ClosedLoopOutput) {
+fn assert_identical(method: Feedforward, on_board: &ClosedLoopOutput, on_host: &ClosedLoopOutput) {
     let cmp = closed_loop::compare(on_board, on_host);
-    println!("{}: {}", method.as_str(), cmp.describe());
+    println!("{}: {}", method.name(), cmp.describe());
     assert!(cmp.identical(), "{cmp:?}");
     assert_eq!(on_board.run.rows.len(), 92);
     // Every trace row (joints, truth, estimate, fitness, status) and every servo row
@@ -62,10 +63,10 @@ fn hil_closed_loop_equals_host_closed_loop() {
     }
     let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));
     let t0 = std::time::Instant::now();
-    let (ff_board, ff_host) = run_both(Method::Ff, &firmware);
-    assert_identical(Method::Ff, &ff_board, &ff_host);
-    let (fft_board, fft_host) = run_both(Method::FfTarget, &firmware);
-    assert_identical(Method::FfTarget, &fft_board, &fft_host);
+    let (ff_board, ff_host) = run_both(Feedforward::On, &firmware);
+    assert_identical(Feedforward::On, &ff_board, &ff_host);
+    let (fft_board, fft_host) = run_both(Feedforward::OnWithTarget, &firmware);
+    assert_identical(Feedforward::OnWithTarget, &fft_board, &fft_host);
     // The arm's path depends on the estimates: another method's estimates move it differently.
     let other = closed_loop::compare(&ff_board, &fft_board);
     assert!(other.max_joint_diff_rad > 0.0, "{other:?}");

@@ -9,14 +9,15 @@ use evorec_core::image::Rgb565Image;
 use evorec_core::kinematics::PA10;
 use evorec_core::limits::DEFAULT_GRID;
 use evorec_core::model::SurfaceStrips;
+use evorec_core::tuning::Feedforward;
 use evorec_sim::experiments::experiment::{self, Accuracy};
 use evorec_sim::sim::board::{self as sim, SimBoard, World};
 use evorec_sim::sim::motion::MotionKind;
-use evorec_sim::sim::scenario::{Method, Scenario};
+use evorec_sim::sim::scenario::Scenario;
 use nalgebra::Isometry3;
 
 /// 5 s of a motion at ω = 0.5 rad/s (4× the paper's base speed), default camera and target.
-fn short(motion: MotionKind, method: Method) -> Scenario {
+fn short(motion: MotionKind, method: Feedforward) -> Scenario {
     let mut s = Scenario::new(1, 5.0, method);
     s.robot.motion = motion;
     s.robot.omega_rad_s = 0.5;
@@ -30,7 +31,7 @@ fn run(s: &Scenario) -> Accuracy {
 #[test]
 fn feedforward_tracks_motion_a_and_b_accurately() {
     for motion in [MotionKind::A, MotionKind::B] {
-        let a = run(&short(motion, Method::Ff));
+        let a = run(&short(motion, Feedforward::On));
         println!("{motion:?} ff: {a:?}");
         assert_eq!(a.frames, 153);
         assert!(a.f_mean >= 0.9, "{motion:?}: F_mean {}", a.f_mean);
@@ -67,8 +68,8 @@ fn camera_like_light_is_tracked_with_the_learnt_colours() {
 #[test]
 fn feedforward_is_not_worse_than_the_plain_ga() {
     for motion in [MotionKind::A, MotionKind::B] {
-        let ff = run(&short(motion, Method::Ff));
-        let ga = run(&short(motion, Method::Ga));
+        let ff = run(&short(motion, Feedforward::On));
+        let ga = run(&short(motion, Feedforward::Off));
         let pos = |a: &Accuracy| a.rms_x_mm + a.rms_y_mm + a.rms_z_mm;
         let eps = |a: &Accuracy| a.rms_e1 + a.rms_e2 + a.rms_e3;
         println!("{motion:?}: ff {ff:?}\n   ga {ga:?}");
@@ -81,7 +82,7 @@ fn feedforward_is_not_worse_than_the_plain_ga() {
 #[test]
 fn model_at_the_true_pose_fits_clean_rendered_frames() {
     for motion in [MotionKind::A, MotionKind::B] {
-        let mut s = short(motion, Method::Ff);
+        let mut s = short(motion, Feedforward::On);
         s.camera.noise_std = 0.0;
         s.duration_s = 2.0;
         let rig = sim::rig(&s).expect("rig");
@@ -111,7 +112,7 @@ fn model_at_the_true_pose_fits_clean_rendered_frames() {
 
 #[test]
 fn arm_forward_kinematics_is_the_rendered_camera_pose() {
-    let s = short(MotionKind::B, Method::Ff);
+    let s = short(MotionKind::B, Feedforward::On);
     let mut world = World::new(&s).expect("world");
     for k in 1..=10 {
         world.advance_to(0.4 * f64::from(k));

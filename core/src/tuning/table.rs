@@ -1,6 +1,6 @@
 //! The table of [`Tuning`]'s fields, in the order every serialization uses.
 
-use super::{Field, Kind, METHODS, Rule, Tuning, Value, count, int, method_name, real, set_method};
+use super::{Feedforward, Field, Kind, Rule, Tuning, Value, count, int, method_name, real, set_method};
 
 /// Every tuning field, in order: the run's mode and limits, the GA, the acquisition, the
 /// status thresholds, the target motion model.
@@ -9,7 +9,7 @@ pub const FIELDS: [Field; 55] = [
         name: "method",
         unit: "",
         meaning: "what is fed forward: ga (nothing), ff (the arm's motion), ff+target (also the block's own)",
-        kind: Kind::Name(&METHODS),
+        kind: Kind::Name(&Feedforward::NAMES),
         rule: Rule::Any,
         get: |t: &Tuning| method_name(t.feedforward),
         set: set_method,
@@ -263,11 +263,11 @@ pub const FIELDS: [Field; 55] = [
         status.acquire_fitness
     ),
     int!(
-        "status.confirm_generations",
+        "status.confirm_frames",
         "frames",
         AtLeastOne,
         "frames in a row found before tracking (one status decision per frame)",
-        status.confirm_generations
+        status.confirm_frames
     ),
     real!(
         "status.lose_fitness",
@@ -276,13 +276,13 @@ pub const FIELDS: [Field; 55] = [
         "fitness relative to the expected score in the current light below which a tracked block counts as gone",
         status.lose_fitness
     ),
-    int!("status.lose_generations", "frames", AtLeastOne, "frames in a row gone before lost", status.lose_generations),
+    int!("status.lose_frames", "frames", AtLeastOne, "frames in a row gone before lost", status.lose_frames),
     int!(
-        "status.lost_generations_to_search",
+        "status.lost_frames_to_search",
         "frames",
         AtLeastOne,
         "frames lost before searching again",
-        status.lost_generations_to_search
+        status.lost_frames_to_search
     ),
     real!(
         "target.acceleration_m_s2",

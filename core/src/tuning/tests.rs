@@ -47,7 +47,7 @@ fn a_bad_value_names_its_field() {
     assert_eq!(field_of(&with("ga.settled_fitness", Value::Real(f32::NAN))), Some("ga.settled_fitness"));
     assert_eq!(field_of(&with("acquire.scan_stride", Value::Int(0))), Some("acquire.scan_stride"));
     assert_eq!(field_of(&with("acquire.spread_m.fine", Value::Real(f32::NAN))), Some("acquire.spread_m.fine"));
-    assert_eq!(field_of(&with("status.confirm_generations", Value::Int(0))), Some("status.confirm_generations"));
+    assert_eq!(field_of(&with("status.confirm_frames", Value::Int(0))), Some("status.confirm_frames"));
     assert_eq!(field_of(&with("status.lose_fitness", Value::Real(0.9))), Some("status.lose_fitness"));
     assert_eq!(field_of(&with("hue_tolerance", Value::Int(90))), Some("hue_tolerance"));
     assert_eq!(field_of(&with("max_dt_s", Value::Real(0.0))), Some("max_dt_s"));
@@ -70,8 +70,8 @@ fn wrong_kinds_and_ranges_are_refused_by_the_setters() {
     let mut t = Tuning::DEFAULT;
     let e = t.set("ga.mutation_prob", Value::Int(1)).unwrap_err();
     assert_eq!(e.field, "ga.mutation_prob");
-    let e = t.set("status.lose_generations", Value::Int(70_000)).unwrap_err();
-    assert_eq!(format!("{e}"), "tracker.status.lose_generations: is too large for its integer type");
+    let e = t.set("status.lose_frames", Value::Int(70_000)).unwrap_err();
+    assert_eq!(format!("{e}"), "tracker.status.lose_frames: is too large for its integer type");
     let e = t.set("method", Value::Name("fast")).unwrap_err();
     assert_eq!(e.field, "method");
     assert_eq!(t.set("no.such", Value::Int(1)).unwrap_err().rule, "is not a tuning field");
@@ -80,11 +80,26 @@ fn wrong_kinds_and_ranges_are_refused_by_the_setters() {
 
 #[test]
 fn the_method_names_the_feedforward_mode() {
-    for (name, mode) in METHODS.iter().zip([Feedforward::Off, Feedforward::On, Feedforward::OnWithTarget]) {
+    for (name, mode) in Feedforward::NAMES.iter().zip([Feedforward::Off, Feedforward::On, Feedforward::OnWithTarget]) {
         let t = with("method", Value::Name(name));
         assert_eq!(t.feedforward, mode);
         assert_eq!(t.get("method"), Some(Value::Name(name)));
     }
+}
+
+#[test]
+fn a_feedforward_mode_reads_back_from_its_name() {
+    for (mode, name) in Feedforward::ALL.into_iter().zip(Feedforward::NAMES) {
+        assert_eq!(format!("{mode}"), name);
+        assert_eq!(name.parse::<Feedforward>(), Ok(mode));
+    }
+    assert_eq!(Feedforward::OnWithTarget.name(), "ff+target");
+    let e = "FF".parse::<Feedforward>().unwrap_err();
+    assert_eq!((e.text(), format!("{e}").as_str()), ("FF", "expected \"ga\", \"ff\" or \"ff+target\", got \"FF\""));
+    let long = "é".repeat(20);
+    let e = long.parse::<Feedforward>().unwrap_err();
+    assert_eq!(e.text(), "é".repeat(16));
+    assert!(format!("{e}").ends_with("ééé…\""));
 }
 
 #[test]

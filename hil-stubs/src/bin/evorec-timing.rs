@@ -44,7 +44,7 @@ mod firmware {
     use evorec_firmware::protocol::Setup;
     use evorec_firmware::timing::{
         BANNER, CaseGen, DeadlineReport, DownCounter, FRAME_PERIOD_US, FULL_FRAMES, GenLine, PhaseTicks, PhaseTimer,
-        SWEEP_FRAMES, method_name, rig_for, schedule,
+        SWEEP_FRAMES, rig_for, schedule,
     };
     use evorec_firmware::{FRAME_HEIGHT, FRAME_WIDTH, PROFILE, rt, selftest, sys};
     use static_cell::ConstStaticCell;
@@ -244,7 +244,7 @@ mod firmware {
             "RUN name={} method={} p={} g={} frames={} points_per_camera={} walked_per_camera={} width={} height={} \
              profile={}",
             name,
-            method_name(feedforward),
+            feedforward,
             P,
             G,
             frames,

@@ -100,15 +100,6 @@ fn conveyor_moves_the_target_along_world_y_and_back() {
 }
 
 #[test]
-fn method_names_round_trip() {
-    for f in [Feedforward::Off, Feedforward::On, Feedforward::OnWithTarget] {
-        assert_eq!(method_from_name(method_name(f)), Some(f));
-    }
-    assert_eq!(method_name(Feedforward::OnWithTarget), "ff+target");
-    assert_eq!(method_from_name("FF"), None);
-}
-
-#[test]
 fn rig_for_scales_the_selftest_view() {
     // At 160×120 the rig is the self-test's; at 320×240 the focal length doubles.
     assert_eq!(rig_for(160, 120).unwrap(), crate::selftest::rig().unwrap());

@@ -7,6 +7,7 @@ use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::track::colours::ColourReport;
 use evorec_sim::rig::{bag, track};
 
+use super::ConfigArg;
 use super::track::TrackArgs;
 
 #[derive(clap::Args, Debug)]
@@ -26,9 +27,8 @@ pub struct ColoursArgs {
     /// Seed of the GA.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// A `[tracker]` TOML file (as `evorec config` prints it).
-    #[arg(long, value_name = "FILE")]
-    config: Option<PathBuf>,
+    #[command(flatten)]
+    config: ConfigArg,
     /// Where to write the `[target]` table with the measured hues.
     #[arg(long, default_value = "colours.toml")]
     out: PathBuf,
@@ -36,7 +36,7 @@ pub struct ColoursArgs {
 
 impl ColoursArgs {
     pub fn run(self, progress: bool) -> Result<()> {
-        let mut opts = TrackArgs::default_options(self.config.as_deref(), self.seed, progress)?;
+        let mut opts = TrackArgs::default_options(self.config.path(), self.seed, progress)?;
         opts.frames = Some(self.frame.saturating_add(self.frames).saturating_add(1));
         let (block, output) = match &self.rig {
             Some(rig) => {

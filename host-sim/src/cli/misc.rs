@@ -4,14 +4,14 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use evorec_core::tuning::Tuning;
+use evorec_core::tuning::{Feedforward, Tuning};
 use evorec_sim::experiments::servo;
 use evorec_sim::output::frame;
 use evorec_sim::rig::export;
 use evorec_sim::sim::render::Light;
-use evorec_sim::sim::scenario::{Method, Scenario, TrackerTable, load_light, with_config_file};
+use evorec_sim::sim::scenario::{Scenario, TrackerTable, load_light};
 
-use super::{OutArgs, load};
+use super::{ConfigArg, OutArgs, load};
 
 #[derive(clap::Args, Debug)]
 pub struct ServoArgs {
@@ -33,10 +33,9 @@ pub struct ServoArgs {
     /// is a single draw, so compare grids over several seeds.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// A TOML file holding a `[tracker]` table (as `evorec config` prints it): the tuning of
-    /// every cell, whose method replaces the file's `method`.
-    #[arg(long, value_name = "FILE")]
-    config: Option<PathBuf>,
+    /// The tuning of every cell (each cell's method replaces the file's `method`).
+    #[command(flatten)]
+    config: ConfigArg,
 }
 
 impl ServoArgs {
@@ -65,7 +64,7 @@ impl ServoArgs {
         };
         g.targets = self.speeds.iter().map(|&speed_m_s| servo::TargetCase::Conveyor { speed_m_s }).collect();
         g.targets.push(servo::TargetCase::Rotating { omega_rad_s: 0.5 });
-        g.tracker = TrackerTable(with_config_file(Tuning::DEFAULT, self.config.as_deref())?);
+        g.tracker = TrackerTable(self.config.over(Tuning::DEFAULT)?);
         Ok(g)
     }
 }
@@ -125,10 +124,9 @@ pub struct AcquireArgs {
     points: usize,
     #[command(flatten)]
     out: OutArgs,
-    /// A TOML file holding a `[tracker]` table (as `evorec config` prints it): the tuning of
-    /// every trial (default: the core's defaults).
-    #[arg(long, value_name = "FILE")]
-    config: Option<PathBuf>,
+    /// The tuning of every trial (default: the core's defaults).
+    #[command(flatten)]
+    config: ConfigArg,
     /// A TOML file holding a `[render]` table (a scenario's keys, e.g.
     /// scenarios/light/camera_like.toml): the light every trial is rendered under (default:
     /// the flat light).
@@ -140,8 +138,8 @@ impl AcquireArgs {
     pub fn run(self, progress: bool) -> Result<()> {
         let t0 = Instant::now();
         let out = &self.out.out;
-        let tuning = with_config_file(Tuning::DEFAULT, self.config.as_deref())?;
-        let frame_period_s = Scenario::new(0, 1.0, Method::Ff).frame_period_s;
+        let tuning = self.config.over(Tuning::DEFAULT)?;
+        let frame_period_s = Scenario::new(0, 1.0, Feedforward::On).frame_period_s;
         let light = match &self.light {
             Some(path) => load_light(path, frame_period_s)?,
             None => Light::default(),
@@ -187,9 +185,8 @@ impl RenderArgs {
 pub struct ConfigArgs {
     /// A scenario whose `[tracker]` table to print (default: the core's defaults).
     scenario: Option<PathBuf>,
-    /// A TOML file holding a `[tracker]` table over the scenario's or the defaults.
-    #[arg(long, value_name = "FILE")]
-    config: Option<PathBuf>,
+    #[command(flatten)]
+    config: ConfigArg,
 }
 
 impl ConfigArgs {
@@ -198,7 +195,7 @@ impl ConfigArgs {
             Some(path) => *load(path)?.tuning(),
             None => Tuning::DEFAULT,
         };
-        print!("{}", TrackerTable(with_config_file(base, self.config.as_deref())?).to_toml());
+        print!("{}", TrackerTable(self.config.over(base)?).to_toml());
         Ok(())
     }
 }

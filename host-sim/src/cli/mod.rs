@@ -14,8 +14,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
+use evorec_core::tuning::{Feedforward, Tuning};
 use evorec_sim::output::io;
-use evorec_sim::sim::scenario::{Method, Scenario, with_config_file};
+use evorec_sim::sim::scenario::{Scenario, with_config_file};
 
 /// On-line evolutionary 3D pose recognition: PA-10 hand-eye stereo simulator.
 #[derive(Parser, Debug)]
@@ -130,17 +131,38 @@ impl OutArgs {
     }
 }
 
+/// `--config FILE`: the tracker's tuning from a file, the one declaration of the option for
+/// every subcommand that takes it (`#[command(flatten)]`).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ConfigArg {
+    /// A TOML file holding a `[tracker]` table (as `evorec config` prints it, or a run's
+    /// `config.toml`): its keys replace the tuning the command starts from (the scenario's or
+    /// the defaults); options such as `--method` replace its keys.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+}
+
+impl ConfigArg {
+    /// The file, if given.
+    pub fn path(&self) -> Option<&Path> {
+        self.config.as_deref()
+    }
+
+    /// `base` with the file's keys, if a file is given.
+    pub fn over(&self, base: Tuning) -> Result<Tuning> {
+        Ok(with_config_file(base, self.path())?)
+    }
+}
+
 /// `--config`, `--method` and `--seed` of the subcommands that run one scenario file (`run`,
 /// `hil`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct Overrides {
-    /// A TOML file holding a `[tracker]` table (as `evorec config` prints it, or a run's
-    /// `config.toml`): its keys replace the scenario's.
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub config: ConfigArg,
     /// Override the scenario's method: ga, ff or ff+target.
-    #[arg(long, value_parser = Method::parse)]
-    pub method: Option<Method>,
+    #[arg(long, value_parser = str::parse::<Feedforward>)]
+    pub method: Option<Feedforward>,
     /// Override the scenario's seed (GA and image noise), 0 ..= 2^63−1: for seed sweeps.
     #[arg(long, value_parser = clap::value_parser!(u64).range(0..=i64::MAX as u64))]
     pub seed: Option<u64>,
@@ -151,7 +173,7 @@ impl Overrides {
     /// then `--method`, then `--seed`.
     pub fn load(&self, path: &Path) -> Result<Scenario> {
         let mut s = load(path)?;
-        s.tracker.0 = with_config_file(*s.tuning(), self.config.as_deref())?;
+        s.tracker.0 = self.config.over(*s.tuning())?;
         if let Some(m) = self.method {
             s.set_method(m);
         }

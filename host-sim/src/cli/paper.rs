@@ -6,9 +6,10 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::ValueEnum;
+use evorec_core::tuning::Feedforward;
 use evorec_sim::experiments::{paper, paper_seeds, target_grid};
 use evorec_sim::sim::motion::MotionKind;
-use evorec_sim::sim::scenario::{Method, Scenario, load_light};
+use evorec_sim::sim::scenario::{Scenario, load_light};
 
 use super::{OutArgs, load};
 
@@ -29,8 +30,8 @@ pub struct PaperArgs {
     grid: Grid,
     /// Run only this method's cells (ga, ff or ff+target; the target grid has ff and
     /// ff+target).
-    #[arg(long, value_parser = Method::parse)]
-    method: Option<Method>,
+    #[arg(long, value_parser = str::parse::<Feedforward>)]
+    method: Option<Feedforward>,
     /// Seed sweep instead of one grid: the sweep's cells (motion A at every ω, motion B at
     /// ω > 0, of `--method`, default ff) run once per GA seed FIRST..LAST (both included), the
     /// base's seed replaced; writes DIR/cells_FIRST_LAST.csv (columns motion, omega, seed, F,
@@ -63,7 +64,7 @@ impl PaperArgs {
             println!("{} runs in {:.1} s; wrote {}", runs.len(), t0.elapsed().as_secs_f64(), path.display());
             return Ok(());
         }
-        let wanted = |m: Method| self.method.is_none_or(|w| w == m);
+        let wanted = |m: Feedforward| self.method.is_none_or(|w| w == m);
         let mut runs = 0;
         if self.grid != Grid::Target {
             let cells: Vec<_> = paper::grid().into_iter().filter(|c| wanted(c.method)).collect();
@@ -83,7 +84,7 @@ impl PaperArgs {
 
     /// The cells of `--seeds`: `--cells` in their order, else all of the sweep's.
     fn sweep_cells(&self) -> Vec<paper::Cell> {
-        let all = paper_seeds::cells(self.method.unwrap_or(Method::Ff));
+        let all = paper_seeds::cells(self.method.unwrap_or(Feedforward::On));
         if self.cells.is_empty() {
             return all;
         }
@@ -96,7 +97,7 @@ impl PaperArgs {
         let mut s = match &self.base {
             Some(p) => load(p)?,
             None => {
-                let mut s = Scenario::new(1, paper::DURATION_S, Method::Ff);
+                let mut s = Scenario::new(1, paper::DURATION_S, Feedforward::On);
                 s.tracker.0.generations_per_frame = 1;
                 s
             }

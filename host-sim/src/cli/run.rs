@@ -30,13 +30,13 @@ impl RunArgs {
         let t0 = Instant::now();
         if s.servo.is_some() {
             let output = closed_loop::run(&s, &closed_loop::LoopOptions::for_scenario(&s), || {})?;
-            let title = format!("{} ({}, closed loop)", self.scenario.display(), s.method().as_str());
+            let title = format!("{} ({}, closed loop)", self.scenario.display(), s.method().name());
             write_closed_loop(&output, out, &title, t0)?;
             println!("wrote {}", out.display());
             return Ok(());
         }
         let output = experiment::run(&s, || {})?;
-        let title = format!("{} ({})", self.scenario.display(), s.method().as_str());
+        let title = format!("{} ({})", self.scenario.display(), s.method().name());
         write_open_loop(&output, out, &title, t0)
     }
 }
@@ -75,7 +75,7 @@ impl HilArgs {
         }
         let (output, link) = hil::run_with_faults(&s, &firmware, &out.join("qemu"), faults, || {})?;
         report_link(&link, out, faults.is_some())?;
-        let title = format!("{} ({}, firmware on QEMU)", self.scenario.display(), s.method().as_str());
+        let title = format!("{} ({}, firmware on QEMU)", self.scenario.display(), s.method().name());
         write_open_loop(&output, out, &title, t0)
     }
 
@@ -104,7 +104,7 @@ fn hil_servo(
     let options = hil::options_with_faults(faults);
     let (output, link) = hil::run_closed_loop(s, &opts, firmware, &out.join("qemu"), &options, || {})?;
     report_link(&link, out, faults.is_some())?;
-    let title = format!("{} ({}, closed loop, firmware on QEMU)", scenario.display(), s.method().as_str());
+    let title = format!("{} ({}, closed loop, firmware on QEMU)", scenario.display(), s.method().name());
     write_closed_loop(&output, out, &title, t0)?;
     let t1 = Instant::now();
     let host = closed_loop::run(s, &opts, || {})?;

@@ -6,12 +6,12 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::ValueEnum;
-use evorec_core::tuning::Tuning;
+use evorec_core::tuning::{Feedforward, Tuning};
 use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::{bag, track};
-use evorec_sim::sim::scenario::{HOST_POPULATION_CAPACITY, Method, with_config_file};
+use evorec_sim::sim::scenario::{HOST_POPULATION_CAPACITY, with_config_file};
 
-use super::OutArgs;
+use super::{ConfigArg, OutArgs};
 
 #[derive(clap::Args, Debug)]
 pub struct TrackArgs {
@@ -30,8 +30,8 @@ pub struct TrackArgs {
     /// `ga` (plain 1-step GA), `ff` (+ the arm's motion fed forward) or `ff+target` (+ the
     /// target's own motion, estimated from past estimates, fed forward too; the default unless
     /// `--config` says otherwise: a recorded target may move).
-    #[arg(long, value_enum)]
-    method: Option<Method>,
+    #[arg(long, value_parser = method_values())]
+    method: Option<Feedforward>,
     /// Seed of the GA.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -62,11 +62,10 @@ pub struct TrackArgs {
     /// taken at another time).
     #[arg(long)]
     no_pairing_check: bool,
-    /// A TOML file holding a `[tracker]` table (as `evorec config` prints it, or a run's
-    /// `config.toml`): its keys replace the defaults; `--method`, `--no-ff` and `--population`
-    /// replace its keys.
-    #[arg(long, value_name = "FILE")]
-    config: Option<PathBuf>,
+    /// Over the defaults (`ff+target`); `--method`, `--no-ff` and `--population` replace its
+    /// keys.
+    #[command(flatten)]
+    config: ConfigArg,
 }
 
 /// `evorec track --pixels`.
@@ -127,9 +126,9 @@ impl TrackArgs {
     /// The tuning: `ff+target` over the defaults, then the `--config` file, then `--method`
     /// (or `--no-ff`) and `--population`.
     fn tuning(&self) -> Result<Tuning> {
-        let mut t = base_tuning(self.config.as_deref())?;
-        if let Some(m) = if self.no_ff { Some(Method::Ga) } else { self.method } {
-            t.feedforward = m.into();
+        let mut t = base_tuning(self.config.path())?;
+        if let Some(m) = if self.no_ff { Some(Feedforward::Off) } else { self.method } {
+            t.feedforward = m;
         }
         if let Some(p) = self.population {
             t.ga.population = p;
@@ -143,7 +142,7 @@ impl TrackArgs {
 
 /// `ff+target` over the defaults, then the `config` file's keys.
 fn base_tuning(config: Option<&Path>) -> Result<Tuning> {
-    let base = Tuning { feedforward: Method::FfTarget.into(), ..Tuning::DEFAULT };
+    let base = Tuning { feedforward: Feedforward::OnWithTarget, ..Tuning::DEFAULT };
     Ok(with_config_file(base, config)?)
 }
 
@@ -319,4 +318,14 @@ impl RigArgs {
         log::warn!("{}: add the block's [target] section (written commented out)", self.out.display());
         Ok(())
     }
+}
+
+/// `--method`'s values: core's names ([`Feedforward::NAMES`]), each with its meaning for `--help`.
+fn method_values() -> impl clap::builder::TypedValueParser<Value = Feedforward> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser as _};
+    let meanings =
+        ["Plain 1-step GA", "GA + the arm's motion fed forward", "GA + the arm's and the target's motion fed forward"];
+    let values =
+        Feedforward::NAMES.into_iter().zip(meanings).map(|(name, meaning)| PossibleValue::new(name).help(meaning));
+    PossibleValuesParser::new(values).try_map(|name| name.parse::<Feedforward>())
 }

@@ -36,9 +36,10 @@ use crate::sim::board::TraceRow;
 use crate::sim::motion::MotionKind;
 use crate::sim::occlusion::{Initial, Occlusion, OcclusionKind, Occlusions, Placement};
 use crate::sim::render::Light;
-use crate::sim::scenario::{Method, Scenario};
+use crate::sim::scenario::Scenario;
 use evorec_core::pose::Psi;
 use evorec_core::status::Status;
+use evorec_core::tuning::Feedforward;
 
 /// Position error (mm) within which a pose counts as found: the sequence tracker's
 /// [`WITHIN_POSITION_M`](crate::experiments::truth::WITHIN_POSITION_M).
@@ -94,7 +95,7 @@ impl Case {
 /// The scenario of trial `seed` in `case`; `recovery` selects the occlusion run.
 pub fn scenario(seed: u64, case: Case, recovery: bool) -> Scenario {
     let duration = if recovery { RECOVERY_DURATION_S } else { ACQUIRE_DURATION_S };
-    let mut s = Scenario::new(seed, duration, Method::Ff);
+    let mut s = Scenario::new(seed, duration, Feedforward::On);
     s.target.placement = Placement::Random;
     s.target.omega_rad_s = 0.0;
     match case {

@@ -65,7 +65,7 @@ pub struct LoopOptions {
 impl LoopOptions {
     /// The options a scenario's method implies (no occlusion).
     pub fn for_scenario(s: &Scenario) -> Self {
-        let target_velocity = s.method() == crate::sim::scenario::Method::FfTarget;
+        let target_velocity = s.method() == Feedforward::OnWithTarget;
         Self { occlusion: None, conveyor: None, feedforward: None, target_velocity }
     }
 }
@@ -553,11 +553,11 @@ pub fn write_outputs(out: &ClosedLoopOutput, dir: &std::path::Path, title: &str)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::scenario::Method;
+    use evorec_core::tuning::Feedforward;
 
     /// A still block, the camera brought 0.1 m closer, 320×240.
     pub(super) fn scenario(duration_s: f64) -> Scenario {
-        let mut s = Scenario::new(1, duration_s, Method::Ff);
+        let mut s = Scenario::new(1, duration_s, Feedforward::On);
         s.camera.width = 320;
         s.camera.height = 240;
         s.camera.fx = 400.0;
@@ -586,7 +586,7 @@ mod tests {
     #[test]
     fn the_boards_target_filter_is_the_trackers() {
         let mut s = scenario(2.0);
-        s.set_method(Method::FfTarget);
+        s.set_method(Feedforward::OnWithTarget);
         let mut board =
             ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));
         let (tracker, rejected) = run_host_tracker(&s, &mut board, || {}).unwrap_or_else(|e| unreachable!("{e}"));
@@ -598,7 +598,7 @@ mod tests {
     #[test]
     fn a_tuned_target_filter_reaches_the_tracker_and_the_boards_copy() {
         let mut s = scenario(2.0);
-        s.set_method(Method::FfTarget);
+        s.set_method(Feedforward::OnWithTarget);
         let default_run = {
             let mut board =
                 ServoBoard::closed_loop(&s, &LoopOptions::for_scenario(&s)).unwrap_or_else(|e| unreachable!("{e}"));

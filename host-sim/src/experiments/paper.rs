@@ -11,7 +11,8 @@ use anyhow::Result;
 
 use crate::experiments::experiment::{self, Accuracy};
 use crate::sim::motion::MotionKind;
-use crate::sim::scenario::{Method, Scenario};
+use crate::sim::scenario::Scenario;
+use evorec_core::tuning::Feedforward;
 
 /// Robot frequencies of the grid (rad/s).
 pub const OMEGAS: [f64; 5] = [0.0, 0.125, 0.25, 0.5, 1.0];
@@ -66,8 +67,8 @@ pub const PUBLISHED: [Published; 14] = {
 pub struct Cell {
     /// Motion A or B.
     pub motion: MotionKind,
-    /// Method.
-    pub method: Method,
+    /// Feedforward.
+    pub method: Feedforward,
     /// ω (rad/s).
     pub omega: f64,
 }
@@ -81,23 +82,23 @@ impl Cell {
     /// The method's name in the paper's tables.
     pub fn method_name(&self) -> &'static str {
         match self.method {
-            Method::Ga => "1-step GA",
-            Method::Ff => "1-step GA + FF",
-            Method::FfTarget => "1-step GA + FF + target",
+            Feedforward::Off => "1-step GA",
+            Feedforward::On => "1-step GA + FF",
+            Feedforward::OnWithTarget => "1-step GA + FF + target",
         }
     }
 
     /// Directory name of the cell's run.
     pub fn slug(&self) -> String {
-        format!("{}_{}_w{}", self.motion_name(), self.method.as_str().replace('+', "_"), self.omega)
+        format!("{}_{}_w{}", self.motion_name(), self.method.name().replace('+', "_"), self.omega)
     }
 
     /// The published row of this cell, if any.
     pub fn published(&self) -> Option<&'static Published> {
         let ff = match self.method {
-            Method::Ga => false,
-            Method::Ff => true,
-            Method::FfTarget => return None,
+            Feedforward::Off => false,
+            Feedforward::On => true,
+            Feedforward::OnWithTarget => return None,
         };
         PUBLISHED.iter().find(|p| p.motion == self.motion_name() && p.ff == ff && p.omega == self.omega)
     }
@@ -107,7 +108,7 @@ impl Cell {
 pub fn grid() -> Vec<Cell> {
     let mut cells = Vec::new();
     for motion in [MotionKind::A, MotionKind::B] {
-        for method in Method::ALL {
+        for method in Feedforward::ALL {
             for omega in OMEGAS {
                 cells.push(Cell { motion, method, omega });
             }

@@ -12,7 +12,8 @@ use crate::experiments::experiment::{self, Accuracy};
 use crate::experiments::paper::{Cell, OMEGAS, scenario_of};
 use crate::experiments::truth::WrongTracking;
 use crate::sim::motion::MotionKind;
-use crate::sim::scenario::{Method, Scenario};
+use crate::sim::scenario::Scenario;
+use evorec_core::tuning::Feedforward;
 
 /// Columns of `cells_A_B.csv`.
 pub const COLUMNS: [&str; 12] = [
@@ -32,7 +33,7 @@ pub const COLUMNS: [&str; 12] = [
 
 /// The cells of a sweep of `method`: motion A at every ω of the paper, motion B at ω > 0
 /// (motion B at rest is motion A at rest).
-pub fn cells(method: Method) -> Vec<Cell> {
+pub fn cells(method: Feedforward) -> Vec<Cell> {
     let a = OMEGAS.iter().map(|&omega| Cell { motion: MotionKind::A, method, omega });
     let b = OMEGAS.iter().filter(|w| **w > 0.0).map(|&omega| Cell { motion: MotionKind::B, method, omega });
     a.chain(b).collect()
@@ -50,7 +51,7 @@ pub fn parse_cell(text: &str) -> Result<(MotionKind, f64), String> {
         "B" | "b" => MotionKind::B,
         _ => return Err(format!("`{text}`: the motion is A or B")),
     };
-    let known = cells(Method::Ff).iter().any(|c| c.motion == motion && c.omega == omega);
+    let known = cells(Feedforward::On).iter().any(|c| c.motion == motion && c.omega == omega);
     if !known {
         return Err(format!("`{text}` is not a cell of the sweep (A at ω = 0, 0.125, 0.25, 0.5, 1; B at ω > 0)"));
     }
@@ -179,7 +180,8 @@ mod tests {
 
     #[test]
     fn the_sweep_has_nine_cells_and_parses_the_script_s_cells() {
-        let names: Vec<String> = cells(Method::Ff).iter().map(|c| format!("{}:{}", c.motion_name(), c.omega)).collect();
+        let names: Vec<String> =
+            cells(Feedforward::On).iter().map(|c| format!("{}:{}", c.motion_name(), c.omega)).collect();
         assert_eq!(names, ["A:0", "A:0.125", "A:0.25", "A:0.5", "A:1", "B:0.125", "B:0.25", "B:0.5", "B:1"]);
         assert_eq!(parse_cell("A:0.25"), Ok((MotionKind::A, 0.25)));
         assert_eq!(parse_cell("b:1"), Ok((MotionKind::B, 1.0)));
@@ -194,7 +196,7 @@ mod tests {
 
     #[test]
     fn a_row_is_the_script_s() {
-        let cell = Cell { motion: MotionKind::B, method: Method::Ff, omega: 0.125 };
+        let cell = Cell { motion: MotionKind::B, method: Feedforward::On, omega: 0.125 };
         let accuracy = Accuracy {
             f_mean: 0.998_4,
             rms_x_mm: 0.362_514_9,

@@ -14,8 +14,9 @@ use crate::experiments::closed_loop::{self, LoopOptions, Outcome, ServoSummary};
 use crate::output::io;
 use crate::output::plot::{FONT, draw_err, ensure_font, render_png};
 use crate::sim::board::frame_total;
-use crate::sim::scenario::{Method, Scenario, ServoSection, TrackerTable};
+use crate::sim::scenario::{Scenario, ServoSection, TrackerTable};
 use crate::sim::target_path::Conveyor;
+use evorec_core::tuning::Feedforward;
 
 /// What the block does.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -107,7 +108,8 @@ pub struct Cell {
     /// The block's motion.
     pub target: TargetCase,
     /// Recognition method.
-    pub method: Method,
+    #[serde(with = "crate::sim::scenario::feedforward_name")]
+    pub method: Feedforward,
     /// Servo gain (1/s).
     pub gain: f64,
     /// Processing delay (frame periods).
@@ -116,13 +118,7 @@ pub struct Cell {
 
 impl Cell {
     fn slug(&self) -> String {
-        format!(
-            "{}_{}_g{}_d{}",
-            self.target.slug(),
-            self.method.as_str().replace('+', "_"),
-            self.gain,
-            self.delay_frames
-        )
+        format!("{}_{}_g{}_d{}", self.target.slug(), self.method.name().replace('+', "_"), self.gain, self.delay_frames)
     }
 }
 
@@ -130,7 +126,7 @@ impl Cell {
 pub fn cells(g: &GridSettings) -> Vec<Cell> {
     let mut out = Vec::new();
     for &target in &g.targets {
-        for method in Method::ALL {
+        for method in Feedforward::ALL {
             for &gain in &g.gains {
                 for &delay_frames in &g.delays {
                     out.push(Cell { target, method, gain, delay_frames });
@@ -157,8 +153,8 @@ pub fn scenario_of(g: &GridSettings, cell: &Cell) -> (Scenario, LoopOptions) {
     let mut opts = LoopOptions {
         occlusion: None,
         conveyor: None,
-        feedforward: Some(cell.method.into()),
-        target_velocity: cell.method == Method::FfTarget,
+        feedforward: Some(cell.method),
+        target_velocity: cell.method == Feedforward::OnWithTarget,
     };
     match cell.target {
         TargetCase::Conveyor { speed_m_s } => {
@@ -235,7 +231,7 @@ pub const COLUMNS: [&str; 12] = [
 fn fields(c: &Cell, s: &ServoSummary) -> [String; 12] {
     [
         c.target.name(),
-        c.method.as_str().to_owned(),
+        c.method.name().to_owned(),
         format!("{}", c.gain),
         c.delay_frames.to_string(),
         format!("{:.2}", s.rms_err_mm),
@@ -271,14 +267,14 @@ pub fn markdown(results: &[(Cell, ServoSummary)]) -> String {
         }
     }
     for t in &targets {
-        for m in Method::ALL {
+        for m in Feedforward::ALL {
             let count =
                 |o: Outcome| results.iter().filter(|(c, s)| c.target == *t && c.method == m && s.outcome == o).count();
             let _ = writeln!(
                 md,
                 "| {} | {} | {} | {} | {} | {} |",
                 t.name(),
-                m.as_str(),
+                m.name(),
                 count(Outcome::Converged),
                 count(Outcome::Oscillating),
                 count(Outcome::Diverged),
@@ -323,9 +319,9 @@ pub fn stability_map(
         let title =
             format!("stability map, {} (green converged, yellow oscillating, red diverged, grey lost)", target.name());
         let body = root.titled(&title, (FONT, 20)).map_err(draw_err)?;
-        for (area, m) in body.split_evenly((1, 3)).iter().zip(Method::ALL) {
+        for (area, m) in body.split_evenly((1, 3)).iter().zip(Feedforward::ALL) {
             let mut chart = ChartBuilder::on(area)
-                .caption(m.as_str(), (FONT, 18))
+                .caption(m.name(), (FONT, 18))
                 .margin(10)
                 .x_label_area_size(40)
                 .y_label_area_size(50)

@@ -16,7 +16,8 @@ use anyhow::Result;
 use crate::experiments::experiment::{self, Summary};
 use crate::experiments::paper::DURATION_S;
 use crate::sim::motion::MotionKind;
-use crate::sim::scenario::{ConveyorFrame, ConveyorStart, Method, Scenario, WORLD_Y};
+use crate::sim::scenario::{ConveyorFrame, ConveyorStart, Scenario, WORLD_Y};
+use evorec_core::tuning::Feedforward;
 
 /// Conveyor speeds (m/s).
 pub const SPEEDS: [f64; 5] = [0.0, 0.05, 0.1, 0.2, 0.3];
@@ -108,7 +109,7 @@ pub struct Cell {
     /// Yaw oscillation frequency `ω_o` (rad/s).
     pub omega_o: f64,
     /// FF or FF + target.
-    pub method: Method,
+    pub method: Feedforward,
 }
 
 impl Cell {
@@ -118,7 +119,7 @@ impl Cell {
             Belt::AcrossY => String::new(),
             b => format!("_{}", b.as_str()),
         };
-        format!("target_{}{belt}_v{}_wo{}", self.method.as_str().replace('+', "_"), self.speed_m_s, self.omega_o)
+        format!("target_{}{belt}_v{}_wo{}", self.method.name().replace('+', "_"), self.speed_m_s, self.omega_o)
     }
 
     /// The conveyor's name in the tables: its [`Belt::as_str`], "–" without one.
@@ -143,7 +144,7 @@ pub fn grid() -> Vec<Cell> {
     }
     let mut cells = Vec::new();
     for (belt, speed_m_s, omega_o) in conditions {
-        for method in [Method::Ff, Method::FfTarget] {
+        for method in [Feedforward::On, Feedforward::OnWithTarget] {
             cells.push(Cell { belt, speed_m_s, omega_o, method });
         }
     }
@@ -325,14 +326,14 @@ mod tests {
         let cells = grid();
         assert_eq!(cells.len(), 2 * (SPEEDS.len() + OMEGAS_O.len() - 1 + 2 * DEPTH_SPEEDS.len()));
         for v in SPEEDS {
-            for m in [Method::Ff, Method::FfTarget] {
+            for m in [Feedforward::On, Feedforward::OnWithTarget] {
                 assert!(cells.contains(&Cell { belt: Belt::AcrossY, speed_m_s: v, omega_o: PAPER_OMEGA_O, method: m }));
             }
         }
         for w in [0.5, 1.0] {
             assert!(cells.iter().any(|c| c.speed_m_s == 0.0 && c.omega_o == w));
         }
-        let base = Scenario::new(1, 1.0, Method::Ga);
+        let base = Scenario::new(1, 1.0, Feedforward::Off);
         for c in &cells {
             let s = scenario_of(&base, c);
             let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
@@ -355,7 +356,7 @@ mod tests {
         assert!(old.iter().all(|c| c.belt == Belt::AcrossY));
         assert_eq!(old[6].slug(), "target_ff_v0.2_wo0.125");
         assert_eq!(old[7].slug(), "target_ff_target_v0.2_wo0.125");
-        let base = Scenario::new(1, 1.0, Method::Ga);
+        let base = Scenario::new(1, 1.0, Feedforward::Off);
         let s = scenario_of(&base, old[7]);
         assert_eq!(
             (s.target.conveyor_travel_m, s.target.conveyor_direction, s.target.conveyor_start),
@@ -367,19 +368,21 @@ mod tests {
         assert_eq!(depth.len(), 2 * 2 * DEPTH_SPEEDS.len());
         for belt in [Belt::Approach, Belt::Recede] {
             for v in DEPTH_SPEEDS {
-                for m in [Method::Ff, Method::FfTarget] {
+                for m in [Feedforward::On, Feedforward::OnWithTarget] {
                     let c = Cell { belt, speed_m_s: v, omega_o: PAPER_OMEGA_O, method: m };
                     assert!(depth.contains(&c), "{c:?}");
                 }
             }
         }
-        let c = depth.iter().find(|c| c.belt == Belt::Recede && c.speed_m_s == 0.1 && c.method == Method::FfTarget);
+        let c = depth
+            .iter()
+            .find(|c| c.belt == Belt::Recede && c.speed_m_s == 0.1 && c.method == Feedforward::OnWithTarget);
         assert_eq!(c.map(Cell::slug).as_deref(), Some("target_ff_target_recede_v0.1_wo0.125"));
     }
 
     #[test]
     fn depth_belts_run_along_the_optical_axis_from_the_middle_at_full_speed() {
-        let base = Scenario::new(1, 72.0, Method::Ff);
+        let base = Scenario::new(1, 72.0, Feedforward::On);
         let cam = crate::sim::motion::initial_camera_pose(base.camera.baseline_m);
         for c in depth_cells() {
             let s = scenario_of(&base, &c);
@@ -438,11 +441,11 @@ mod tests {
         // Motion A's ±0.1 m sway already takes a corner of the block out of an image now and
         // then on the belts across y (about 90 px at 0.1 m/s and faster); the depth belts
         // over 0.2 m keep the block centre well inside both images and lose less of the block.
-        let base = Scenario::new(1, 72.0, Method::Ff);
-        let across = Cell { belt: Belt::AcrossY, speed_m_s: 0.2, omega_o: PAPER_OMEGA_O, method: Method::Ff };
+        let base = Scenario::new(1, 72.0, Feedforward::On);
+        let across = Cell { belt: Belt::AcrossY, speed_m_s: 0.2, omega_o: PAPER_OMEGA_O, method: Feedforward::On };
         let across_corner = worst_margin_px(&scenario_of(&base, &across), false);
         assert!(across_corner < -50.0, "{across_corner}");
-        for c in depth_cells().into_iter().filter(|c| c.method == Method::Ff) {
+        for c in depth_cells().into_iter().filter(|c| c.method == Feedforward::On) {
             let s = scenario_of(&base, &c);
             let (corner, centre) = (worst_margin_px(&s, false), worst_margin_px(&s, true));
             assert!(centre > 100.0, "{c:?}: the centre comes within {centre:.1} px of an image border");
@@ -453,10 +456,10 @@ mod tests {
     #[test]
     fn shipped_approach_and_recede_scenarios_are_the_grid_s_0_1_m_s_cells() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
-        let base = Scenario::new(1, 20.0, Method::Ff);
+        let base = Scenario::new(1, 20.0, Feedforward::On);
         for (file, belt) in [("approach_ff_target.toml", Belt::Approach), ("recede_ff_target.toml", Belt::Recede)] {
             let s = Scenario::load(dir.join(file)).unwrap_or_else(|e| unreachable!("{e}"));
-            let cell = Cell { belt, speed_m_s: 0.1, omega_o: PAPER_OMEGA_O, method: Method::FfTarget };
+            let cell = Cell { belt, speed_m_s: 0.1, omega_o: PAPER_OMEGA_O, method: Feedforward::OnWithTarget };
             assert_eq!(s, scenario_of(&base, &cell), "{file}");
         }
     }

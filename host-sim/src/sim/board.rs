@@ -680,10 +680,10 @@ pub fn world_at_frame(s: &Scenario, frame: u32) -> Result<World> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::scenario::Method;
+    use evorec_core::tuning::Feedforward;
 
     /// A 1 s run at 160×120 of the block on a 0.2 m/s conveyor, static arm.
-    fn conveyor_run(method: Method) -> Vec<TraceRow> {
+    fn conveyor_run(method: Feedforward) -> Vec<TraceRow> {
         let mut s = Scenario::new(3, 1.0, method);
         s.camera.width = 160;
         s.camera.height = 120;
@@ -700,7 +700,7 @@ mod tests {
 
     #[test]
     fn the_hand_over_compares_with_the_truth_one_delay_later() {
-        let rows = conveyor_run(Method::Ff);
+        let rows = conveyor_run(Feedforward::On);
         assert_eq!(rows.len(), 31);
         for pair in rows.windows(2) {
             let h = pair[0].handover.unwrap_or_else(|| unreachable!("every frame has a hand-over"));
@@ -716,7 +716,7 @@ mod tests {
 
     #[test]
     fn the_boards_filter_copy_runs_the_scenarios_tuning() {
-        let mut s = Scenario::new(3, 1.0, Method::FfTarget);
+        let mut s = Scenario::new(3, 1.0, Feedforward::OnWithTarget);
         s.tracker.0.target.max_gap_s = 0.3;
         let board = SimBoard::new(World::new(&s).unwrap_or_else(|e| unreachable!("{e}")))
             .unwrap_or_else(|e| unreachable!("{e}"));
@@ -729,7 +729,7 @@ mod tests {
 
     #[test]
     fn the_target_path_moves_the_rendered_block() {
-        let rows = conveyor_run(Method::FfTarget);
+        let rows = conveyor_run(Feedforward::OnWithTarget);
         let (first, last) = (&rows[0].truth, &rows[rows.len() - 1].truth);
         // Static arm: the truth in the camera moves with the conveyor (sideways, ~0.1 m in 1 s).
         let moved = (last.translation() - first.translation()).norm();

@@ -187,8 +187,9 @@ mod tests {
     #[test]
     fn a_hidden_block_has_no_hue_and_random_poses_differ() {
         use crate::sim::board::World;
-        use crate::sim::scenario::{Method, Scenario};
-        let mut s = Scenario::new(5, 3.0, Method::Ff);
+        use crate::sim::scenario::Scenario;
+        use evorec_core::tuning::Feedforward;
+        let mut s = Scenario::new(5, 3.0, Feedforward::On);
         s.camera.width = 160;
         s.camera.height = 120;
         s.camera.fx = 200.0;

@@ -396,8 +396,9 @@ mod tests {
 
     #[test]
     fn scenario_sets_the_conveyor_s_direction_frame_and_start() {
-        use crate::sim::scenario::{ConveyorFrame, ConveyorStart, Method};
-        let mut s = Scenario::new(1, 10.0, Method::FfTarget);
+        use crate::sim::scenario::{ConveyorFrame, ConveyorStart};
+        use evorec_core::tuning::Feedforward;
+        let mut s = Scenario::new(1, 10.0, Feedforward::OnWithTarget);
         s.target.conveyor_speed_m_s = 0.1;
         let Some((c, start)) = conveyor_of(&TargetPath::from_scenario(&s)) else { unreachable!() };
         assert_eq!((c.direction, start), (Conveyor::WORLD_Y, 0.0));

@@ -152,7 +152,7 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
     let summary = TrackSummary {
         sequence: seq.name(),
         feedforward: out.options.tuning.feedforward != Feedforward::Off,
-        method: crate::sim::scenario::Method::from(out.options.tuning.feedforward).as_str(),
+        method: out.options.tuning.feedforward.name(),
         population: out.options.tuning.ga.population,
         pixels: out.options.pixels.as_str(),
         seed: out.options.seed,

@@ -147,66 +147,26 @@ fn invalid(field: impl Into<String>, message: impl Into<String>) -> ScenarioErro
     ScenarioError::Invalid { field: field.into(), message: message.into() }
 }
 
-/// How the pose is recognised: the one method type of the simulator, its scenario files and
-/// its command line (`--method`); the core's [`Feedforward`] switch is [`From`] it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
-pub enum Method {
-    /// Plain 1-step GA.
-    #[serde(rename = "ga")]
-    Ga,
-    /// GA + the arm's motion fed forward.
-    #[serde(rename = "ff")]
-    Ff,
-    /// GA + the arm's and the target's motion fed forward.
-    #[serde(rename = "ff+target")]
-    #[value(name = "ff+target")]
-    FfTarget,
-}
+/// serde of core's [`Feedforward`] by its name ([`Feedforward::NAMES`]), for a field
+/// `#[serde(with = "crate::sim::scenario::feedforward_name")]`.
+pub mod feedforward_name {
+    use evorec_core::tuning::Feedforward;
+    use serde::{Deserialize, Deserializer, Serializer, de::Error as _};
 
-impl Method {
-    /// Every method, in the order of the tables.
-    pub const ALL: [Method; 3] = [Method::Ga, Method::Ff, Method::FfTarget];
-
-    /// The spelling used in scenario files and on the command line.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Ga => "ga",
-            Self::Ff => "ff",
-            Self::FfTarget => "ff+target",
-        }
-    }
-
-    /// Parses [`Method::as_str`]'s spelling.
+    /// Writes the mode's name.
     ///
     /// # Errors
-    /// The message for an unknown method.
-    pub fn parse(text: &str) -> std::result::Result<Self, String> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.as_str() == text)
-            .ok_or_else(|| format!("expected \"ga\", \"ff\" or \"ff+target\", got \"{text}\""))
+    /// The serializer's.
+    pub fn serialize<S: Serializer>(mode: &Feedforward, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(mode.name())
     }
-}
 
-/// The tracker's feedforward switch of a method.
-impl From<Method> for Feedforward {
-    fn from(m: Method) -> Self {
-        match m {
-            Method::Ga => Feedforward::Off,
-            Method::Ff => Feedforward::On,
-            Method::FfTarget => Feedforward::OnWithTarget,
-        }
-    }
-}
-
-/// The method a feedforward switch belongs to.
-impl From<Feedforward> for Method {
-    fn from(f: Feedforward) -> Self {
-        match f {
-            Feedforward::Off => Method::Ga,
-            Feedforward::On => Method::Ff,
-            Feedforward::OnWithTarget => Method::FfTarget,
-        }
+    /// Reads a name of [`Feedforward::NAMES`].
+    ///
+    /// # Errors
+    /// Not a string, or not one of the names ([`evorec_core::tuning::UnknownFeedforward`]).
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Feedforward, D::Error> {
+        String::deserialize(d)?.parse().map_err(D::Error::custom)
     }
 }
 
@@ -478,7 +438,7 @@ pub struct Scenario {
 
 impl Scenario {
     /// A scenario with the required values given and every other value at its default.
-    pub fn new(seed: u64, duration_s: f64, method: Method) -> Self {
+    pub fn new(seed: u64, duration_s: f64, method: Feedforward) -> Self {
         Self {
             seed,
             duration_s,
@@ -489,19 +449,19 @@ impl Scenario {
             servo: None,
             start: TrackerStart::new(0.033),
             occlusion: Occlusions::default(),
-            tracker: TrackerTable(Tuning { feedforward: method.into(), ..Tuning::DEFAULT }),
+            tracker: TrackerTable(Tuning { feedforward: method, ..Tuning::DEFAULT }),
             render: Light::default(),
         }
     }
 
     /// The recognition method (`[tracker] method`).
-    pub fn method(&self) -> Method {
-        self.tracker.0.feedforward.into()
+    pub fn method(&self) -> Feedforward {
+        self.tracker.0.feedforward
     }
 
     /// Sets the recognition method (`[tracker] method`).
-    pub fn set_method(&mut self, method: Method) {
-        self.tracker.0.feedforward = method.into();
+    pub fn set_method(&mut self, method: Feedforward) {
+        self.tracker.0.feedforward = method;
     }
 
     /// The tuning the scenario's tracker runs with.
@@ -856,6 +816,7 @@ fn parse_servo(s: &Section<'_>) -> Result<Option<ServoSection>> {
 }
 
 mod acquisition;
+pub mod fixture;
 mod render_table;
 mod section;
 mod tracker_table;

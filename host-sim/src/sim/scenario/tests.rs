@@ -19,7 +19,7 @@ fn with(extra: &str) -> String {
 #[test]
 fn minimal_file_gets_defaults() {
     let s = Scenario::from_toml_str(BASE).unwrap_or_else(|e| unreachable!("{e}"));
-    assert_eq!(s, Scenario::new(1, 10.0, Method::Ff));
+    assert_eq!(s, Scenario::new(1, 10.0, Feedforward::On));
     assert_eq!(s.camera.width, 640);
     assert_eq!(s.target.face_hues_deg, [0.0, 120.0, 240.0, 0.0, 120.0, 240.0]);
     assert_eq!(s.robot.motion, MotionKind::Static);
@@ -120,7 +120,7 @@ fn servo_section_is_validated_field_by_field() {
         "servo.delay_frames: must be in 0..=10, got 11"
     );
     assert!(err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ngian = 1\n")).starts_with("servo.gian: unknown key"));
-    let mut s = Scenario::new(3, 5.0, Method::Ff);
+    let mut s = Scenario::new(3, 5.0, Feedforward::On);
     s.servo = Some(ServoSection {
         desired_q_xyzw: Some([0.0, 0.0, 0.0, 1.0]),
         gain: 3.5,
@@ -139,7 +139,7 @@ fn integers_are_accepted_for_floats_but_not_the_reverse() {
 
 #[test]
 fn round_trip_through_toml() {
-    let mut s = Scenario::new(7, 12.5, Method::FfTarget);
+    let mut s = Scenario::new(7, 12.5, Feedforward::OnWithTarget);
     s.frame_period_s = 0.04;
     s.start.delay_s = 0.05;
     s.tracker.0.ga.mutation_prob = 0.7;
@@ -199,10 +199,10 @@ fn shipped_scenarios_have_the_specified_settings() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
     let load = |n: &str| Scenario::load(dir.join(n)).unwrap_or_else(|e| unreachable!("{e}"));
     for (file, motion, method) in [
-        ("motion_a_ff.toml", MotionKind::A, Method::Ff),
-        ("motion_a_ga.toml", MotionKind::A, Method::Ga),
-        ("motion_b_ff.toml", MotionKind::B, Method::Ff),
-        ("motion_b_ga.toml", MotionKind::B, Method::Ga),
+        ("motion_a_ff.toml", MotionKind::A, Feedforward::On),
+        ("motion_a_ga.toml", MotionKind::A, Feedforward::Off),
+        ("motion_b_ff.toml", MotionKind::B, Feedforward::On),
+        ("motion_b_ga.toml", MotionKind::B, Feedforward::Off),
     ] {
         let s = load(file);
         assert_eq!((s.robot.motion, s.method(), s.seed, s.duration_s), (motion, method, 1, 72.0), "{file}");
@@ -211,7 +211,7 @@ fn shipped_scenarios_have_the_specified_settings() {
     let smoke = load("smoke.toml");
     assert_eq!(
         (smoke.robot.motion, smoke.robot.omega_rad_s, smoke.method(), smoke.duration_s),
-        (MotionKind::A, 0.5, Method::Ff, 3.0)
+        (MotionKind::A, 0.5, Feedforward::On, 3.0)
     );
     assert_eq!(load("static.toml").robot.motion, MotionKind::Static);
 }
@@ -341,7 +341,7 @@ fn conveyor_direction_frame_and_start_are_read_and_checked() {
 #[test]
 fn conveyor_keys_round_trip_and_are_written_only_when_not_default() {
     // Defaults: nothing written, so the outputs of older scenarios stay as they were.
-    let mut s = Scenario::new(2, 8.0, Method::FfTarget);
+    let mut s = Scenario::new(2, 8.0, Feedforward::OnWithTarget);
     s.target.conveyor_speed_m_s = 0.1;
     let text = s.to_toml_string().unwrap_or_else(|e| unreachable!("{e}"));
     assert!(!text.contains("conveyor_direction") && !text.contains("conveyor_start"), "{text}");

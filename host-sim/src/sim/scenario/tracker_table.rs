@@ -32,7 +32,16 @@ pub fn parse_tracker(t: Option<&Table>, base: Tuning, path: &str) -> Result<Tuni
     Ok(tuning)
 }
 
-/// Sets every key of `t` (dotted names under `prefix`) in `tuning`.
+/// Old names of fields, still accepted (old name, the field's name): the status counts were
+/// named in generations, but count frames (one status decision per frame).
+pub const OLD_NAMES: [(&str, &str); 3] = [
+    ("status.confirm_generations", "status.confirm_frames"),
+    ("status.lose_generations", "status.lose_frames"),
+    ("status.lost_generations_to_search", "status.lost_frames_to_search"),
+];
+
+/// Sets every key of `t` (dotted names under `prefix`; an [`OLD_NAMES`] name as its field's) in
+/// `tuning`.
 fn set_keys(tuning: &mut Tuning, t: &Table, prefix: &str, path: &str) -> Result<()> {
     for (key, value) in t {
         let name = format!("{prefix}{key}");
@@ -41,6 +50,13 @@ fn set_keys(tuning: &mut Tuning, t: &Table, prefix: &str, path: &str) -> Result<
             continue;
         }
         let field = format!("{path}.{name}");
+        let name = match OLD_NAMES.iter().find(|(old, _)| *old == name) {
+            Some((_, new)) if t.contains_key(new.rsplit('.').next().unwrap_or(new)) => {
+                return Err(invalid(field, format!("is the old name of {path}.{new}: give one of them")));
+            }
+            Some((_, new)) => (*new).to_owned(),
+            None => name,
+        };
         let Some(f) = FIELDS.iter().find(|f| f.name == name) else {
             return Err(invalid(field, "unknown key (`evorec config` lists every key)"));
         };
@@ -193,6 +209,25 @@ mod tests {
         let b = TrackerTable::from_toml_str("[tracker.ga]\nmutation_prob = 0.5\n", Tuning::DEFAULT).unwrap();
         assert_eq!(a, b);
         assert_eq!(a.0.ga.mutation_prob, 0.5);
+    }
+
+    #[test]
+    fn the_old_names_of_the_status_counts_are_still_read() {
+        let read = |text: &str| TrackerTable::from_toml_str(text, Tuning::DEFAULT).map(|t| t.0.status);
+        let old = read(
+            "[tracker]\nstatus.confirm_generations = 4\nstatus.lose_generations = 2\n\
+                        status.lost_generations_to_search = 90\n",
+        )
+        .unwrap();
+        let new = read("[tracker.status]\nconfirm_frames = 4\nlose_frames = 2\nlost_frames_to_search = 90\n").unwrap();
+        assert_eq!(old, new);
+        assert_eq!((new.confirm_frames, new.lose_frames, new.lost_frames_to_search), (4, 2, 90));
+        let both = read("[tracker]\nstatus.lose_frames = 2\nstatus.lose_generations = 2\n").unwrap_err().to_string();
+        assert_eq!(
+            both,
+            "tracker.status.lose_generations: is the old name of tracker.status.lose_frames: give one of them"
+        );
+        assert!(TrackerTable::default().to_toml().contains("status.lose_frames = 1"));
     }
 
     #[test]

@@ -99,7 +99,7 @@ pub struct PairingCheck {
 }
 
 impl PairingCheck {
-    /// Adds frame `i`'s motion in the two cameras; every [`EVERY`] frames once [`WINDOW`] are
+    /// Adds frame `i`'s motion in the two cameras; every 30 frames once [`WINDOW`] are
     /// in, the verdict on the last window if the pairs are out of step.
     pub fn push(&mut self, i: usize, left: f32, right: f32) -> Option<OutOfStep> {
         if self.left.is_empty() {

@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::image::HueImage;
-use crate::limits::DEFAULT_HUE_TOLERANCE;
+use crate::limits::{DEFAULT_HUE_TOLERANCE, NO_HUE};
 use crate::model::{Block, ROW_DISTANCES_M};
 use crate::synth::test_scene::{H, W, rig, scene};
 use std::vec;

@@ -1,5 +1,6 @@
 //! Tests of scenario files.
 
+use super::parse::unit_direction;
 use super::*;
 use crate::sim::render::Light;
 

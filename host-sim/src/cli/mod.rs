@@ -4,10 +4,15 @@
 //! Layer `cli`, on top of the library's layers (see the crate doc of `evorec_sim`): the
 //! `evorec` binary's own modules, which may use every layer; no layer uses them.
 
+mod acquire;
 mod colours;
-mod misc;
+mod config;
+mod export;
 mod paper;
+mod render;
 mod run;
+mod servo;
+mod timing;
 mod track;
 
 use std::path::{Path, PathBuf};
@@ -50,12 +55,12 @@ pub enum Command {
     /// conveyor 0/0.05/0.1/0.2 m/s and turning block × (ga, ff, ff+target) × gains × delays,
     /// in parallel; writes DIR/servo_table.csv, DIR/servo_table.md, DIR/stability_*.png and
     /// DIR/runs/*/servo_error.csv.
-    Servo(misc::ServoArgs),
+    Servo(servo::ServoArgs),
     /// Worst-case timing and memory per GA generation on the board: runs the timing firmware
     /// under QEMU with -icount and writes DIR/timing.json and DIR/timing.md. Builds nothing:
     /// build the firmware first (`cd hil-stubs && cargo build --release`; for `--profile m7`
     /// `cd hil-stubs && CARGO_TARGET_DIR=../target/m7 cargo build --release --features m7`).
-    Timing(misc::TimingArgs),
+    Timing(timing::TimingArgs),
     /// Track a recorded stereo sequence (`evorec-seq/1` directory) or a ROS 2 bag (with
     /// `--rig`): writes DIR/trace.csv, DIR/estimate.tum (TUM format), DIR/summary.json, plots
     /// and `DIR/overlay_<N>.png`, and for a bag DIR/estimate.mcap + DIR/metadata.yaml, which
@@ -74,14 +79,14 @@ pub enum Command {
     /// Write a simulator scenario as a recorded sequence (`evorec-seq/1`): the PA-10's URDF,
     /// camera_info YAMLs, PNGs, joints at 1 kHz, ground truth, sequence.toml with the initial
     /// pose; `evorec track SEQ` then reads it back.
-    Export(misc::ExportArgs),
+    Export(export::ExportArgs),
     /// Acquisition statistics: N random block poses (seeds FIRST_SEED..), each from an unknown
     /// start and through a 1 s occlusion, static arm and motion A at 0.5 rad/s with FF, in
     /// parallel; writes DIR/acquire.json, DIR/acquire.md and DIR/acquire_cdf.png.
-    Acquire(misc::AcquireArgs),
+    Acquire(acquire::AcquireArgs),
     /// Render one frame of a scenario: left/right PNGs, the same with the projected search
     /// model at the true pose drawn over them, and frame.json with the geometry.
-    Render(misc::RenderArgs),
+    Render(render::RenderArgs),
     /// The block's face colours as the cameras of a recorded sequence or a ROS 2 bag see them:
     /// tracks from the first frame to `--frames` past `--frame` (a frame showing the block),
     /// prints each face's measured hue and band, and writes them as a `[target]` table
@@ -91,7 +96,7 @@ pub enum Command {
     /// Print the tracker's tuning as a `[tracker]` TOML table, every field with its unit and
     /// meaning: the defaults, or a scenario's (and a `--config` file's) effective values. Give
     /// the file to `run`, `hil`, `track`, `servo` or `acquire` with `--config FILE`.
-    Config(misc::ConfigArgs),
+    Config(config::ConfigArgs),
 }
 
 impl Command {

@@ -8,8 +8,11 @@ mod acquire;
 mod colours;
 mod config;
 mod export;
+mod hil;
+mod import;
 mod paper;
 mod render;
+mod rig;
 mod run;
 mod servo;
 mod timing;
@@ -50,7 +53,7 @@ pub enum Command {
     /// Run one scenario with the tracker in the firmware under QEMU (the scenario must render
     /// the firmware's 160x120 frames); writes the same files as `run`. Builds nothing: build
     /// the firmware first (`cd hil-stubs && cargo build --release`).
-    Hil(run::HilArgs),
+    Hil(hil::HilArgs),
     /// Closed-loop experiments (position-based visual servoing from the tracker's estimates):
     /// conveyor 0/0.05/0.1/0.2 m/s and turning block × (ga, ff, ff+target) × gains × delays,
     /// in parallel; writes DIR/servo_table.csv, DIR/servo_table.md, DIR/stability_*.png and
@@ -70,12 +73,12 @@ pub enum Command {
     /// Write a ROS 2 bag (MCAP storage: a bag directory or one .mcap file) as a recorded sequence
     /// (`evorec-seq/1`): images paired by stamp, joint states by name, transforms from tf, the URDF
     /// from the bag or the rig file. Nothing is written at OUT unless the whole bag was read.
-    Import(track::ImportArgs),
+    Import(import::ImportArgs),
     /// Draft a rig file (`evorec-rig/1`) from a ROS 2 bag: topics by message type, the camera
     /// frames from the images, the base link from the URDF and the flange from /tf_static.
     /// Keys the bag leaves open are written as "TODO" with the candidates; the block's
     /// `[target]` section is written commented out, to fill in.
-    Rig(track::RigArgs),
+    Rig(rig::RigArgs),
     /// Write a simulator scenario as a recorded sequence (`evorec-seq/1`): the PA-10's URDF,
     /// camera_info YAMLs, PNGs, joints at 1 kHz, ground truth, sequence.toml with the initial
     /// pose; `evorec track SEQ` then reads it back.

@@ -1,5 +1,5 @@
-//! `evorec track` (a recorded sequence or a ROS 2 bag) and `evorec import` (a bag as a
-//! sequence).
+//! `evorec track`: a recorded sequence or a ROS 2 bag, and how a bag is read (shared with
+//! `evorec import`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -221,20 +221,6 @@ fn print_track(s: &track::output::TrackSummary, t0: Instant, out: &Path) {
     println!("\nwrote {}", out.display());
 }
 
-#[derive(clap::Args, Debug)]
-pub struct ImportArgs {
-    /// The bag.
-    bag: PathBuf,
-    /// The rig file (`evorec-rig/1`): topics, frames and the block.
-    #[arg(long)]
-    rig: PathBuf,
-    /// Sequence directory to create (must not exist or be empty).
-    #[arg(long)]
-    out: PathBuf,
-    #[command(flatten)]
-    bag_args: BagArgs,
-}
-
 /// How to read a bag (`track BAG --rig`, `import`).
 #[derive(clap::Args, Debug)]
 pub struct BagArgs {
@@ -252,71 +238,12 @@ pub struct BagArgs {
 }
 
 impl BagArgs {
-    fn options(&self) -> bag::BagOptions {
+    pub(super) fn options(&self) -> bag::BagOptions {
         bag::BagOptions { pair_tolerance_ms: self.pair_tolerance_ms, start: self.start, end: self.end }
     }
 
     fn given(&self) -> bool {
         self.pair_tolerance_ms.is_some() || self.start.is_some() || self.end.is_some()
-    }
-}
-
-impl ImportArgs {
-    pub fn run(self, progress: bool) -> Result<()> {
-        let t0 = Instant::now();
-        let rig = bag::Rig::load(&self.rig)?;
-        let b = bag::load(&self.bag, &rig, &self.bag_args.options(), &self.out)?;
-        b.report.log();
-        let bar = progress.then(|| evorec_sim::output::logging::progress_bar_of(b.pairs.len() as u64, "pairs"));
-        bag::import::import(&b, &self.out, bar.as_ref())?;
-        if let Some(bar) = bar {
-            bar.finish_and_clear();
-        }
-        let secs = t0.elapsed().as_secs_f64();
-        if progress {
-            self.print(&b, secs);
-        }
-        match &b.cut {
-            Some(cut) => {
-                anyhow::bail!("{cut}: imported the {} frames before it into {}", b.pairs.len(), self.out.display())
-            }
-            None => Ok(()),
-        }
-    }
-
-    /// The lines a run prints on stdout (none with -q).
-    fn print(&self, b: &bag::BagSequence, secs: f64) {
-        println!("{}", b.report.describe());
-        println!(
-            "imported {} frame pairs in {secs:.1} s ({:.0} pairs/s); wrote {}",
-            b.pairs.len(),
-            b.pairs.len() as f64 / secs.max(1e-9),
-            self.out.display()
-        );
-    }
-}
-
-#[derive(clap::Args, Debug)]
-pub struct RigArgs {
-    /// The bag (directory or .mcap file).
-    bag: PathBuf,
-    /// The rig file to write (must not exist).
-    #[arg(long)]
-    out: PathBuf,
-}
-
-impl RigArgs {
-    pub fn run(self) -> Result<()> {
-        if self.out.exists() {
-            anyhow::bail!("{}: exists; evorec rig does not overwrite a rig file", self.out.display());
-        }
-        let draft = bag::rigfile::draft(&self.bag)?;
-        evorec_sim::output::io::write_bytes(&self.out, draft.text.as_bytes())?;
-        for key in &draft.open {
-            log::warn!("{}: left to you: {key}", self.out.display());
-        }
-        log::warn!("{}: add the block's [target] section (written commented out)", self.out.display());
-        Ok(())
     }
 }
 

@@ -19,7 +19,7 @@ echo "== firmware (thumbv7em-none-eabihf, release)"
 (cd hil-stubs && cargo build --release)
 
 echo "== workspace tests"
-cargo test --workspace --release
+cargo test --workspace
 
 echo "== on-target tests (QEMU)"
 (cd hil-stubs && cargo test --release --test on_target)

@@ -27,56 +27,31 @@ use nalgebra::{Isometry3, Matrix3, Point2, Point3, Translation3, UnitQuaternion,
 
 use crate::limits::{MAX_IMAGE_SIDE, MIN_DEPTH_M};
 
-/// Why camera parameters were rejected.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum CameraError {
-    /// A parameter is NaN or infinite.
-    NonFinite,
-    /// A focal length is not positive.
-    BadFocalLength,
-    /// Width or height is 0 or larger than [`MAX_IMAGE_SIDE`].
-    BadSize,
-    /// The stereo baseline is not positive.
-    BadBaseline,
-}
-
-impl core::fmt::Display for CameraError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::NonFinite => f.write_str("camera parameter is not finite"),
-            Self::BadFocalLength => f.write_str("focal length must be positive"),
-            Self::BadSize => f.write_str("image size must be 1..=2048 pixels per side"),
-            Self::BadBaseline => f.write_str("stereo baseline must be positive"),
-        }
+error_enum! {
+    /// Why camera parameters were rejected.
+    pub enum CameraError {
+        /// A parameter is NaN or infinite.
+        NonFinite => "camera parameter is not finite",
+        /// A focal length is not positive.
+        BadFocalLength => "focal length must be positive",
+        /// Width or height is 0 or larger than [`MAX_IMAGE_SIDE`].
+        BadSize => "image size must be 1..=2048 pixels per side",
+        /// The stereo baseline is not positive.
+        BadBaseline => "stereo baseline must be positive",
     }
 }
 
-impl core::error::Error for CameraError {}
-
-/// Why a point has no pixel.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum ProjectError {
-    /// The point is behind the camera or closer than [`MIN_DEPTH_M`] to its plane.
-    BehindCamera,
-    /// The point projects outside `[0, width) × [0, height)`.
-    OutsideImage,
-    /// The point is not finite.
-    NonFinite,
-}
-
-impl core::fmt::Display for ProjectError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::BehindCamera => f.write_str("point is behind the camera"),
-            Self::OutsideImage => f.write_str("point projects outside the image"),
-            Self::NonFinite => f.write_str("point is not finite"),
-        }
+error_enum! {
+    /// Why a point has no pixel.
+    pub enum ProjectError {
+        /// The point is behind the camera or closer than [`MIN_DEPTH_M`] to its plane.
+        BehindCamera => "point is behind the camera",
+        /// The point projects outside `[0, width) × [0, height)`.
+        OutsideImage => "point projects outside the image",
+        /// The point is not finite.
+        NonFinite => "point is not finite",
     }
 }
-
-impl core::error::Error for ProjectError {}
 
 /// OpenCV's plumb_bob lens distortion `D = [k1, k2, p1, p2, k3]` on normalised coordinates:
 ///

@@ -79,6 +79,9 @@
 #[cfg(test)]
 extern crate std;
 
+#[macro_use]
+mod error_enum;
+
 // No indexing or slicing that can panic (`clippy::indexing_slicing`) in the modules below that
 // carry the lint: `get`, iterators, pattern matching or fixed-size conversions instead. The
 // fitness kernel, model, camera and hue modules still index (bounds proven by construction;

@@ -45,26 +45,15 @@ use crate::limits::{INNER_INSETS_M, OUTER_OFFSETS_M};
 /// Number of faces of the block.
 pub const FACES: usize = 6;
 
-/// Why a block description was rejected.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum ModelError {
-    /// A size or hue is NaN or infinite.
-    NonFinite,
-    /// An edge is not longer than twice the deepest inner inset plus 2 mm.
-    TooSmall,
-}
-
-impl core::fmt::Display for ModelError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::NonFinite => f.write_str("block size or hue is not finite"),
-            Self::TooSmall => f.write_str("block edge too short for the sample inset"),
-        }
+error_enum! {
+    /// Why a block description was rejected.
+    pub enum ModelError {
+        /// A size or hue is NaN or infinite.
+        NonFinite => "block size or hue is not finite",
+        /// An edge is not longer than twice the deepest inner inset plus 2 mm.
+        TooSmall => "block edge too short for the sample inset",
     }
 }
-
-impl core::error::Error for ModelError {}
 
 /// A rectangular block with one hue per face.
 #[derive(Debug, Clone, Copy, PartialEq)]

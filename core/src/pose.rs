@@ -9,26 +9,15 @@ use nalgebra::{Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vec
 
 use crate::{math, quat};
 
-/// Why a `ψ` is not a pose.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum PoseError {
-    /// A component is NaN or infinite.
-    NonFinite,
-    /// `|ε| > 1` (beyond [`EPS_NORM_TOLERANCE`]): no real `η` exists.
-    EpsOutOfBall,
-}
-
-impl core::fmt::Display for PoseError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::NonFinite => f.write_str("pose has a non-finite component"),
-            Self::EpsOutOfBall => f.write_str("quaternion vector part has norm > 1"),
-        }
+error_enum! {
+    /// Why a `ψ` is not a pose.
+    pub enum PoseError {
+        /// A component is NaN or infinite.
+        NonFinite => "pose has a non-finite component",
+        /// `|ε| > 1` (beyond [`EPS_NORM_TOLERANCE`]): no real `η` exists.
+        EpsOutOfBall => "quaternion vector part has norm > 1",
     }
 }
-
-impl core::error::Error for PoseError {}
 
 /// `|ε|²` may exceed 1 by this much (rounding) and still be accepted (then `η = 0`).
 pub const EPS_NORM_TOLERANCE: f32 = 1e-5;

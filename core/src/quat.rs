@@ -13,29 +13,17 @@ use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 use crate::math;
 
-/// Why a quaternion could not be built.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum QuatError {
-    /// An input held NaN or infinity.
-    NonFinite,
-    /// The rotation axis had (near) zero length.
-    ZeroAxis,
-    /// The matrix is not a rotation (not orthonormal within tolerance, or `det < 0`).
-    NotRotation,
-}
-
-impl core::fmt::Display for QuatError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::NonFinite => f.write_str("input is not finite"),
-            Self::ZeroAxis => f.write_str("rotation axis has zero length"),
-            Self::NotRotation => f.write_str("matrix is not a proper rotation"),
-        }
+error_enum! {
+    /// Why a quaternion could not be built.
+    pub enum QuatError {
+        /// An input held NaN or infinity.
+        NonFinite => "input is not finite",
+        /// The rotation axis had (near) zero length.
+        ZeroAxis => "rotation axis has zero length",
+        /// The matrix is not a rotation (not orthonormal within tolerance, or `det < 0`).
+        NotRotation => "matrix is not a proper rotation",
     }
 }
-
-impl core::error::Error for QuatError {}
 
 /// Tolerance on `‖RᵀR − I‖∞` and `|det R − 1|` accepted by [`from_rotation_matrix`].
 pub const ROTATION_TOLERANCE: f32 = 1e-3;

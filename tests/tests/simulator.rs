@@ -33,12 +33,12 @@ fn feedforward_tracks_motion_a_and_b_accurately() {
     for motion in [MotionKind::A, MotionKind::B] {
         let a = run(&short(motion, Feedforward::On));
         println!("{motion:?} ff: {a:?}");
-        assert_eq!(a.frames, 153);
+        assert_eq!(a.rms.frames, 153);
         assert!(a.f_mean >= 0.9, "{motion:?}: F_mean {}", a.f_mean);
-        for (name, v) in [("x", a.rms_x_mm), ("y", a.rms_y_mm), ("z", a.rms_z_mm)] {
+        for (name, v) in [("x", a.rms.rms_x_mm), ("y", a.rms.rms_y_mm), ("z", a.rms.rms_z_mm)] {
             assert!(v <= 3.0, "{motion:?}: RMS {name} = {v} mm");
         }
-        for (name, v) in [("e1", a.rms_e1), ("e2", a.rms_e2), ("e3", a.rms_e3)] {
+        for (name, v) in [("e1", a.rms.rms_e1), ("e2", a.rms.rms_e2), ("e3", a.rms.rms_e3)] {
             assert!(v <= 0.005, "{motion:?}: RMS {name} = {v}");
         }
     }
@@ -55,12 +55,12 @@ fn camera_like_light_is_tracked_with_the_learnt_colours() {
     let a = run(&s);
     println!("camera-like: {a:?}");
     assert!(a.f_mean >= 0.9, "F_mean {}", a.f_mean);
-    for (name, v) in [("x", a.rms_x_mm), ("y", a.rms_y_mm)] {
+    for (name, v) in [("x", a.rms.rms_x_mm), ("y", a.rms.rms_y_mm)] {
         assert!(v <= 1.0, "RMS {name} = {v} mm");
     }
     // The pale faces' edges bias depth by about +2 mm (docs/method.md).
-    assert!(a.rms_z_mm <= 4.0, "RMS z = {} mm", a.rms_z_mm);
-    for (name, v) in [("e1", a.rms_e1), ("e2", a.rms_e2), ("e3", a.rms_e3)] {
+    assert!(a.rms.rms_z_mm <= 4.0, "RMS z = {} mm", a.rms.rms_z_mm);
+    for (name, v) in [("e1", a.rms.rms_e1), ("e2", a.rms.rms_e2), ("e3", a.rms.rms_e3)] {
         assert!(v <= 0.005, "RMS {name} = {v}");
     }
 }
@@ -70,8 +70,8 @@ fn feedforward_is_not_worse_than_the_plain_ga() {
     for motion in [MotionKind::A, MotionKind::B] {
         let ff = run(&short(motion, Feedforward::On));
         let ga = run(&short(motion, Feedforward::Off));
-        let pos = |a: &Accuracy| a.rms_x_mm + a.rms_y_mm + a.rms_z_mm;
-        let eps = |a: &Accuracy| a.rms_e1 + a.rms_e2 + a.rms_e3;
+        let pos = |a: &Accuracy| a.rms.rms_x_mm + a.rms.rms_y_mm + a.rms.rms_z_mm;
+        let eps = |a: &Accuracy| a.rms.rms_e1 + a.rms.rms_e2 + a.rms.rms_e3;
         println!("{motion:?}: ff {ff:?}\n   ga {ga:?}");
         assert!(ff.f_mean >= ga.f_mean, "{motion:?}: F_mean ff {} < ga {}", ff.f_mean, ga.f_mean);
         assert!(pos(&ff) <= pos(&ga), "{motion:?}: position RMS ff {} > ga {}", pos(&ff), pos(&ga));

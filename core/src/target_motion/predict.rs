@@ -20,26 +20,15 @@ pub struct Prediction {
     pub base_time_us: u64,
 }
 
-/// Why [`TargetFilter::predict`] could not predict.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum PredictError {
-    /// The filter holds no track (never updated, reset, or lost).
-    NoTrack,
-    /// A joint position or velocity is NaN or infinite.
-    NonFiniteJoint,
-}
-
-impl core::fmt::Display for PredictError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::NoTrack => f.write_str("no target track to predict from"),
-            Self::NonFiniteJoint => f.write_str("joint sample is not finite"),
-        }
+error_enum! {
+    /// Why [`TargetFilter::predict`] could not predict.
+    pub enum PredictError {
+        /// The filter holds no track (never updated, reset, or lost).
+        NoTrack => "no target track to predict from",
+        /// A joint position or velocity is NaN or infinite.
+        NonFiniteJoint => "joint sample is not finite",
     }
 }
-
-impl core::error::Error for PredictError {}
 
 impl TargetFilter {
     /// Hands the pose over to time `t_us`: the filtered pose moved by the filtered velocity

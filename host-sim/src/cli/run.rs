@@ -63,15 +63,15 @@ pub(super) fn write_closed_loop(
 fn report(a: &experiment::Accuracy, t0: Instant) {
     println!(
         "{} frames in {:.1} s: F_mean {:.4}, RMS x/y/z {:.2}/{:.2}/{:.2} mm, RMS e1/e2/e3 {:.4}/{:.4}/{:.4}",
-        a.frames,
+        a.rms.frames,
         t0.elapsed().as_secs_f64(),
         a.f_mean,
-        a.rms_x_mm,
-        a.rms_y_mm,
-        a.rms_z_mm,
-        a.rms_e1,
-        a.rms_e2,
-        a.rms_e3
+        a.rms.rms_x_mm,
+        a.rms.rms_y_mm,
+        a.rms.rms_z_mm,
+        a.rms.rms_e1,
+        a.rms.rms_e2,
+        a.rms.rms_e3
     );
 }
 
@@ -83,13 +83,13 @@ fn report_handover(h: Option<&experiment::HandoverSummary>) {
          target velocity trusted in {:.0} %",
         h.delay_s,
         h.frames,
-        h.at_capture.rms_position_mm,
-        h.held.rms_position_mm,
-        h.predicted.rms_position_mm,
+        h.at_capture.position_mm(),
+        h.held.position_mm(),
+        h.predicted.position_mm(),
         h.position_ratio,
-        h.at_capture.rms_eps_norm,
-        h.held.rms_eps_norm,
-        h.predicted.rms_eps_norm,
+        h.at_capture.eps_norm(),
+        h.held.eps_norm(),
+        h.predicted.eps_norm(),
         h.eps_ratio,
         h.trusted_fraction * 100.0
     );

@@ -209,10 +209,10 @@ fn print_track(s: &track::output::TrackSummary, t0: Instant, out: &Path) {
         s.f_mean
     );
     if let Some(a) = &s.all {
-        print!(
-            ", RMS x/y/z {:.2}/{:.2}/{:.2} mm, RMS rotation {:.2} deg (max {:.2})",
-            a.rms_x_mm, a.rms_y_mm, a.rms_z_mm, a.rms_rot_deg, a.max_rot_deg
-        );
+        print!(", RMS x/y/z {:.2}/{:.2}/{:.2} mm", a.rms_x_mm, a.rms_y_mm, a.rms_z_mm);
+        if let Some(r) = &a.rotation {
+            print!(", RMS rotation {:.2} deg (max {:.2})", r.rms_rot_deg, r.max_rot_deg);
+        }
         match s.within_from_frame {
             Some(f) => print!(", within 10 mm/5 deg from frame {f}"),
             None => print!(", never stays within 10 mm/5 deg"),

@@ -13,7 +13,7 @@ use evorec_core::tracker::{ConfigError, StepError, Tracker, TrackerConfig};
 use serde::Serialize;
 
 use crate::experiments::truth::{self as eval, WrongTracking};
-pub use crate::experiments::truth::{RotationError, isometry_of, rms_columns};
+pub use crate::experiments::truth::{Rms, RotationError, isometry_of, rms_columns};
 use crate::sim::board::{self as sim, Handover, SimBoard, TraceRow, World};
 use crate::sim::occlusion::Initial;
 use crate::sim::scenario::{HOST_POPULATION_CAPACITY, Scenario};
@@ -108,20 +108,9 @@ pub struct Accuracy {
     /// Mean fitness `F̄`.
     #[serde(rename = "F_mean")]
     pub f_mean: f64,
-    /// RMS error of x (mm).
-    pub rms_x_mm: f64,
-    /// RMS error of y (mm).
-    pub rms_y_mm: f64,
-    /// RMS error of z (mm).
-    pub rms_z_mm: f64,
-    /// RMS error of ε₁.
-    pub rms_e1: f64,
-    /// RMS error of ε₂.
-    pub rms_e2: f64,
-    /// RMS error of ε₃.
-    pub rms_e3: f64,
-    /// Frames.
-    pub frames: usize,
+    /// RMS errors of the estimates (flattened: `rms_x_mm` … `rms_e3`, `frames`).
+    #[serde(flatten)]
+    pub rms: Rms,
 }
 
 impl Accuracy {
@@ -129,19 +118,14 @@ impl Accuracy {
     pub fn of(rows: &[TraceRow]) -> Self {
         let n = rows.len().max(1) as f64;
         let f = rows.iter().map(|r| f64::from(r.fitness)).sum::<f64>();
-        let diffs = rows.iter().map(|r| std::array::from_fn(|k| f64::from(r.estimate.0[k]) - f64::from(r.truth.0[k])));
-        let rms = rms_columns::<6>(diffs).unwrap_or([0.0; 6]);
-        Self {
-            f_mean: f / n,
-            rms_x_mm: rms[0] * 1e3,
-            rms_y_mm: rms[1] * 1e3,
-            rms_z_mm: rms[2] * 1e3,
-            rms_e1: rms[3],
-            rms_e2: rms[4],
-            rms_e3: rms[5],
-            frames: rows.len(),
-        }
+        Self { f_mean: f / n, rms: pose_rms(rows.iter().map(|r| (r.estimate, r.truth))) }
     }
+}
+
+/// The RMS of `estimate − truth` over the `(estimate, truth)` pairs ([`Rms::ZERO`] for none).
+fn pose_rms(pairs: impl Iterator<Item = (Psi, Psi)>) -> Rms {
+    Rms::of_differences(pairs.map(|(e, t)| std::array::from_fn(|k| f64::from(e.0[k]) - f64::from(t.0[k]))))
+        .unwrap_or(Rms::ZERO)
 }
 
 /// How the tracker's status went over a run.
@@ -191,32 +175,16 @@ impl RotationError {
     }
 }
 
-/// RMS errors of one pose series against a truth series.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct PoseRms {
-    /// RMS error of x, y, z (mm).
-    pub rms_xyz_mm: [f64; 3],
-    /// RMS error of ε₁, ε₂, ε₃.
-    pub rms_eps: [f64; 3],
-    /// RMS of the position error's length (mm).
-    pub rms_position_mm: f64,
-    /// RMS of the ε error's length.
-    pub rms_eps_norm: f64,
-}
-
-impl PoseRms {
-    /// RMS of `estimate − truth` over the `(estimate, truth)` pairs (zeros for none).
-    pub fn of(pairs: impl Iterator<Item = (Psi, Psi)>) -> Self {
-        let diffs = pairs.map(|(e, t)| std::array::from_fn(|k| f64::from(e.0[k]) - f64::from(t.0[k])));
-        let r = rms_columns::<6>(diffs).unwrap_or([0.0; 6]);
-        let norm = |a: f64, b: f64, c: f64| (a * a + b * b + c * c).sqrt();
-        Self {
-            rms_xyz_mm: [r[0] * 1e3, r[1] * 1e3, r[2] * 1e3],
-            rms_eps: [r[3], r[4], r[5]],
-            rms_position_mm: norm(r[0], r[1], r[2]) * 1e3,
-            rms_eps_norm: norm(r[3], r[4], r[5]),
-        }
-    }
+/// How `summary.json` writes an RMS of the hand-over: per axis as `[x, y, z]` (mm) and
+/// `[ε₁, ε₂, ε₃]`, and the lengths of both.
+fn serialize_handover_rms<S: serde::Serializer>(r: &Rms, s: S) -> std::result::Result<S::Ok, S::Error> {
+    use serde::ser::SerializeStruct;
+    let mut st = s.serialize_struct("Rms", 4)?;
+    st.serialize_field("rms_xyz_mm", &[r.rms_x_mm, r.rms_y_mm, r.rms_z_mm])?;
+    st.serialize_field("rms_eps", &[r.rms_e1, r.rms_e2, r.rms_e3])?;
+    st.serialize_field("rms_position_mm", &r.position_mm())?;
+    st.serialize_field("rms_eps_norm", &r.eps_norm())?;
+    st.end()
 }
 
 /// The hand-over at the output time (`[start] delay_s` after capture), over the frames
@@ -228,14 +196,17 @@ pub struct HandoverSummary {
     /// Frames counted.
     pub frames: usize,
     /// The estimate against the truth at capture time (the tracker's own error).
-    pub at_capture: PoseRms,
+    #[serde(serialize_with = "serialize_handover_rms")]
+    pub at_capture: Rms,
     /// The estimate held unchanged until the output time, against the truth then.
-    pub held: PoseRms,
+    #[serde(serialize_with = "serialize_handover_rms")]
+    pub held: Rms,
     /// The core's prediction for the output time against the truth then.
-    pub predicted: PoseRms,
-    /// `predicted.rms_position_mm / at_capture.rms_position_mm`.
+    #[serde(serialize_with = "serialize_handover_rms")]
+    pub predicted: Rms,
+    /// `predicted.position_mm() / at_capture.position_mm()`.
     pub position_ratio: f64,
-    /// `predicted.rms_eps_norm / at_capture.rms_eps_norm`.
+    /// `predicted.eps_norm() / at_capture.eps_norm()`.
     pub eps_ratio: f64,
     /// Fraction of the frames whose prediction used a trusted target velocity.
     pub trusted_fraction: f64,
@@ -263,9 +234,9 @@ impl HandoverSummary {
         if rows.is_empty() {
             return None;
         }
-        let at_capture = PoseRms::of(rows.iter().map(|(r, _)| (r.estimate, r.truth)));
-        let held = PoseRms::of(rows.iter().map(|(r, h)| (r.estimate, h.truth_out)));
-        let predicted = PoseRms::of(rows.iter().map(|(_, h)| (h.predicted, h.truth_out)));
+        let at_capture = pose_rms(rows.iter().map(|(r, _)| (r.estimate, r.truth)));
+        let held = pose_rms(rows.iter().map(|(r, h)| (r.estimate, h.truth_out)));
+        let predicted = pose_rms(rows.iter().map(|(_, h)| (h.predicted, h.truth_out)));
         let trusted: Vec<&Handover> = rows.iter().map(|(_, h)| *h).filter(|h| h.trusted).collect();
         let vel = rms_columns::<2>(trusted.iter().map(|h| {
             let (dv, dw) = (h.velocity.v - h.true_velocity.v, h.velocity.w - h.true_velocity.w);
@@ -279,8 +250,8 @@ impl HandoverSummary {
             at_capture,
             held,
             predicted,
-            position_ratio: ratio(predicted.rms_position_mm, at_capture.rms_position_mm),
-            eps_ratio: ratio(predicted.rms_eps_norm, at_capture.rms_eps_norm),
+            position_ratio: ratio(predicted.position_mm(), at_capture.position_mm()),
+            eps_ratio: ratio(predicted.eps_norm(), at_capture.eps_norm()),
             trusted_fraction: trusted.len() as f64 / rows.len() as f64,
             target_feedforward_frames,
             rms_velocity_error_m_s: vel[0],

@@ -156,7 +156,7 @@ pub fn run_grid_of(cells: &[Cell], base: &Scenario, out: &Path, show_progress: b
 }
 
 fn values(a: &Accuracy) -> [f64; 7] {
-    [a.f_mean, a.rms_x_mm, a.rms_y_mm, a.rms_z_mm, a.rms_e1, a.rms_e2, a.rms_e3]
+    [a.f_mean, a.rms.rms_x_mm, a.rms.rms_y_mm, a.rms.rms_z_mm, a.rms.rms_e1, a.rms.rms_e2, a.rms.rms_e3]
 }
 
 /// Column names of the tables (those of `paper_tables.csv`).

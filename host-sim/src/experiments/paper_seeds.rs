@@ -127,7 +127,9 @@ pub fn run(
 pub fn record(r: &SeedRun) -> Vec<String> {
     let a = &r.accuracy;
     let mut rec = vec![r.cell.motion_name().to_owned(), format!("{}", r.cell.omega), r.seed.to_string()];
-    rec.extend([a.f_mean, a.rms_x_mm, a.rms_y_mm, a.rms_z_mm, a.rms_e1, a.rms_e2, a.rms_e3].map(g6));
+    rec.extend(
+        [a.f_mean, a.rms.rms_x_mm, a.rms.rms_y_mm, a.rms.rms_z_mm, a.rms.rms_e1, a.rms.rms_e2, a.rms.rms_e3].map(g6),
+    );
     rec.push(g6(r.wrong_tracking.tracking_wrong_fraction));
     rec.push(r.wrong_tracking.longest_wrong_tracking_frames.to_string());
     rec
@@ -155,6 +157,7 @@ pub fn g6(v: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::experiments::truth::Rms;
 
     #[test]
     fn g6_matches_percent_g() {
@@ -197,16 +200,17 @@ mod tests {
     #[test]
     fn a_row_is_the_script_s() {
         let cell = Cell { motion: MotionKind::B, method: Feedforward::On, omega: 0.125 };
-        let accuracy = Accuracy {
-            f_mean: 0.998_4,
+        let rms = Rms {
             rms_x_mm: 0.362_514_9,
             rms_y_mm: 0.41,
             rms_z_mm: 1.98,
             rms_e1: 0.001_187_65,
             rms_e2: 0.003_2,
             rms_e3: 0.000_012_3,
+            rotation: None,
             frames: 2182,
         };
+        let accuracy = Accuracy { f_mean: 0.998_4, rms };
         let wrong_tracking = WrongTracking {
             tracking_frames: 2000,
             tracking_wrong_frames: 25,

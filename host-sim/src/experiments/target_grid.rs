@@ -224,23 +224,20 @@ pub const COLUMNS: [&str; 18] = [
 ];
 
 fn values(s: &Summary) -> [f64; 14] {
-    let a = &s.accuracy;
+    let (f_mean, a) = (s.accuracy.f_mean, &s.accuracy.rms);
     let tracking = s.status.tracking as f64 / a.frames.max(1) as f64;
     let (delay, cap, held, pred, rp, re) = match &s.handover {
         Some(h) => (
             h.delay_s,
-            h.at_capture.rms_position_mm,
-            h.held.rms_position_mm,
-            h.predicted.rms_position_mm,
+            h.at_capture.position_mm(),
+            h.held.position_mm(),
+            h.predicted.position_mm(),
             h.position_ratio,
             h.eps_ratio,
         ),
         None => (f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN),
     };
-    [
-        a.f_mean, a.rms_x_mm, a.rms_y_mm, a.rms_z_mm, a.rms_e1, a.rms_e2, a.rms_e3, tracking, delay, cap, held, pred,
-        rp, re,
-    ]
+    [f_mean, a.rms_x_mm, a.rms_y_mm, a.rms_z_mm, a.rms_e1, a.rms_e2, a.rms_e3, tracking, delay, cap, held, pred, rp, re]
 }
 
 /// Writes `target_table.csv` and `target_table.md`.

@@ -134,7 +134,8 @@ pub fn frame_error(
     (FrameError { d: std::array::from_fn(|k| e[k] - t[k]), rot_deg: angle.to_degrees() }, t)
 }
 
-/// RMS errors over a set of frames.
+/// RMS errors of estimates against the truth over a set of frames, per axis of ψ: the one
+/// RMS type of every summary (`evorec run`'s accuracy, `evorec track`'s errors, the hand-over).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Rms {
     /// RMS x error (mm).
@@ -149,20 +150,19 @@ pub struct Rms {
     pub rms_e2: f64,
     /// RMS ε₃ error.
     pub rms_e3: f64,
-    /// RMS rotation error (degrees).
-    pub rms_rot_deg: f64,
-    /// Largest rotation error (degrees).
-    pub max_rot_deg: f64,
+    /// The rotation error, where the frames' rotation angles were taken ([`Rms::of`]).
+    #[serde(flatten)]
+    pub rotation: Option<RotationError>,
     /// Frames.
     pub frames: usize,
 }
 
 impl Rms {
-    /// The RMS of `errors` (`None` when empty).
-    pub fn of(errors: &[FrameError]) -> Option<Self> {
-        let columns = errors.iter().map(|e| [e.d[0], e.d[1], e.d[2], e.d[3], e.d[4], e.d[5]]);
-        let [x, y, z, e1, e2, e3] = rms_columns::<6>(columns)?;
-        let rot = RotationError::of(errors.iter().map(|e| e.rot_deg))?;
+    /// The RMS of the differences `estimate − truth` of ψ (m, m, m, ε₁, ε₂, ε₃), without a
+    /// rotation error (`None` when empty).
+    pub fn of_differences(diffs: impl IntoIterator<Item = [f64; 6]>) -> Option<Self> {
+        let mut frames = 0usize;
+        let [x, y, z, e1, e2, e3] = rms_columns::<6>(diffs.into_iter().inspect(|_| frames += 1))?;
         Some(Self {
             rms_x_mm: x * 1e3,
             rms_y_mm: y * 1e3,
@@ -170,10 +170,37 @@ impl Rms {
             rms_e1: e1,
             rms_e2: e2,
             rms_e3: e3,
-            rms_rot_deg: rot.rms_rot_deg,
-            max_rot_deg: rot.max_rot_deg,
-            frames: errors.len(),
+            rotation: None,
+            frames,
         })
+    }
+
+    /// The RMS of frame errors, with their rotation error (`None` when empty).
+    pub fn of(errors: &[FrameError]) -> Option<Self> {
+        let rotation = RotationError::of(errors.iter().map(|e| e.rot_deg))?;
+        Self::of_differences(errors.iter().map(|e| e.d)).map(|r| Self { rotation: Some(rotation), ..r })
+    }
+
+    /// All zeros over no frames.
+    pub const ZERO: Self = Self {
+        rms_x_mm: 0.0,
+        rms_y_mm: 0.0,
+        rms_z_mm: 0.0,
+        rms_e1: 0.0,
+        rms_e2: 0.0,
+        rms_e3: 0.0,
+        rotation: None,
+        frames: 0,
+    };
+
+    /// The RMS of the position error's length (mm).
+    pub fn position_mm(&self) -> f64 {
+        Vector3::new(self.rms_x_mm, self.rms_y_mm, self.rms_z_mm).norm()
+    }
+
+    /// The RMS of the ε error's length.
+    pub fn eps_norm(&self) -> f64 {
+        Vector3::new(self.rms_e1, self.rms_e2, self.rms_e3).norm()
     }
 }
 
@@ -234,8 +261,13 @@ mod tests {
         let e = |x: f64, rot: f64| FrameError { d: [x, 0.0, 0.0, 0.0, 0.0, 0.0], rot_deg: rot };
         let r = Rms::of(&[e(0.003, 1.0), e(-0.004, 7.0)]).unwrap();
         assert!((r.rms_x_mm - 12.5f64.sqrt()).abs() < 1e-12);
-        assert!((r.rms_rot_deg - 25.0f64.sqrt()).abs() < 1e-12);
-        assert_eq!((r.max_rot_deg, r.frames), (7.0, 2));
+        let rot = r.rotation.unwrap();
+        assert!((rot.rms_rot_deg - 25.0f64.sqrt()).abs() < 1e-12);
+        assert_eq!((rot.max_rot_deg, r.frames), (7.0, 2));
+        let d = Rms::of_differences([[0.003, 0.004, 0.0, 0.0, 0.006, 0.008]]).unwrap();
+        assert!((d.position_mm() - 5.0).abs() < 1e-12 && (d.eps_norm() - 0.01).abs() < 1e-15);
+        assert_eq!((d.rotation, d.frames), (None, 1));
+        assert_eq!(Rms::of_differences([]), None);
         assert_eq!(Rms::of(&[]), None);
         assert_eq!(rms_columns([[3.0, -4.0], [-3.0, 4.0]]), Some([3.0, 4.0]));
         assert_eq!(rms_columns::<2>([]), None);
@@ -285,6 +317,6 @@ mod tests {
         assert_eq!(settled_from(&[good, turned]), None);
         assert_eq!(settled_from(&[]), None);
         let r = Rms::of(&[good, bad]).unwrap();
-        assert!((r.rms_x_mm - (0.5f64 * (1.0 + 400.0)).sqrt()).abs() < 1e-9 && r.max_rot_deg == 1.0);
+        assert!((r.rms_x_mm - (0.5f64 * (1.0 + 400.0)).sqrt()).abs() < 1e-9 && r.rotation.map(|x| x.max_rot_deg) == Some(1.0));
     }
 }

@@ -11,6 +11,8 @@
 //! and leave several times more unexplained in step. A scene without motion gives no verdict (nothing to compare);
 //! an offset of one frame is not told from the smoothness of the motion itself.
 
+use std::collections::VecDeque;
+
 use image::RgbImage;
 
 /// Every `STRIDE`-th pixel along each image axis is sampled.
@@ -35,27 +37,28 @@ const MIN_RESIDUAL_RATIO: f64 = 4.0;
 #[derive(Debug, Default)]
 pub struct MotionMeter {
     previous: Vec<u8>,
+    current: Vec<u8>,
 }
 
 impl MotionMeter {
     /// The mean absolute grey-level change since the last image this meter saw (0 for the
     /// first, or after a change of image size).
     pub fn measure(&mut self, img: &RgbImage) -> f32 {
-        let grey: Vec<u8> = (0..img.height())
-            .step_by(STRIDE as usize)
-            .flat_map(|y| (0..img.width()).step_by(STRIDE as usize).map(move |x| (x, y)))
-            .map(|(x, y)| {
+        self.current.clear();
+        for y in (0..img.height()).step_by(STRIDE as usize) {
+            for x in (0..img.width()).step_by(STRIDE as usize) {
                 let [r, g, b] = img.get_pixel(x, y).0;
-                ((u16::from(r) + u16::from(g) + u16::from(b)) / 3) as u8
-            })
-            .collect();
-        let change = if grey.len() == self.previous.len() && !grey.is_empty() {
-            let sum: u64 = grey.iter().zip(&self.previous).map(|(a, b)| u64::from(a.abs_diff(*b))).sum();
-            sum as f32 / grey.len() as f32
+                self.current.push(((u16::from(r) + u16::from(g) + u16::from(b)) / 3) as u8);
+            }
+        }
+        let (now, before) = (&self.current, &self.previous);
+        let change = if now.len() == before.len() && !now.is_empty() {
+            let sum: u64 = now.iter().zip(before).map(|(a, b)| u64::from(a.abs_diff(*b))).sum();
+            sum as f32 / now.len() as f32
         } else {
             0.0
         };
-        self.previous = grey;
+        std::mem::swap(&mut self.previous, &mut self.current);
         change
     }
 }
@@ -89,31 +92,32 @@ impl std::fmt::Display for OutOfStep {
     }
 }
 
-/// The two series and the check over their last [`WINDOW`] frames.
+/// The two series over their last [`WINDOW`] frames, and the check on them.
 #[derive(Debug, Default)]
 pub struct PairingCheck {
-    left: Vec<f32>,
-    right: Vec<f32>,
-    /// Position in the recording of the first entry of the series.
-    start: usize,
+    left: VecDeque<f32>,
+    right: VecDeque<f32>,
+    /// Frames pushed so far.
+    pushed: usize,
 }
 
 impl PairingCheck {
     /// Adds frame `i`'s motion in the two cameras; every 30 frames once [`WINDOW`] are
     /// in, the verdict on the last window if the pairs are out of step.
     pub fn push(&mut self, i: usize, left: f32, right: f32) -> Option<OutOfStep> {
-        if self.left.is_empty() {
-            self.start = i;
+        for (series, v) in [(&mut self.left, left), (&mut self.right, right)] {
+            if series.len() == WINDOW {
+                series.pop_front();
+            }
+            series.push_back(v);
         }
-        self.left.push(left);
-        self.right.push(right);
-        let n = self.left.len();
-        if n < WINDOW || !(n - WINDOW).is_multiple_of(EVERY) {
+        self.pushed += 1;
+        if self.pushed < WINDOW || !(self.pushed - WINDOW).is_multiple_of(EVERY) {
             return None;
         }
-        let (l, r) = (&self.left[n - WINDOW..], &self.right[n - WINDOW..]);
-        let first = self.start + n - WINDOW;
-        let best = OutOfStep { frames: (first, first + WINDOW - 1), ..best_offset(l, r)? };
+        let (l, r) = (self.left.make_contiguous(), self.right.make_contiguous());
+        let first = i + 1 - WINDOW;
+        let best = OutOfStep { frames: (first, i), ..best_offset(l, r)? };
         log::debug!(
             "stereo pairing, frames {}–{}: best offset {} frames (correlation {:.3}), in step {:.3}",
             best.frames.0,

@@ -73,6 +73,7 @@ import statistics
 import subprocess
 import sys
 import textwrap
+import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BEGIN, END = '<!-- results:paper:begin -->', '<!-- results:paper:end -->'
@@ -127,8 +128,10 @@ def run_step(name, args, out, reuse, done=None):
         print(f'== {name}: reusing {out}')
         return
     print(f'== {name}: {" ".join(args)}', flush=True)
+    t0 = time.monotonic()
     if subprocess.call(args) != 0:
         die(f'step "{name}" failed ({" ".join(args)}); nothing written')
+    print(f'== {name}: done in {time.monotonic() - t0:.0f} s', flush=True)
 
 
 def run_steps(name, runs, reuse, jobs=2):
@@ -137,6 +140,7 @@ def run_steps(name, runs, reuse, jobs=2):
     the running ones end, naming the step `name` and the command."""
     todo = [(args, out) for args, out in runs if not reusable(out, reuse, 'summary.json')]
     print(f'== {name}: {len(todo)} runs, {len(runs) - len(todo)} reused', flush=True)
+    t0 = time.monotonic()
     running, failed = [], None
     while (todo and failed is None) or running:
         while todo and failed is None and len(running) < jobs:
@@ -160,6 +164,7 @@ def run_steps(name, runs, reuse, jobs=2):
             failed = f'{" ".join(args)}; see {log.name}'
     if failed is not None:
         die(f'step "{name}" failed ({failed}); nothing written')
+    print(f'== {name}: done in {time.monotonic() - t0:.0f} s', flush=True)
 
 
 def bags_with_truth(bags_dir):

@@ -336,10 +336,9 @@ def axial_section(w, seeds):
             '| frames reported `tracking`, wrong (pooled) | ' + ' | '.join(
                 '{} of {:,}'.format(*pooled_wrong(runs)[:2]) for _, runs in cells) + ' |']
     speeds = sorted({speed for _, _, speed in AXIAL_BELTS}, key=float)
-    sentence = (f'On the simulator, belts along the optical axis (`scenarios/{{approach,recede}}_ff_target.toml` '
-                f'at {", ".join(speeds[:-1])} and {speeds[-1]} m/s, GA seeds 1–{seeds} each) are followed with a '
-                f'median RMS z of {min(med.values()):.2f}–{max(med.values()):.2f} mm per belt and speed, and '
-                f'{sum(lost.values())} of {seeds * len(cells)} runs report the block lost.')
+    sentence = (f'On the simulator, belts along the optical axis at {", ".join(speeds[:-1])} and {speeds[-1]} m/s '
+                f'(approach and recede, GA seeds 1–{seeds} each): median RMS z {min(med.values()):.2f}–'
+                f'{max(med.values()):.2f} mm per belt and speed; {sum(lost.values())} of {seeds * len(cells)} runs lost.')
     return '\n'.join(head + rows + foot), sentence
 
 
@@ -359,10 +358,10 @@ def reversing_section(w, seeds):
             f"{med['rms_rot_deg']:.2f} | {med['F_mean']:.4f} | | | {med['tracking_wrong_fraction']:.4f} | |",
             f"| all seeds | | | | | | {tracking} | {wrong} | **{wrong / tracking if tracking else 0:.4f}** (pooled) | "
             f'{lost} of {seeds} runs |']
-    sentence = (f'A block crossing the view at 0.2 m/s and reversing (`{REVERSING_BELT}`, GA seeds 1–{seeds}): '
-                f"median RMS x / y / z {med['rms_x_mm']:.2f} / {med['rms_y_mm']:.2f} / {med['rms_z_mm']:.2f} mm; "
-                f'{pct:.1f} % of the frames reported `tracking` are more than 10 mm or 5° off (the seeds\' '
-                f'frames pooled), and {lost} of {seeds} runs report the block lost.')
+    speed = re.search(r'(?m)^conveyor_speed_m_s = (\S+)', open(os.path.join(ROOT, REVERSING_BELT), encoding='utf-8').read())
+    sentence = (f'A block crossing the view at {speed.group(1) if speed else "?"} m/s and reversing, GA seeds '
+                f"1–{seeds}: median RMS x / y / z {med['rms_x_mm']:.2f} / {med['rms_y_mm']:.2f} / {med['rms_z_mm']:.2f} "
+                f'mm; {pct:.1f} % of the frames reported `tracking` over 10 mm or 5° off; {lost} of {seeds} runs lost.')
     return '\n'.join(head + rows + foot), sentence
 
 
@@ -393,10 +392,9 @@ def pr_section(w, seeds, tracked):
     frame = statistics.median(s['within_from_frame'] for s in found)
     foot = [f"| median | **{frame:g}** | **{med('rms_x_mm'):.2f} / {med('rms_y_mm'):.2f} / {med('rms_z_mm'):.2f}** | "
             f"**{med('rms_rot_deg'):.2f}** | {tracking} (all) | {wrong} (all) |"]
-    sentence = (f'`{SEEDS_BAG}`, GA seeds 1–{seeds}: found in {len(found)} of {seeds} seeds, at frame {frame:g} '
-                f"(median), then median RMS x / y / z {med('rms_x_mm'):.2f} / {med('rms_y_mm'):.2f} / "
-                f"{med('rms_z_mm'):.2f} mm and rotation {med('rms_rot_deg'):.2f}°; {wrong} of the {tracking:,} "
-                f'frames reported `tracking` are more than 10 mm or 5° off.')
+    sentence = (f'`{SEEDS_BAG}`, GA seeds 1–{seeds}: found in {len(found)} of {seeds} at frame {frame:g} (median), '
+                f"then median RMS x / y / z {med('rms_x_mm'):.2f} / {med('rms_y_mm'):.2f} / {med('rms_z_mm'):.2f} mm "
+                f"and {med('rms_rot_deg'):.2f}°; {wrong} of {tracking:,} frames reported `tracking` over 10 mm or 5° off.")
     return '\n'.join(head + rows + foot), sentence
 
 

@@ -338,7 +338,8 @@ def axial_section(w, seeds):
     speeds = sorted({speed for _, _, speed in AXIAL_BELTS}, key=float)
     sentence = (f'On the simulator, belts along the optical axis at {", ".join(speeds[:-1])} and {speeds[-1]} m/s '
                 f'(approach and recede, GA seeds 1–{seeds} each): median RMS z {min(med.values()):.2f}–'
-                f'{max(med.values()):.2f} mm per belt and speed; {sum(lost.values())} of {seeds * len(cells)} runs lost.')
+                f'{max(med.values()):.2f} mm per belt and speed; `lost` reported in {sum(lost.values())} of '
+                f'{seeds * len(cells)} runs.')
     return '\n'.join(head + rows + foot), sentence
 
 
@@ -361,7 +362,8 @@ def reversing_section(w, seeds):
     speed = re.search(r'(?m)^conveyor_speed_m_s = (\S+)', open(os.path.join(ROOT, REVERSING_BELT), encoding='utf-8').read())
     sentence = (f'A block crossing the view at {speed.group(1) if speed else "?"} m/s and reversing, GA seeds '
                 f"1–{seeds}: median RMS x / y / z {med['rms_x_mm']:.2f} / {med['rms_y_mm']:.2f} / {med['rms_z_mm']:.2f} "
-                f'mm; {pct:.1f} % of the frames reported `tracking` over 10 mm or 5° off; {lost} of {seeds} runs lost.')
+                f'mm; {pct:.1f} % of the frames reported `tracking` over 10 mm or 5° off; `lost` reported in {lost} of '
+                f'{seeds} runs.')
     return '\n'.join(head + rows + foot), sentence
 
 
@@ -394,7 +396,7 @@ def pr_section(w, seeds, tracked):
             f"**{med('rms_rot_deg'):.2f}** | {tracking} (all) | {wrong} (all) |"]
     sentence = (f'`{SEEDS_BAG}`, GA seeds 1–{seeds}: found in {len(found)} of {seeds} at frame {frame:g} (median), '
                 f"then median RMS x / y / z {med('rms_x_mm'):.2f} / {med('rms_y_mm'):.2f} / {med('rms_z_mm'):.2f} mm "
-                f"and {med('rms_rot_deg'):.2f}°; {wrong} of {tracking:,} frames reported `tracking` over 10 mm or 5° off.")
+                f"and rotation {med('rms_rot_deg'):.2f}°; {wrong} of {tracking:,} frames reported `tracking` over 10 mm or 5° off.")
     return '\n'.join(head + rows + foot), sentence
 
 

@@ -369,7 +369,7 @@ def reversing_section(w, seeds):
 
 def pr_section(w, seeds, tracked):
     """(results.md section, pr-seeds sentence) of the camera-like bag over GA seeds; `tracked`
-    is whether its bag was found."""
+    says whether its bag is under BAGS."""
     if not tracked:
         text = f'No `{SEEDS_BAG}` bag with its rig file and ground truth under BAGS: not tracked.'
         return text, text

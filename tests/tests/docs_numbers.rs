@@ -278,6 +278,13 @@ fn generated_blocks_state_what_docs_results_states() {
     }
 }
 
+/// Up to 40 characters of `text` before byte `at`, on one line: the words a number follows.
+fn before(text: &str, at: usize) -> String {
+    let head: Vec<char> = text[..at].chars().collect();
+    let words: String = head[head.len().saturating_sub(40)..].iter().collect();
+    words.replace('\n', " ").trim().to_string()
+}
+
 /// Fails, at `at`, unless the block `ours` is the text of `docs/results.md`'s block `theirs`
 /// (at line `line` there); names the first number that differs.
 fn same_sentences(at: &str, ours: &str, theirs: &str, line: usize) {
@@ -292,7 +299,7 @@ fn same_sentences(at: &str, ours: &str, theirs: &str, line: usize) {
             source,
             "{at}: states {n} (\"{}\"), where {RESULTS}:{line}'s block states {} (rerun \
              `scripts/results.py --blocks-only`, do not edit the block)",
-            ours[..*pos].rsplit(['\n', ';', ':']).next().unwrap_or_default().trim(),
+            before(ours, *pos),
             shown(source)
         );
     }

@@ -118,8 +118,6 @@ fn expected(want: &str) -> &str {
     match want {
         "i64" => "an integer",
         "f64" => "a number",
-        "a map" => "a table",
-        w if w.starts_with("struct ") => "a table",
         w => w,
     }
 }

@@ -76,6 +76,10 @@
 //! All tables and all keys except `seed` and `duration_s` are optional; the values shown are
 //! the defaults (`robot.motion` defaults to `"static"`, no `[servo]` runs the scripted motion
 //! open loop).
+//!
+//! A file is read by the `toml` crate into one serde struct per table (every key optional, no
+//! other key accepted: `deny_unknown_fields`), whose errors are given the key's dotted path;
+//! each value is then checked against its range, in the order of the tables above.
 
 use std::path::{Path, PathBuf};
 

@@ -114,6 +114,25 @@ fn parse_target_path(r: &RawTarget, base: TargetConfig) -> Result<TargetConfig> 
             "the block follows one path: set conveyor_speed_m_s or random_amplitude_m to 0",
         ));
     }
+    let (conveyor_direction, conveyor_direction_frame, conveyor_start) = conveyor_direction(r)?;
+    Ok(TargetConfig {
+        conveyor_speed_m_s,
+        conveyor_travel_m,
+        conveyor_accel_m_s2,
+        conveyor_dwell_s,
+        conveyor_direction,
+        conveyor_direction_frame,
+        conveyor_start,
+        random_amplitude_m,
+        random_amplitude_deg,
+        random_omega_rad_s,
+        ..base
+    })
+}
+
+/// `[target] conveyor_direction` (normalised), `conveyor_direction_frame` and `conveyor_start`.
+fn conveyor_direction(r: &RawTarget) -> Result<([f64; 3], ConveyorFrame, ConveyorStart)> {
+    let d = TargetConfig::default();
     let direction = r.conveyor_direction.map_or(d.conveyor_direction, |f| f.0);
     let conveyor_direction = unit_direction(direction).ok_or_else(|| {
         let [x, y, z] = direction;
@@ -136,19 +155,7 @@ fn parse_target_path(r: &RawTarget, base: TargetConfig) -> Result<TargetConfig> 
             return Err(invalid("target.conveyor_start", format!("expected \"rest\" or \"moving\", got \"{other}\"")));
         }
     };
-    Ok(TargetConfig {
-        conveyor_speed_m_s,
-        conveyor_travel_m,
-        conveyor_accel_m_s2,
-        conveyor_dwell_s,
-        conveyor_direction,
-        conveyor_direction_frame,
-        conveyor_start,
-        random_amplitude_m,
-        random_amplitude_deg,
-        random_omega_rad_s,
-        ..base
-    })
+    Ok((conveyor_direction, conveyor_direction_frame, conveyor_start))
 }
 
 /// `v` as a unit vector: `None` if a component is not finite or all are zero. A vector whose

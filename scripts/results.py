@@ -1,42 +1,66 @@
 #!/usr/bin/env python3
-"""Writes docs/results.md, and the results table of README.md, from run outputs.
+"""Writes docs/results.md, and the results tables and generated blocks of the documents, from run outputs.
 
 Requires: Python >= 3.8, standard library only; git on PATH (for the commit stamp); the release
 binary of evorec (`cargo build --release -p evorec-sim`), and for the timing section the firmware
 (`cd hil-stubs && cargo build --release`) and qemu-system-arm.
 
-    scripts/results.py [--work DIR] [--sequences DIR] [--bags DIR] [--trials N] [--reuse]
+    scripts/results.py [--work DIR] [--sequences DIR] [--bags DIR] [--trials N] [--seeds N] [--reuse]
     scripts/results.py --blocks-only
 
-Runs, into WORK (default target/results):
-  evorec paper --out WORK/paper                     the paper's experiment (30 runs)
-  evorec track SEQ --out WORK/track/NAME            every sequence directory under SEQUENCES
-                                                    (default ../shared/data/sequences), if any
-  evorec import BAG --rig NAME.rig.toml --out WORK/bags/NAME, then evorec track of it
-    --out WORK/track/NAME-bag                       every ROS 2 bag NAME under BAGS (default
-                                                    ../shared/data/bags) with NAME.rig.toml and
-                                                    NAME.groundtruth.tum beside it (the ground
-                                                    truth copied in; import == track BAG)
-  evorec acquire --trials N --out WORK/acquire      acquisition statistics (N = 100)
-  evorec timing --out WORK/timing                   M4 instructions per generation
-then writes docs/results.md from those outputs, stamped with the commit they ran on, and replaces
-the lines between the README's `<!-- results:paper:begin -->` and `<!-- results:paper:end -->`
-markers with the paper table's published cells (and the entries worse than the paper's), and
-those between `<!-- results:track:begin -->` and `<!-- results:track:end -->` with the recorded
-sequences' errors. It also fills every generated block of the README, docs/timing.md and
-docs/firmware.md,
+Runs, into WORK (default target/results), each step named as it runs:
+  paper    evorec paper --out WORK/paper                 the paper's experiment (30 runs)
+  track    evorec track SEQ --out WORK/track/NAME        every sequence directory under SEQUENCES
+                                                          (default ../shared/data/sequences), if any
+  import   evorec import BAG --rig NAME.rig.toml --out WORK/bags/NAME, then evorec track of it
+           --out WORK/track/NAME-bag                     every ROS 2 bag NAME under BAGS (default
+                                                          ../shared/data/bags) with NAME.rig.toml and
+                                                          NAME.groundtruth.tum beside it (the ground
+                                                          truth copied in; import == track BAG)
+  acquire  evorec acquire --trials N --out WORK/acquire  acquisition statistics (N = 100)
+  timing   evorec timing --out WORK/timing               M4 instructions per generation
+  seeds    over GA seeds 1..N (--seeds, default 20), two runs at a time, each run's output in
+           DIR.log beside its DIR:
+           evorec run SCENARIO --seed N --out WORK/seeds/BELT-SPEED/seed-N
+                                                          the belts along the optical axis:
+                                                          scenarios/{approach,recede}_ff_target.toml
+                                                          with conveyor_speed_m_s 0.05, 0.1, 0.2
+                                                          (written to WORK/seeds/scenarios/)
+           evorec run scenarios/conveyor_ff_target.toml --seed N --out WORK/seeds/conveyor/seed-N
+                                                          the sideways reversing belt
+           evorec track WORK/bags/pr-iiwa-sway --seed N --out WORK/seeds/pr-iiwa-sway/seed-N
+                                                          the camera-like bag, if under BAGS
+  servo    evorec servo --out WORK/servo                 the closed-loop servo grid (seed 1)
+then writes docs/results.md from those outputs, stamped with the commit they ran on (with "with
+uncommitted changes" if the tree is dirty), copies into docs/servo/ the files of WORK/servo that
+docs/servo/ holds (servo_table.md and the stability maps; the same names), and replaces the lines
+between the README's `<!-- results:paper:begin -->` and `<!-- results:paper:end -->` markers with
+the paper table's published cells (and the entries worse than the paper's), and those between
+`<!-- results:track:begin -->` and `<!-- results:track:end -->` with the recorded sequences'
+errors. It also fills every generated block of the README, docs/timing.md, docs/firmware.md and
+docs/method.md,
 
     <!-- generated:NAME -->
     <!-- generated by scripts/results.py from the runs of commit STAMP; do not edit -->
-    | quantity | value |
-    …
+    BODY
     <!-- /generated -->
 
-with the rows of the board timing table that block NAME holds (see BLOCKS), so no document restates
-a number of docs/results.md by hand (tests/tests/docs_numbers.rs checks it). `--blocks-only` runs
-nothing and fills those blocks from the board timing table and stamp docs/results.md already
-holds (after adding or moving a block). `--reuse` skips every step whose output exists
-(a partial rerun). A step that fails stops the script, naming the step, and nothing is written.
+where BODY is, for a board block (see BLOCKS), the rows of the board timing table it holds
+(`| quantity | value |`), and for a sentence block (SENTENCE_BLOCKS) a sentence that docs/results.md
+holds in a block of the same name:
+  belts-axial      the belts along the optical axis: the range of the cells' median RMS z, runs lost
+  belt-reversing   the sideways reversing belt: median RMS x / y / z, and the frames reported
+                   `tracking` more than 10 mm or 5° off, pooled over the seeds (the sum of the
+                   runs' `tracking_wrong_frames` over the sum of their `tracking_frames`; each run's
+                   `tracking_wrong_fraction` and their median are in docs/results.md), runs lost
+  pr-seeds         pr-iiwa-sway over the seeds: the median `within_from_frame` and the median
+                   `after_within` errors of the seeds that found the block, wrong tracking pooled
+  servo-converged  the servo grid's converged cells per method and target
+So no document restates a number of docs/results.md by hand (tests/tests/docs_numbers.rs checks
+it). `--blocks-only` runs nothing and fills those blocks from the board timing table, the sentence
+blocks and the stamp docs/results.md already holds (after adding or moving a block). `--reuse`
+skips every step whose output exists (a seed run counts when its summary.json does; a partial
+rerun). A step that fails stops the script, naming the step, and nothing is written.
 EVOREC=path overrides the binary.
 """
 import argparse
@@ -45,9 +69,11 @@ import json
 import os
 import re
 import shutil
+import statistics
 import subprocess
 import sys
 import textwrap
+import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BEGIN, END = '<!-- results:paper:begin -->', '<!-- results:paper:end -->'
@@ -71,8 +97,19 @@ BLOCKS = {
                      'static-ram', 'stack'],
     'board-memory': ['flash', 'static-ram', 'stack'],
 }
-BLOCK_DOCS = ['README.md', os.path.join('docs', 'timing.md'), os.path.join('docs', 'firmware.md')]
+# The generated blocks that hold sentences rather than rows of the board timing table; docs/results.md
+# holds each of them too (the source --blocks-only copies, and tests/tests/docs_numbers.rs compares).
+SENTENCE_BLOCKS = ['belts-axial', 'belt-reversing', 'pr-seeds', 'servo-converged']
+BLOCK_DOCS = ['README.md', os.path.join('docs', 'timing.md'), os.path.join('docs', 'firmware.md'),
+              os.path.join('docs', 'method.md')]
+# The seed sweeps: the belts along the right camera's optical axis (each scenario with its
+# conveyor speed set), the sideways reversing belt, and the camera-like bag.
+AXIAL_BELTS = [(name, f'scenarios/{name}_ff_target.toml', speed)
+               for name in ('approach', 'recede') for speed in ('0.05', '0.1', '0.2')]
+REVERSING_BELT = 'scenarios/conveyor_ff_target.toml'
+SEEDS_BAG = 'pr-iiwa-sway'
 BLOCK_RE = re.compile(r'<!-- generated:([a-z0-9-]+) -->\n.*?<!-- /generated -->', re.S)
+SENTENCE_RE = re.compile(r'<!-- generated:([a-z0-9-]+) -->\n<!-- generated by [^\n]*-->\n(.*?)\n<!-- /generated -->', re.S)
 
 
 def die(msg):
@@ -80,14 +117,54 @@ def die(msg):
     sys.exit(1)
 
 
-def run_step(name, args, out, reuse):
-    """Runs one evorec command unless --reuse and its output directory exists."""
-    if reuse and os.path.isdir(out):
+def reusable(out, reuse, done=None):
+    """Whether --reuse keeps `out`: it exists (and holds the file `done`, if named)."""
+    return reuse and os.path.isdir(out) and (done is None or os.path.isfile(os.path.join(out, done)))
+
+
+def run_step(name, args, out, reuse, done=None):
+    """Runs one evorec command unless --reuse and its output directory exists (holding `done`)."""
+    if reusable(out, reuse, done):
         print(f'== {name}: reusing {out}')
         return
     print(f'== {name}: {" ".join(args)}', flush=True)
+    t0 = time.monotonic()
     if subprocess.call(args) != 0:
         die(f'step "{name}" failed ({" ".join(args)}); nothing written')
+    print(f'== {name}: done in {time.monotonic() - t0:.0f} s', flush=True)
+
+
+def run_steps(name, runs, reuse, jobs=2):
+    """Runs the evorec commands `runs` ((args, out) each, a run done when out/summary.json exists)
+    `jobs` at a time, each one's output in out.log beside out; a failure stops the script after
+    the running ones end, naming the step `name` and the command."""
+    todo = [(args, out) for args, out in runs if not reusable(out, reuse, 'summary.json')]
+    print(f'== {name}: {len(todo)} runs, {len(runs) - len(todo)} reused', flush=True)
+    t0 = time.monotonic()
+    running, failed = [], None
+    while (todo and failed is None) or running:
+        while todo and failed is None and len(running) < jobs:
+            args, out = todo.pop(0)
+            os.makedirs(os.path.dirname(out), exist_ok=True)
+            log = open(out + '.log', 'w', encoding='utf-8')
+            running.append((subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT), args, log))
+        proc, args, log = running[0]
+        for entry in running:  # the first to end
+            if entry[0].poll() is not None:
+                proc, args, log = entry
+                break
+        else:
+            try:
+                proc.wait(timeout=1)
+            except subprocess.TimeoutExpired:
+                continue
+        running.remove((proc, args, log))
+        log.close()
+        if proc.returncode != 0 and failed is None:
+            failed = f'{" ".join(args)}; see {log.name}'
+    if failed is not None:
+        die(f'step "{name}" failed ({failed}); nothing written')
+    print(f'== {name}: done in {time.monotonic() - t0:.0f} s', flush=True)
 
 
 def bags_with_truth(bags_dir):
@@ -211,6 +288,139 @@ def timing_section(timing_dir):
     return timing_table(timing_values(timing_dir), [key for key, _ in TIMING_ROWS])
 
 
+def summaries(dirs):
+    """summary.json of every run directory of `dirs`, in order."""
+    return [json.load(open(os.path.join(d, 'summary.json'), encoding='utf-8')) for d in dirs]
+
+
+def belt_scenario(w, name, path, speed):
+    """The scenario `path` with its conveyor speed set to `speed` m/s, written under WORK."""
+    text = open(os.path.join(ROOT, path), encoding='utf-8').read()
+    text, n = re.subn(r'(?m)^conveyor_speed_m_s = .*$', f'conveyor_speed_m_s = {speed}', text)
+    if n != 1:
+        die(f'{path} sets conveyor_speed_m_s {n} times, not once; nothing written')
+    out = os.path.join(w, 'seeds', 'scenarios', f'{name}_{speed}.toml')
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    with open(out, 'w', encoding='utf-8') as f:
+        f.write(text)
+    return out
+
+
+def seed_dirs(base, seeds):
+    return [os.path.join(base, f'seed-{n}') for n in range(1, seeds + 1)]
+
+
+def pooled_wrong(runs):
+    """(wrong frames, tracking frames, percent) of `runs`' summaries pooled: the frames reported
+    tracking that are more than 10 mm or 5° off, of all the frames reported tracking."""
+    wrong = sum(s['tracking_wrong_frames'] for s in runs)
+    tracking = sum(s['tracking_frames'] for s in runs)
+    return wrong, tracking, 100.0 * wrong / tracking if tracking else 0.0
+
+
+def axial_section(w, seeds):
+    """(results.md section, belts-axial sentence) of the belts along the optical axis."""
+    cells = [(f'{name} {speed}', summaries(seed_dirs(f'{w}/seeds/{name}-{speed}', seeds)))
+             for name, _, speed in AXIAL_BELTS]
+    head = ['| seed | ' + ' | '.join(c for c, _ in cells) + ' |', '|---' * (len(cells) + 1) + '|']
+    rows = [f'| {n + 1} | ' + ' | '.join(f"{runs[n]['rms_z_mm']:.2f}" for _, runs in cells) + ' |'
+            for n in range(seeds)]
+    med = {c: statistics.median(s['rms_z_mm'] for s in runs) for c, runs in cells}
+    lost = {c: sum(1 for s in runs if s['status']['lost'] > 0) for c, runs in cells}
+    foot = ['| median | ' + ' | '.join(f'**{med[c]:.2f}**' for c, _ in cells) + ' |',
+            '| median RMS x / y mm | ' + ' | '.join(
+                f"{statistics.median(s['rms_x_mm'] for s in runs):.2f} / {statistics.median(s['rms_y_mm'] for s in runs):.2f}"
+                for _, runs in cells) + ' |',
+            '| median F̄ | ' + ' | '.join(f"{statistics.median(s['F_mean'] for s in runs):.4f}" for _, runs in cells) + ' |',
+            '| runs with a frame reported lost | ' + ' | '.join(f'{lost[c]} of {seeds}' for c, _ in cells) + ' |',
+            '| frames reported `tracking`, wrong (pooled) | ' + ' | '.join(
+                '{} of {:,}'.format(*pooled_wrong(runs)[:2]) for _, runs in cells) + ' |']
+    speeds = sorted({speed for _, _, speed in AXIAL_BELTS}, key=float)
+    sentence = (f'On the simulator, belts along the optical axis at {", ".join(speeds[:-1])} and {speeds[-1]} m/s '
+                f'(approach and recede, GA seeds 1–{seeds} each): median RMS z {min(med.values()):.2f}–'
+                f'{max(med.values()):.2f} mm per belt and speed; `lost` reported in {sum(lost.values())} of '
+                f'{seeds * len(cells)} runs.')
+    return '\n'.join(head + rows + foot), sentence
+
+
+def reversing_section(w, seeds):
+    """(results.md section, belt-reversing sentence) of the sideways reversing belt."""
+    runs = summaries(seed_dirs(f'{w}/seeds/conveyor', seeds))
+    head = ['| seed | RMS x mm | RMS y mm | RMS z mm | RMS rotation ° | F̄ | frames `tracking` | of them wrong | '
+            '`tracking_wrong_fraction` | frames `lost` |', '|---|---|---|---|---|---|---|---|---|---|']
+    rows = [f"| {n} | {s['rms_x_mm']:.2f} | {s['rms_y_mm']:.2f} | {s['rms_z_mm']:.2f} | {s['rms_rot_deg']:.2f} | "
+            f"{s['F_mean']:.4f} | {s['tracking_frames']} | {s['tracking_wrong_frames']} | "
+            f"{s['tracking_wrong_fraction']:.4f} | {s['status']['lost']} |" for n, s in enumerate(runs, 1)]
+    med = {k: statistics.median(s[k] for s in runs) for k in ('rms_x_mm', 'rms_y_mm', 'rms_z_mm', 'rms_rot_deg', 'F_mean',
+                                                               'tracking_wrong_fraction')}
+    wrong, tracking, pct = pooled_wrong(runs)
+    lost = sum(1 for s in runs if s['status']['lost'] > 0)
+    foot = [f"| median | **{med['rms_x_mm']:.2f}** | **{med['rms_y_mm']:.2f}** | **{med['rms_z_mm']:.2f}** | "
+            f"{med['rms_rot_deg']:.2f} | {med['F_mean']:.4f} | | | {med['tracking_wrong_fraction']:.4f} | |",
+            f"| all seeds | | | | | | {tracking} | {wrong} | **{wrong / tracking if tracking else 0:.4f}** (pooled) | "
+            f'{lost} of {seeds} runs |']
+    speed = re.search(r'(?m)^conveyor_speed_m_s = (\S+)', open(os.path.join(ROOT, REVERSING_BELT), encoding='utf-8').read())
+    sentence = (f'A block crossing the view at {speed.group(1) if speed else "?"} m/s and reversing, GA seeds '
+                f"1–{seeds}: median RMS x / y / z {med['rms_x_mm']:.2f} / {med['rms_y_mm']:.2f} / {med['rms_z_mm']:.2f} "
+                f'mm; {pct:.1f} % of the frames reported `tracking` over 10 mm or 5° off; `lost` reported in {lost} of '
+                f'{seeds} runs.')
+    return '\n'.join(head + rows + foot), sentence
+
+
+def pr_section(w, seeds, tracked):
+    """(results.md section, pr-seeds sentence) of the camera-like bag over GA seeds; `tracked`
+    says whether its bag is under BAGS."""
+    if not tracked:
+        text = f'No `{SEEDS_BAG}` bag with its rig file and ground truth under BAGS: not tracked.'
+        return text, text
+    runs = summaries(seed_dirs(f'{w}/seeds/{SEEDS_BAG}', seeds))
+    head = ['| seed | found at frame | after it: RMS x / y / z mm | rotation ° | frames `tracking` | of them wrong |',
+            '|---|---|---|---|---|---|']
+    rows = []
+    for n, s in enumerate(runs, 1):
+        a = s.get('after_within')
+        after = (f"{a['rms_x_mm']:.2f} / {a['rms_y_mm']:.2f} / {a['rms_z_mm']:.2f} | {a['rms_rot_deg']:.2f}" if a
+                 else '— | —')
+        frame = s['within_from_frame']
+        rows.append(f"| {n} | {'never' if frame is None else frame} | {after} | {s.get('tracking_frames', 0)} | "
+                    f"{s.get('tracking_wrong_frames', 0)} |")
+    found = [s for s in runs if s['within_from_frame'] is not None and s.get('after_within')]
+    wrong, tracking, _ = pooled_wrong([{'tracking_wrong_frames': s.get('tracking_wrong_frames', 0),
+                                        'tracking_frames': s.get('tracking_frames', 0)} for s in runs])
+    if not found:
+        text = '\n'.join(head + rows)
+        return text, f'`{SEEDS_BAG}`, GA seeds 1–{seeds}: found in none of the seeds.'
+    med = lambda k: statistics.median(s['after_within'][k] for s in found)
+    frame = statistics.median(s['within_from_frame'] for s in found)
+    foot = [f"| median | **{frame:g}** | **{med('rms_x_mm'):.2f} / {med('rms_y_mm'):.2f} / {med('rms_z_mm'):.2f}** | "
+            f"**{med('rms_rot_deg'):.2f}** | {tracking} (all) | {wrong} (all) |"]
+    sentence = (f'`{SEEDS_BAG}`, GA seeds 1–{seeds}: found in {len(found)} of {seeds} at frame {frame:g} (median), '
+                f"then median RMS x / y / z {med('rms_x_mm'):.2f} / {med('rms_y_mm'):.2f} / {med('rms_z_mm'):.2f} mm "
+                f"and rotation {med('rms_rot_deg'):.2f}°; {wrong} of {tracking:,} frames reported `tracking` over 10 mm or 5° off.")
+    return '\n'.join(head + rows + foot), sentence
+
+
+def servo_section(servo_dir):
+    """(results.md section, servo-converged sentence) of the servo grid: its outcome counts."""
+    md = open(os.path.join(servo_dir, 'servo_table.md'), encoding='utf-8').read().strip()
+    counts = md.split('\n\n')[0]
+    converged, cells = {}, {}
+    for line in counts.splitlines()[2:]:
+        c = [x.strip() for x in line.strip('|').split('|')]
+        target, method, outcome = c[0], c[1], [int(x) for x in c[2:]]
+        converged.setdefault(method, []).append((target, outcome[0]))
+        cells[target] = sum(outcome)
+    parts = []
+    for method, per_target in converged.items():
+        n = sum(k for _, k in per_target)
+        which = ', '.join(f'{t} {k}' for t, k in per_target if k)
+        parts.append(f'`{method}` {n}' + (f' ({which})' if which else ''))
+    per = sorted(set(cells.values()))
+    sentence = (f'Converged cells of the servo grid (`evorec servo`, seed 1; {"/".join(map(str, per))} gain × delay '
+                f'cells over each of {len(cells)} targets, {sum(cells.values())} per method): ' + '; '.join(parts) + '.')
+    return counts, sentence
+
+
 def timing_values_of_results(results_md):
     """(key -> cell, stamp) of the board timing table docs/results.md holds."""
     stamp = re.search(r'from the runs of commit (.+?);', results_md)
@@ -228,19 +438,42 @@ def timing_values_of_results(results_md):
     return values, stamp.group(1)
 
 
-def fill_blocks(text, values, stamp, name):
-    """`text` (the document `name`) with every generated block filled from `values`."""
+def block_text(name, stamp, body):
+    """The generated block `name` holding `body`, stamped."""
+    return (f'<!-- generated:{name} -->\n'
+            f'<!-- generated by scripts/results.py from the runs of commit {stamp}; do not edit -->\n'
+            f'{body}\n<!-- /generated -->')
+
+
+def sentence(text):
+    """`text` wrapped as the documents' prose is (100 columns)."""
+    return textwrap.fill(text, width=100, break_long_words=False, break_on_hyphens=False)
+
+
+def sentences_of_results(results_md):
+    """name -> body of the sentence blocks docs/results.md holds."""
+    found = {m.group(1): m.group(2) for m in SENTENCE_RE.finditer(results_md)}
+    missing = [n for n in SENTENCE_BLOCKS if n not in found]
+    if missing:
+        die(f'docs/results.md holds no block {", ".join(missing)}; nothing written')
+    return found
+
+
+def fill_blocks(text, values, sentences, stamp, name):
+    """`text` (the document `name`) with every generated block filled: a board block with its rows
+    of `values`, a sentence block with `sentences`' text."""
     def block(m):
         keys = BLOCKS.get(m.group(1))
-        if keys is None:
-            die(f'{name}: unknown generated block "{m.group(1)}" (known: {", ".join(BLOCKS)}); nothing written')
-        return (f'<!-- generated:{m.group(1)} -->\n'
-                f'<!-- generated by scripts/results.py from the runs of commit {stamp}; do not edit -->\n'
-                f'{timing_table(values, keys)}\n<!-- /generated -->')
+        if keys is not None:
+            return block_text(m.group(1), stamp, timing_table(values, keys))
+        if m.group(1) in sentences:
+            return block_text(m.group(1), stamp, sentences[m.group(1)])
+        die(f'{name}: unknown generated block "{m.group(1)}" (known: {", ".join(list(BLOCKS) + SENTENCE_BLOCKS)}); '
+            'nothing written')
     return BLOCK_RE.sub(block, text)
 
 
-def filled_documents(values, stamp, texts):
+def filled_documents(values, sentences, stamp, texts):
     """(path, text) of every document of BLOCK_DOCS with its blocks filled; `texts` holds the
     documents already changed (path -> text)."""
     out = []
@@ -249,7 +482,7 @@ def filled_documents(values, stamp, texts):
         text = texts.get(path)
         if text is None:
             text = open(path, encoding='utf-8').read()
-        out.append((path, fill_blocks(text, values, stamp, rel)))
+        out.append((path, fill_blocks(text, values, sentences, stamp, rel)))
     return out
 
 
@@ -291,13 +524,16 @@ def main():
     ap.add_argument('--sequences', default=os.path.join(ROOT, '..', 'shared', 'data', 'sequences'))
     ap.add_argument('--bags', default=os.path.join(ROOT, '..', 'shared', 'data', 'bags'))
     ap.add_argument('--trials', type=int, default=100)
+    ap.add_argument('--seeds', type=int, default=20)
     ap.add_argument('--reuse', action='store_true')
     ap.add_argument('--blocks-only', action='store_true')
     a = ap.parse_args()
+    if a.seeds < 1:
+        die(f'--seeds must be at least 1, got {a.seeds}')
     if a.blocks_only:
         results_md = open(os.path.join(ROOT, 'docs', 'results.md'), encoding='utf-8').read()
         values, stamp = timing_values_of_results(results_md)
-        write_all(filled_documents(values, stamp, {}))
+        write_all(filled_documents(values, sentences_of_results(results_md), stamp, {}))
         print(f'filled the generated blocks of {", ".join(BLOCK_DOCS)} from docs/results.md')
         return
     evorec = os.environ.get('EVOREC', os.path.join(ROOT, 'target', 'release', 'evorec'))
@@ -323,8 +559,34 @@ def main():
     run_step('acquire', [evorec, '-q', 'acquire', '--trials', str(a.trials), '--out', f'{w}/acquire'],
              f'{w}/acquire', a.reuse)
     run_step('timing', [evorec, '-q', 'timing', '--out', f'{w}/timing'], f'{w}/timing', a.reuse)
+    seed_runs = []
+    for name, path, speed in AXIAL_BELTS:
+        scenario = belt_scenario(w, name, path, speed)
+        seed_runs += [([evorec, '-q', 'run', scenario, '--seed', str(n), '--out', d], d)
+                      for n, d in enumerate(seed_dirs(f'{w}/seeds/{name}-{speed}', a.seeds), 1)]
+    seed_runs += [([evorec, '-q', 'run', os.path.join(ROOT, REVERSING_BELT), '--seed', str(n), '--out', d], d)
+                  for n, d in enumerate(seed_dirs(f'{w}/seeds/conveyor', a.seeds), 1)]
+    bag_seq = f'{w}/bags/{SEEDS_BAG}'
+    pr_tracked = any(name == SEEDS_BAG for name, *_ in bags_with_truth(a.bags))
+    if pr_tracked:
+        seed_runs += [([evorec, '-q', 'track', bag_seq, '--seed', str(n), '--out', d], d)
+                      for n, d in enumerate(seed_dirs(f'{w}/seeds/{SEEDS_BAG}', a.seeds), 1)]
+    run_steps('seeds', seed_runs, a.reuse)
+    run_step('servo', [evorec, '-q', 'servo', '--out', f'{w}/servo'], f'{w}/servo', a.reuse, 'servo_table.md')
+    servo_docs = os.path.join(ROOT, 'docs', 'servo')
+    servo_files = sorted(os.listdir(servo_docs)) if os.path.isdir(servo_docs) else []
+    missing = [f for f in servo_files if not os.path.isfile(os.path.join(w, 'servo', f))]
+    if missing or not servo_files:
+        die(f'step "servo": {w}/servo lacks {", ".join(missing) or "the files of docs/servo"}; nothing written')
 
     paper_md, readme_table = paper_sections(f'{w}/paper')
+    axial_md, axial = axial_section(w, a.seeds)
+    reversing_md, reversing = reversing_section(w, a.seeds)
+    pr_md, pr = pr_section(w, a.seeds, pr_tracked)
+    servo_md, servo = servo_section(f'{w}/servo')
+    sentences = {'belts-axial': sentence(axial), 'belt-reversing': sentence(reversing), 'pr-seeds': sentence(pr),
+                 'servo-converged': sentence(servo)}
+    block = lambda name: block_text(name, stamp, sentences[name])
     date = datetime.date.today().isoformat()
     doc = f"""# Results
 
@@ -356,15 +618,59 @@ from the first frame within 10 mm and 5° of the truth). `NAME-bag` is a ROS 2 b
 `evorec timing --out DIR` (DIR/timing.json; method in [timing.md](timing.md)):
 
 {timing_section(f'{w}/timing')}
+
+## Belts along the optical axis
+
+`evorec run SCENARIO --seed N --out DIR`, N = 1–{a.seeds}, SCENARIO `scenarios/{{approach,recede}}_ff_target.toml`
+with `conveyor_speed_m_s` set to the speed (20 s each; DIR/summary.json). RMS z (mm) per seed, belt
+and speed; "lost": runs with a frame reported `lost`; "wrong": frames reported `tracking` more
+than 10 mm or 5° off, of those reported `tracking`:
+
+{axial_md}
+
+{block('belts-axial')}
+
+## The sideways reversing belt
+
+`evorec run {REVERSING_BELT} --seed N --out DIR`, N = 1–{a.seeds} (72 s each; DIR/summary.json).
+`tracking_wrong_fraction` is each run's wrong frames over its frames reported `tracking`; the
+row "all seeds" pools the frames of every seed (the figure stated elsewhere):
+
+{reversing_md}
+
+{block('belt-reversing')}
+
+## `{SEEDS_BAG}` over GA seeds
+
+`evorec import` of the bag with its ground truth copied in (as above), then `evorec track SEQ --seed N
+--out DIR`, N = 1–{a.seeds}, default options (DIR/summary.json): the first frame from which the
+estimate stays within 10 mm and 5° (`within_from_frame`), and the errors from it on
+(`after_within`); medians over the seeds that found the block:
+
+{pr_md}
+
+{block('pr-seeds')}
+
+## Servo grid
+
+`evorec servo --out DIR` (closed loop, seed 1; DIR/servo_table.md and the stability maps, copied
+into [servo/](servo/servo_table.md)): cells per outcome:
+
+{servo_md}
+
+{block('servo-converged')}
 """
     readme_path = os.path.join(ROOT, 'README.md')
     readme = open(readme_path, encoding='utf-8').read()
     readme = replace_block(readme, BEGIN, END, readme_table, stamp)
     readme = replace_block(readme, TRACK_BEGIN, TRACK_END, track_readme_table(f'{w}/track'), stamp)
     out = os.path.join(ROOT, 'docs', 'results.md')
-    docs = filled_documents(timing_values(f'{w}/timing'), stamp, {readme_path: readme})
+    docs = filled_documents(timing_values(f'{w}/timing'), sentences, stamp, {readme_path: readme})
     write_all([(out, doc)] + docs)
-    print(f'wrote {out}, the results tables of {readme_path} and the generated blocks of {", ".join(BLOCK_DOCS)}')
+    for f in servo_files:
+        shutil.copyfile(os.path.join(w, 'servo', f), os.path.join(servo_docs, f))
+    print(f'wrote {out}, the results tables of {readme_path}, the generated blocks of {", ".join(BLOCK_DOCS)} '
+          f'and docs/servo/ ({", ".join(servo_files)})')
 
 
 if __name__ == '__main__':

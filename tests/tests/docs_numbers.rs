@@ -6,6 +6,11 @@
 //!   `docs/results.md` states, with the same commit stamp, and outside the blocks no document
 //!   restates one of those numbers, an instruction count or byte size of six digits written
 //!   with thousands separators, or milliseconds with decimals by hand;
+//! - the seed sweeps' and the servo grid's figures (the belts, the `pr-iiwa-sway` bag over GA seeds,
+//!   the converged servo cells) are stated in sentence blocks `scripts/results.py` writes into
+//!   `docs/results.md` and copies into the documents: every block of a document that
+//!   `docs/results.md` also holds is the same text, stamp and numbers alike, and the README holds
+//!   the blocks `README_SENTENCE_BLOCKS` names;
 //! - `docs/firmware.md` states the code's link protocol version
 //!   (`evorec_firmware::protocol::VERSION`) and `CONFIG` payload size
 //!   (`evorec_firmware::protocol::CONFIG_LEN`);
@@ -27,6 +32,9 @@ const FIRMWARE: &str = "docs/firmware.md";
 const TIMING: &str = "docs/timing.md";
 const BLOCK_OPEN: &str = "<!-- generated:";
 const BLOCK_CLOSE: &str = "<!-- /generated -->";
+
+/// The sentence blocks the README states (each also in `docs/results.md`).
+const README_SENTENCE_BLOCKS: [&str; 3] = ["belts-axial", "belt-reversing", "pr-seeds"];
 
 /// Numbers of six or more digits (with thousands separators) that may stand outside the
 /// generated blocks: sizes that follow from the code's constants, not from a run.
@@ -223,6 +231,8 @@ fn firmware_md_states_the_codes_config_size() {
 #[test]
 fn generated_blocks_state_what_docs_results_states() {
     let (board, results_stamp) = results_board();
+    let results = read(RESULTS);
+    let sources = blocks(RESULTS, &results);
     let mut seen = Vec::new();
     for file in documents() {
         let text = read(&file);
@@ -235,6 +245,11 @@ fn generated_blocks_state_what_docs_results_states() {
                  `scripts/results.py --blocks-only`",
                 shown(block.stamp.as_deref())
             );
+            seen.push((file.clone(), block.name.clone()));
+            if let Some(source) = sources.iter().find(|b| b.name == block.name) {
+                same_sentences(&at, &text[block.span.clone()], &results[source.span.clone()], source.line);
+                continue;
+            }
             assert!(!block.rows.is_empty(), "{at}: holds no rows: rerun `scripts/results.py --blocks-only`");
             for (quantity, value) in &block.rows {
                 let source = board.iter().find(|(q, _)| q == quantity).map(|(_, v)| v);
@@ -246,12 +261,52 @@ fn generated_blocks_state_what_docs_results_states() {
                     shown(source)
                 );
             }
-            seen.push(file.clone());
         }
     }
     for file in [TIMING, FIRMWARE] {
-        assert!(seen.contains(&file.to_string()), "{file} takes its board numbers from a generated block");
+        assert!(seen.iter().any(|(f, _)| f == file), "{file} takes its board numbers from a generated block");
     }
+    for name in README_SENTENCE_BLOCKS {
+        assert!(
+            sources.iter().any(|b| b.name == name),
+            "{RESULTS} holds no generated block `{name}`: rerun `scripts/results.py`"
+        );
+        assert!(
+            seen.iter().any(|(f, n)| f == "README.md" && n == name),
+            "README.md states its `{name}` figures in the generated block `{name}`"
+        );
+    }
+}
+
+/// Up to 40 characters of `text` before byte `at`, on one line: the words a number follows.
+fn before(text: &str, at: usize) -> String {
+    let head: Vec<char> = text[..at].chars().collect();
+    let words: String = head[head.len().saturating_sub(40)..].iter().collect();
+    words.replace('\n', " ").trim().to_string()
+}
+
+/// Fails, at `at`, unless the block `ours` is the text of `docs/results.md`'s block `theirs`
+/// (at line `line` there); names the first number that differs.
+fn same_sentences(at: &str, ours: &str, theirs: &str, line: usize) {
+    if ours == theirs {
+        return;
+    }
+    let (a, b) = (numbers(ours), numbers(theirs));
+    for (i, (n, pos)) in a.iter().enumerate() {
+        let source = b.get(i).map(|(m, _)| m.as_str());
+        assert_eq!(
+            Some(n.as_str()),
+            source,
+            "{at}: states {n} (\"{}\"), where {RESULTS}:{line}'s block states {} (rerun \
+             `scripts/results.py --blocks-only`, do not edit the block)",
+            before(ours, *pos),
+            shown(source)
+        );
+    }
+    panic!(
+        "{at}: is not the text of {RESULTS}:{line}'s block of the same name (rerun `scripts/results.py \
+         --blocks-only`, do not edit the block):\n{ours}\n--- {RESULTS}:\n{theirs}"
+    );
 }
 
 #[test]
@@ -354,4 +409,13 @@ fn the_scanners_find_what_they_should() {
     assert_eq!(b.len(), 1);
     assert_eq!((b[0].name.as_str(), b[0].line, b[0].stamp.as_deref()), ("x", 2, Some("abc")));
     assert_eq!(b[0].rows, [("flash (B)".to_string(), "1".to_string())]);
+}
+
+#[test]
+#[should_panic(expected = "states 15.4")]
+fn a_sentence_block_with_another_number_fails() {
+    let theirs = "<!-- generated:x -->\n<!-- generated by scripts/results.py from the runs of commit abc; do not edit -->\n\
+                  median RMS z 15.2 mm; 12.6 % wrong.\n<!-- /generated -->";
+    same_sentences("t", theirs, theirs, 1);
+    same_sentences("t", &theirs.replace("15.2", "15.4"), theirs, 1);
 }

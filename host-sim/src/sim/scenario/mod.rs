@@ -76,6 +76,10 @@
 //! All tables and all keys except `seed` and `duration_s` are optional; the values shown are
 //! the defaults (`robot.motion` defaults to `"static"`, no `[servo]` runs the scripted motion
 //! open loop).
+//!
+//! A file is read by the `toml` crate into one serde struct per table (every key optional, no
+//! other key accepted: `deny_unknown_fields`), whose errors are given the key's dotted path;
+//! each value is then checked against its range, in the order of the tables above.
 
 use std::path::{Path, PathBuf};
 
@@ -477,42 +481,26 @@ impl Scenario {
     pub fn from_toml_str(text: &str) -> Result<Self> {
         let table: Table =
             toml::from_str(text).map_err(|e| ScenarioError::Syntax(e.to_string().trim_end().to_owned()))?;
-        let top = Section::new(
-            "",
-            &table,
-            &[
-                "seed",
-                "duration_s",
-                "frame_period_s",
-                "method",
-                "camera",
-                "target",
-                "robot",
-                "ga",
-                "start",
-                "tracker",
-                "occlusion",
-                "servo",
-                "target_filter",
-                "render",
-            ],
-        )?;
-        refuse_old_keys(&table)?;
-        let camera = parse_camera(&top.subtable("camera")?)?;
-        let target = parse_target(&top.subtable("target")?)?;
-        let robot = parse_robot(&top.subtable("robot")?)?;
-        let servo = parse_servo(&top.subtable("servo")?)?;
-        let tracker =
-            TrackerTable(tracker_table::parse_tracker(top.subtable("tracker")?.table, Tuning::DEFAULT, "tracker")?);
-        let start_section = top.subtable("start")?;
-        start_section.check_keys(&["initial", "delay_s"])?;
-        let initial = acquisition::parse_initial(start_section.get("initial"))?;
+        let raw: RawScenario = check::deserialize(text, &table)?;
+        refuse_old_keys(&raw)?;
+        let camera = parse_camera(raw.camera.unwrap_or_default())?;
+        let target = parse_target(raw.target.unwrap_or_default())?;
+        let robot = parse_robot(raw.robot.unwrap_or_default())?;
+        let servo = parse_servo(raw.servo)?;
+        let tracker_table = match &raw.tracker {
+            None => None,
+            Some(toml::Value::Table(t)) => Some(t),
+            Some(v) => return Err(invalid("tracker", format!("expected a table, got {}", check::describe(v)))),
+        };
+        let tracker = TrackerTable(tracker_table::parse_tracker(tracker_table, Tuning::DEFAULT, "tracker")?);
+        let raw_start = raw.start.unwrap_or_default();
+        let initial = acquisition::parse_initial(raw_start.initial.as_ref())?;
 
-        let seed = top.int("seed", None)?;
+        let seed = raw.seed.ok_or_else(|| check::missing("seed"))?;
         let seed = u64::try_from(seed).map_err(|_| invalid("seed", format!("must be ≥ 0, got {seed}")))?;
-        let duration_s = top.float("duration_s", None)?;
+        let duration_s = raw.duration_s.ok_or_else(|| check::missing("duration_s"))?;
         check_range("duration_s", duration_s, Bound::Open(0.0), 3600.0)?;
-        let frame_period_s = top.float("frame_period_s", Some(0.033))?;
+        let frame_period_s = raw.frame_period_s.unwrap_or(0.033);
         check_range("frame_period_s", frame_period_s, Bound::Closed(0.001), 1.0)?;
         if frame_period_s > duration_s {
             return Err(invalid(
@@ -520,10 +508,10 @@ impl Scenario {
                 format!("must not exceed duration_s ({duration_s}), got {frame_period_s}"),
             ));
         }
-        let delay_s = start_section.float_in("delay_s", frame_period_s, Bound::Closed(0.0), 1.0)?;
+        let delay_s = check::float_in("start.delay_s", raw_start.delay_s, frame_period_s, Bound::Closed(0.0), 1.0)?;
         let start = TrackerStart { initial, delay_s };
-        let occlusion = acquisition::parse_occlusions(top.get("occlusion"), duration_s)?;
-        let render = render_table::parse_render(&top.subtable("render")?, frame_period_s)?;
+        let occlusion = acquisition::parse_occlusions(raw.occlusion.as_ref(), duration_s)?;
+        let render = render_table::parse_render(raw.render.unwrap_or_default(), frame_period_s)?;
         Ok(Self { seed, duration_s, frame_period_s, camera, target, robot, servo, start, occlusion, tracker, render })
     }
 
@@ -554,15 +542,17 @@ impl Scenario {
 }
 
 mod acquisition;
+mod check;
 pub mod fixture;
 mod parse;
+mod raw;
 mod render_table;
-mod section;
 mod tracker_table;
 pub use render_table::{light_from_toml_str, load_light};
 pub use tracker_table::{TrackerTable, parse_tracker, with_config_file};
 #[cfg(test)]
 mod tests;
 
+use check::{Bound, check_range};
 use parse::{parse_camera, parse_robot, parse_servo, parse_target, refuse_old_keys};
-use section::{Bound, Section, check_range, check_range_why};
+use raw::RawScenario;

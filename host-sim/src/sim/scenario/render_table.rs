@@ -6,84 +6,82 @@ use std::path::Path;
 
 use toml::{Table, Value};
 
-use super::section::{Bound, Section, check_range};
+use super::check::{Bound, check_range, deserialize, float_in, int_in};
+use super::raw::{Floats, RawLightFile, RawRender};
 use super::{Result, ScenarioError, invalid};
 use crate::sim::render::{Light, ShadowFrame, ToneCurve};
 
-/// The `[render]` keys, in the order of [`Light`]'s fields.
-const KEYS: [&str; 17] = [
-    "light_dir_cam",
-    "ambient",
-    "diffuse",
-    "albedo_saturation",
-    "specular",
-    "shininess",
-    "shadow_frame",
-    "shadow_normal",
-    "shadow_offset_m",
-    "shadow_width_m",
-    "tone_curve",
-    "tone_exposure",
-    "white_balance",
-    "chroma_noise_std",
-    "exposure_s",
-    "blur_samples",
-    "jpeg_quality",
-];
-
 /// A finite, non-zero direction (not normalised).
-fn direction(s: &Section<'_>, key: &str, default: [f32; 3]) -> Result<[f32; 3]> {
-    let v = s.floats(key, default.map(f64::from))?;
+fn direction(field: &str, v: Option<Floats<3>>, default: [f32; 3]) -> Result<[f32; 3]> {
+    let v = v.map_or(default.map(f64::from), |f| f.0);
     let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
     if !norm.is_finite() || norm == 0.0 {
         let [x, y, z] = v;
-        return Err(invalid(s.path(key), format!("must be a finite, non-zero vector, got [{x}, {y}, {z}]")));
+        return Err(invalid(field, format!("must be a finite, non-zero vector, got [{x}, {y}, {z}]")));
     }
     Ok(v.map(|x| x as f32))
 }
 
-fn real(s: &Section<'_>, key: &str, default: f32, lo: Bound, hi: f64) -> Result<f32> {
-    Ok(s.float_in(key, f64::from(default), lo, hi)? as f32)
+fn real(field: &str, x: Option<f64>, default: f32, lo: Bound, hi: f64) -> Result<f32> {
+    Ok(float_in(field, x, f64::from(default), lo, hi)? as f32)
 }
 
-/// Reads a `[render]` table; `frame_period_s` bounds the exposure.
-pub(super) fn parse_render(s: &Section<'_>, frame_period_s: f64) -> Result<Light> {
-    s.check_keys(&KEYS)?;
+/// Checks a `[render]` table; `frame_period_s` bounds the exposure.
+pub(super) fn parse_render(r: RawRender, frame_period_s: f64) -> Result<Light> {
     let d = Light::default();
-    let shadow_frame = match s.string("shadow_frame", Some("camera"))?.as_str() {
+    let shadow_frame = match r.shadow_frame.as_deref().unwrap_or("camera") {
         "camera" => ShadowFrame::Camera,
         "block" => ShadowFrame::Block,
         other => {
-            return Err(invalid(s.path("shadow_frame"), format!("expected \"camera\" or \"block\", got \"{other}\"")));
+            return Err(invalid("render.shadow_frame", format!("expected \"camera\" or \"block\", got \"{other}\"")));
         }
     };
-    let curve = s.string("tone_curve", Some("linear"))?;
+    let curve = r.tone_curve.as_deref().unwrap_or("linear");
     let tone_curve = ToneCurve::NAMES.iter().find(|(n, _)| *n == curve).map(|(_, c)| *c).ok_or_else(|| {
-        invalid(s.path("tone_curve"), format!("expected \"linear\", \"srgb\" or \"filmic\", got \"{curve}\""))
+        invalid("render.tone_curve", format!("expected \"linear\", \"srgb\" or \"filmic\", got \"{curve}\""))
     })?;
-    let gains = s.floats("white_balance", d.white_balance.map(f64::from))?;
+    let gains = r.white_balance.map_or(d.white_balance.map(f64::from), |f| f.0);
     for (i, g) in gains.iter().enumerate() {
-        check_range(&format!("{}[{i}]", s.path("white_balance")), *g, Bound::Open(0.0), 4.0)?;
+        check_range(&format!("render.white_balance[{i}]"), *g, Bound::Open(0.0), 4.0)?;
     }
-    let exposure_s = real(s, "exposure_s", d.exposure_s, Bound::Closed(0.0), frame_period_s.min(0.5))?;
+    let exposure_s =
+        real("render.exposure_s", r.exposure_s, d.exposure_s, Bound::Closed(0.0), frame_period_s.min(0.5))?;
     Ok(Light {
-        light_dir_cam: direction(s, "light_dir_cam", d.light_dir_cam)?,
-        ambient: real(s, "ambient", d.ambient, Bound::Closed(0.0), 1.0)?,
-        diffuse: real(s, "diffuse", d.diffuse, Bound::Closed(0.0), 1.0)?,
-        albedo_saturation: real(s, "albedo_saturation", d.albedo_saturation, Bound::Open(0.0), 1.0)?,
-        specular: real(s, "specular", d.specular, Bound::Closed(0.0), 4.0)?,
-        shininess: real(s, "shininess", d.shininess, Bound::Closed(1.0), 10_000.0)?,
+        light_dir_cam: direction("render.light_dir_cam", r.light_dir_cam, d.light_dir_cam)?,
+        ambient: real("render.ambient", r.ambient, d.ambient, Bound::Closed(0.0), 1.0)?,
+        diffuse: real("render.diffuse", r.diffuse, d.diffuse, Bound::Closed(0.0), 1.0)?,
+        albedo_saturation: real(
+            "render.albedo_saturation",
+            r.albedo_saturation,
+            d.albedo_saturation,
+            Bound::Open(0.0),
+            1.0,
+        )?,
+        specular: real("render.specular", r.specular, d.specular, Bound::Closed(0.0), 4.0)?,
+        shininess: real("render.shininess", r.shininess, d.shininess, Bound::Closed(1.0), 10_000.0)?,
         shadow_frame,
-        shadow_normal: direction(s, "shadow_normal", d.shadow_normal)?,
-        shadow_offset_m: real(s, "shadow_offset_m", d.shadow_offset_m, Bound::Closed(-10.0), 10.0)?,
-        shadow_width_m: real(s, "shadow_width_m", d.shadow_width_m, Bound::Closed(0.0), 20.0)?,
+        shadow_normal: direction("render.shadow_normal", r.shadow_normal, d.shadow_normal)?,
+        shadow_offset_m: real(
+            "render.shadow_offset_m",
+            r.shadow_offset_m,
+            d.shadow_offset_m,
+            Bound::Closed(-10.0),
+            10.0,
+        )?,
+        shadow_width_m: real("render.shadow_width_m", r.shadow_width_m, d.shadow_width_m, Bound::Closed(0.0), 20.0)?,
         tone_curve,
-        tone_exposure: real(s, "tone_exposure", d.tone_exposure, Bound::Open(0.0), 16.0)?,
+        tone_exposure: real("render.tone_exposure", r.tone_exposure, d.tone_exposure, Bound::Open(0.0), 16.0)?,
         white_balance: gains.map(|g| g as f32),
-        chroma_noise_std: real(s, "chroma_noise_std", d.chroma_noise_std, Bound::Closed(0.0), 100.0)?,
+        chroma_noise_std: real(
+            "render.chroma_noise_std",
+            r.chroma_noise_std,
+            d.chroma_noise_std,
+            Bound::Closed(0.0),
+            100.0,
+        )?,
         exposure_s,
-        blur_samples: s.int_in("blur_samples", i64::from(d.blur_samples), 1, 32)? as u32,
-        jpeg_quality: s.int_in("jpeg_quality", i64::from(d.jpeg_quality), 0, 100)? as u8,
+        blur_samples: int_in("render.blur_samples", r.blur_samples, i64::from(d.blur_samples), 1, 32)? as u32,
+        jpeg_quality: int_in("render.jpeg_quality", r.jpeg_quality, i64::from(d.jpeg_quality), 0, 100)? as u8,
     })
 }
 
@@ -99,7 +97,10 @@ pub fn light_from_toml_str(text: &str, frame_period_s: f64) -> Result<Light> {
     }
     match table.get("render") {
         None => Ok(Light::default()),
-        Some(Value::Table(t)) => parse_render(&Section::named("render", t), frame_period_s),
+        Some(Value::Table(_)) => {
+            let raw: RawLightFile = deserialize(text, &table)?;
+            parse_render(raw.render.unwrap_or_default(), frame_period_s)
+        }
         Some(_) => Err(invalid("render", "expected a table")),
     }
 }

@@ -408,3 +408,121 @@ fn the_camera_like_scenario_round_trips_and_its_light_file_matches() {
     let e = light_from_toml_str("[tracker]\nmethod = \"ga\"\n", 0.033).err().map(|e| e.to_string());
     assert_eq!(e.as_deref(), Some("tracker: unknown key (a light file holds a [render] table only)"));
 }
+
+#[test]
+fn type_errors_name_the_key_and_what_was_given() {
+    assert_eq!(err(&with("[camera]\nfx = true\n")), "camera.fx: expected a number, got a boolean (true)");
+    assert_eq!(err(&with("[camera]\nfx = 1979-05-27\n")), "camera.fx: expected a number, got a datetime");
+    assert_eq!(err(&with("[camera]\nwidth = [1, 2, 3]\n")), "camera.width: expected an integer, got an array");
+    assert_eq!(err(&with("[robot]\nmotion = { a = 1 }\n")), "robot.motion: expected a string, got a table");
+    assert_eq!(err("seed = 1.5\nduration_s = 1\n"), "seed: expected an integer, got a float (1.5)");
+    assert_eq!(err(&with("[start]\ndelay_s = \"x\"\n")), "start.delay_s: expected a number, got a string (\"x\")");
+    assert_eq!(
+        err(&with("[target]\nsize_m = 1.5\n")),
+        "target.size_m: expected an array of 3 numbers, got a float (1.5)"
+    );
+    assert_eq!(
+        err(&with("[servo]\ndesired_t_m = [0, 0, 0.6]\ndesired_q_xyzw = [0, 0, 0]\n")),
+        "servo.desired_q_xyzw: expected 4 values, got 3"
+    );
+    assert_eq!(
+        err(&with("[render]\nwhite_balance = [1, true, 1]\n")),
+        "render.white_balance[1]: expected a number, got a boolean (true)"
+    );
+    for table in ["camera", "target", "robot", "servo", "start", "render"] {
+        assert_eq!(err(&with(&format!("{table} = [1, 2]\n"))), format!("{table}: expected a table, got an array"));
+        assert_eq!(
+            err(&with(&format!("{table} = 1979-05-27\n"))),
+            format!("{table}: expected a table, got a datetime")
+        );
+    }
+    assert_eq!(err(&with("tracker = [1]\n")), "tracker: expected a table, got an array");
+}
+
+#[test]
+fn unknown_keys_list_the_table_s_keys() {
+    assert_eq!(err(&with("[start]\ndelay = 0.1\n")), "start.delay: unknown key (expected one of: initial, delay_s)");
+    assert_eq!(
+        err(&with("[camera]\nwidht = 640\n")),
+        "camera.widht: unknown key (expected one of: width, height, fx, fy, cx, cy, baseline_m, noise_std, \
+         supersample)"
+    );
+    assert_eq!(
+        err(&with("colour = 3\n")),
+        "colour: unknown key (expected one of: seed, duration_s, frame_period_s, method, camera, target, robot, ga, \
+         start, tracker, occlusion, servo, target_filter, render)"
+    );
+    assert_eq!(
+        err(&with("[robot]\nspeed = 1\n")),
+        "robot.speed: unknown key (expected one of: motion, omega_rad_s, amplitude_m, amplitude_deg)"
+    );
+    assert_eq!(
+        err(&with("camera.widht = 640\n")),
+        "camera.widht: unknown key (expected one of: width, height, fx, fy, cx, cy, baseline_m, noise_std, \
+         supersample)"
+    );
+}
+
+#[test]
+fn range_and_consistency_errors_without_other_tests() {
+    assert_eq!(err("duration_s = 1\n"), "seed: missing (this key is required)");
+    assert_eq!(err("seed = 1\nduration_s = 10\nframe_period_s = 2\n"), "frame_period_s: must be in [0.001, 1], got 2");
+    assert_eq!(
+        err("seed = 1\nduration_s = 0.5\nframe_period_s = 0.6\n"),
+        "frame_period_s: must not exceed duration_s (0.5), got 0.6"
+    );
+    assert_eq!(err(&with("[camera]\ncy = 500\n")), "camera.cy: must be in [0, 480] (inside the image height), got 500");
+    assert_eq!(err(&with("[camera]\nbaseline_m = 2\n")), "camera.baseline_m: must be in (0, 1], got 2");
+    assert_eq!(err(&with("[camera]\nsupersample = 9\n")), "camera.supersample: must be in 1..=8, got 9");
+    assert_eq!(
+        err(&with("[camera]\nwidth = 4096\nheight = 4096\ncx = 2048\ncy = 2048\nsupersample = 3\n")),
+        "camera.supersample: width·height·supersample² must be ≤ 67108864, got 150994944"
+    );
+    assert!(Scenario::from_toml_str(&with("[camera]\nwidth = 4096\nheight = 4096\nsupersample = 2\n")).is_ok());
+    assert_eq!(
+        err(&with("[target]\ndistance_m = 0.1\n")),
+        "target.distance_m: must exceed the block's half diagonal plus 0.05 m (0.1846 m), got 0.1"
+    );
+    assert_eq!(err(&with("[target]\nyaw0_deg = 255\n")), "target.yaw0_deg: must be in [-180, 180], got 255");
+    assert_eq!(err(&with("[target]\nconveyor_dwell_s = 61\n")), "target.conveyor_dwell_s: must be in [0, 60], got 61");
+    assert_eq!(
+        err(&with("[target]\nplacement = \"anywhere\"\n")),
+        "target.placement: expected \"fixed\" or \"random\", got \"anywhere\""
+    );
+    assert_eq!(err(&with("[robot]\namplitude_m = 0.5\n")), "robot.amplitude_m: must be in [0, 0.3], got 0.5");
+    assert_eq!(
+        err(&with("[servo]\ndesired_t_m = [2, 0, 0.6]\n")),
+        "servo.desired_t_m[0]: must be in [0, 1] (|x|), got 2"
+    );
+    assert_eq!(
+        err(&with("[servo]\ndesired_t_m = [0, -2, 0.6]\n")),
+        "servo.desired_t_m[1]: must be in [0, 1] (|y|), got 2"
+    );
+    assert_eq!(err(&with("[start]\ninitial = 1\n")), "start.initial: expected \"truth\" or \"unknown\", got 1");
+    assert_eq!(
+        light_from_toml_str("render = 3\n", 0.033).err().map(|e| e.to_string()).as_deref(),
+        Some("render: expected a table")
+    );
+    assert_eq!(
+        light_from_toml_str("[render]\nglare = 1\n", 0.033).err().map(|e| e.to_string()).as_deref(),
+        Some(
+            "render.glare: unknown key (expected one of: light_dir_cam, ambient, diffuse, albedo_saturation, \
+             specular, shininess, shadow_frame, shadow_normal, shadow_offset_m, shadow_width_m, tone_curve, \
+             tone_exposure, white_balance, chroma_noise_std, exposure_s, blur_samples, jpeg_quality)"
+        )
+    );
+}
+
+#[test]
+fn the_status_counts_old_names_are_read_in_a_scenario() {
+    let status = |text: &str| Scenario::from_toml_str(&with(text)).map(|s| s.tuning().status);
+    let old = status("[tracker]\nstatus.confirm_generations = 4\nstatus.lose_generations = 2\n")
+        .unwrap_or_else(|e| unreachable!("{e}"));
+    let new = status("[tracker.status]\nconfirm_frames = 4\nlose_frames = 2\n").unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(old, new);
+    assert_eq!(
+        err(&with("[tracker.status]\nlost_frames_to_search = 50\nlost_generations_to_search = 50\n")),
+        "tracker.status.lost_generations_to_search: is the old name of tracker.status.lost_frames_to_search: give \
+         one of them"
+    );
+}

@@ -317,6 +317,9 @@ mod tests {
         assert_eq!(settled_from(&[good, turned]), None);
         assert_eq!(settled_from(&[]), None);
         let r = Rms::of(&[good, bad]).unwrap();
-        assert!((r.rms_x_mm - (0.5f64 * (1.0 + 400.0)).sqrt()).abs() < 1e-9 && r.rotation.map(|x| x.max_rot_deg) == Some(1.0));
+        assert!(
+            (r.rms_x_mm - (0.5f64 * (1.0 + 400.0)).sqrt()).abs() < 1e-9
+                && r.rotation.map(|x| x.max_rot_deg) == Some(1.0)
+        );
     }
 }

@@ -312,9 +312,10 @@ def seed_dirs(base, seeds):
 
 def pooled_wrong(runs):
     """(wrong frames, tracking frames, percent) of `runs`' summaries pooled: the frames reported
-    tracking that are more than 10 mm or 5° off, of all the frames reported tracking."""
-    wrong = sum(s['tracking_wrong_frames'] for s in runs)
-    tracking = sum(s['tracking_frames'] for s in runs)
+    tracking that are more than 10 mm or 5° off, of all the frames reported tracking (a summary
+    without ground truth counts none)."""
+    wrong = sum(s.get('tracking_wrong_frames', 0) for s in runs)
+    tracking = sum(s.get('tracking_frames', 0) for s in runs)
     return wrong, tracking, 100.0 * wrong / tracking if tracking else 0.0
 
 
@@ -385,8 +386,7 @@ def pr_section(w, seeds, tracked):
         rows.append(f"| {n} | {'never' if frame is None else frame} | {after} | {s.get('tracking_frames', 0)} | "
                     f"{s.get('tracking_wrong_frames', 0)} |")
     found = [s for s in runs if s['within_from_frame'] is not None and s.get('after_within')]
-    wrong, tracking, _ = pooled_wrong([{'tracking_wrong_frames': s.get('tracking_wrong_frames', 0),
-                                        'tracking_frames': s.get('tracking_frames', 0)} for s in runs])
+    wrong, tracking, _ = pooled_wrong(runs)
     if not found:
         text = '\n'.join(head + rows)
         return text, f'`{SEEDS_BAG}`, GA seeds 1–{seeds}: found in none of the seeds.'

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs every fuzz target (fuzz/, cargo fuzz + libFuzzer) for SECONDS each (default 60).
 #
-#   scripts/fuzz.sh [SECONDS]        e.g. CI: scripts/fuzz.sh 20
+#   scripts/fuzz.sh [SECONDS]        e.g. scripts/fuzz.sh 60
 #   FUZZ_TARGETS="link_decode tracker_step" scripts/fuzz.sh 600   only these targets
 #   FUZZ_MERGE=1 scripts/fuzz.sh 600  also merge the inputs that found new coverage, minimised
 #                                     (libFuzzer -merge=1), into the kept corpus fuzz/corpus/<target>/

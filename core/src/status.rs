@@ -8,7 +8,9 @@
 //! The decision, once per frame, uses only the elite's fitness `F` of the frame's last generation, relative to what
 //! the colour model expects the true pose to score under the current light
 //! ([`crate::colour::ColourModel::expected_fitness`], 1 on a flat image), and its short history
-//! (two counters), with hysteresis:
+//! (two counters), with hysteresis. While searching or lost, the tracker counts a frame whose
+//! elite lies away from the acquisition's colour-blob seed as one below every threshold (see
+//! `Tracker::step`), so such a candidate is never confirmed:
 //!
 //! ```text
 //!              F ≥ acquire_fitness for confirm_frames in a row

@@ -545,7 +545,10 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // the current light (`crate::colour`), so that its thresholds mean the same in every light.
         let expected = self.colours.model().expected_fitness();
         let relative = best.fitness / expected;
-        let status = self.monitor.update(relative, &self.config.tuning.status);
+        // A pose is not confirmed while the seed from the colour blobs puts the block elsewhere
+        // (see `agrees_with_seed`): the frame then counts as one without a find.
+        let confirmable = !acquiring || self.agrees_with_seed(&best.psi);
+        let status = self.monitor.update(if confirmable { relative } else { 0.0 }, &self.config.tuning.status);
         if status == Status::Tracking && acquiring {
             self.acquisition.reset();
         }
@@ -579,6 +582,18 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// Learns the face colours from the census of the frame's best pose (see
     /// [`crate::colour`]): called while it is tracked, so that a pose not yet confirmed teaches
     /// the model nothing.
+    /// Whether `psi` lies where the acquisition's latest seed puts the block: its centre within
+    /// the block's half diagonal of the seed's. The seed is computed from every coloured pixel
+    /// of both images, independently of the GA, so a candidate further away than the block's
+    /// own extent is another hypothesis (most often a lock at a wrong depth, which scores
+    /// between the status thresholds). Without a seed yet, every candidate agrees.
+    fn agrees_with_seed(&self, psi: &Psi) -> bool {
+        let Some(seed) = self.acquisition.seed() else { return true };
+        let reach = self.model.half_size();
+        let d = psi.translation() - seed.centre;
+        d.dot(&d) <= reach.dot(&reach)
+    }
+
     fn learn_colours<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>, best: &Best) {
         let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
         let mut tally = Tally::EMPTY;
@@ -732,3 +747,6 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

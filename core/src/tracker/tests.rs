@@ -1,0 +1,48 @@
+//! The tracker's private rules, on exact synthetic frames.
+
+use nalgebra::{Isometry3, Vector3};
+
+use super::*;
+use crate::image::HueImage;
+use crate::limits::NO_HUE;
+use crate::quat;
+use crate::synth;
+
+const W: u16 = 320;
+const H: u16 = 240;
+const STILL: JointSample<7> = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
+
+#[test]
+fn a_candidate_is_confirmed_only_where_the_blobs_put_the_block() {
+    let rig = StereoRig::parallel(Pinhole::new_checked(400.0, 400.0, 160.0, 120.0, W, H).unwrap(), 0.1).unwrap();
+    let q = quat::from_angle_axis(2.2, &Vector3::new(0.4, -1.0, 0.3)).unwrap();
+    let truth = Psi::from_parts(&Vector3::new(-0.04, 0.03, 0.8), &q);
+    let iso = truth.try_to_isometry().unwrap();
+    let n = usize::from(W) * usize::from(H);
+    let (mut l, mut r) = (std::vec![NO_HUE; n], std::vec![NO_HUE; n]);
+    synth::render_block(&Block::PAPER, &rig.right, &iso, &mut r).unwrap();
+    synth::render_block(&Block::PAPER, &rig.left, &(rig.left_from_right * iso), &mut l).unwrap();
+    let frame = StereoFrame {
+        left: HueImage::new_checked(&l[..], W, H).unwrap(),
+        right: HueImage::new_checked(&r[..], W, H).unwrap(),
+    };
+    let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space)
+        .with_seed(1)
+        .with_feedforward(Feedforward::Off);
+    let mut t: Tracker<7, 40, 8> = Tracker::new(config).unwrap();
+    // Without a seed yet, every candidate may be confirmed.
+    assert!(t.agrees_with_seed(&Psi::from_parts(&Vector3::new(0.3, 0.3, 1.2), &q)));
+    let mut frames = 0;
+    while t.acquisition.seed().is_none() {
+        t.step(&frame, &STILL, 0.033).unwrap();
+        frames += 1;
+        assert!(frames < 20, "no seed after {frames} frames");
+    }
+    let reach = t.model.half_size().norm();
+    let along = |d: f32| Psi::from_parts(&(truth.translation() + Vector3::new(0.0, 0.0, d)), &q);
+    assert!(t.agrees_with_seed(&truth));
+    // A pose at the wrong depth by more than the block's own extent is another hypothesis.
+    assert!(!t.agrees_with_seed(&along(2.0 * reach)));
+    assert!(!t.agrees_with_seed(&along(-2.0 * reach)));
+}

@@ -579,9 +579,6 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         })
     }
 
-    /// Learns the face colours from the census of the frame's best pose (see
-    /// [`crate::colour`]): called while it is tracked, so that a pose not yet confirmed teaches
-    /// the model nothing.
     /// Whether `psi` lies where the acquisition's latest seed puts the block: its centre within
     /// the block's half diagonal of the seed's. The seed is computed from every coloured pixel
     /// of both images, independently of the GA, so a candidate further away than the block's
@@ -594,6 +591,9 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         d.dot(&d) <= reach.dot(&reach)
     }
 
+    /// Learns the face colours from the census of the frame's best pose (see
+    /// [`crate::colour`]): called while it is tracked, so that a pose not yet confirmed teaches
+    /// the model nothing.
     fn learn_colours<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>, best: &Best) {
         let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
         let mut tally = Tally::EMPTY;

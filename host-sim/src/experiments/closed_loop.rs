@@ -27,7 +27,7 @@ use evorec_core::kinematics::PA10;
 use evorec_core::pose::Psi;
 use evorec_core::servo::{PoseError, Servo, ServoConfig, ServoInput, ServoLimits};
 use evorec_core::status::Status;
-use evorec_core::target_motion::{self, TargetFilter};
+use evorec_core::target_motion::{self, TargetFilter, TargetVelocity};
 use evorec_core::tracker::{Estimate, Feedforward, JointSample};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
@@ -474,6 +474,7 @@ impl ArmController for ServoLoop {
 
     fn publish(&mut self, world: &World, capture: &Capture, est: &Estimate) -> Option<Handover> {
         let Capture { t, truth, joints, hidden } = *capture;
+        let feedforward = self.filter.feedforward_velocity();
         if self.feedforward == Feedforward::OnWithTarget {
             let measured = &est.target_measurement;
             self.filter.update_from_estimate(&PA10, &self.ctl.mount, &joints, measured, est.status);
@@ -493,7 +494,17 @@ impl ArmController for ServoLoop {
             tracker_error_m: norm(&(est.psi.translation() - truth.translation())),
             steady: self.steady,
         });
-        None
+        // The velocities the servo is handed at the release time; the poses there depend on
+        // the arm's motion until then, which the servo has not yet run.
+        let tw = world.target_twist();
+        Some(Handover {
+            t_out: t + self.delay_s,
+            poses: None,
+            trusted: self.filter.is_trusted(),
+            velocity: self.filter.feedforward_velocity(),
+            feedforward,
+            true_velocity: TargetVelocity { v: tw.v.cast(), w: tw.w.cast() },
+        })
     }
 }
 
@@ -593,6 +604,26 @@ mod tests {
         assert_eq!(rejected, 0);
         assert!(tracker.target_filter().has_track() && tracker.target_filter().is_trusted());
         assert_eq!(board.target_filter(), tracker.target_filter());
+    }
+
+    #[test]
+    fn the_trace_of_a_closed_loop_holds_the_velocities_handed_to_the_servo() {
+        let mut s = scenario(2.0);
+        s.set_method(Feedforward::OnWithTarget);
+        let out = run(&s, &LoopOptions::for_scenario(&s), || {}).unwrap_or_else(|e| unreachable!("{e}"));
+        let rows = &out.run.rows;
+        let handed: Vec<&Handover> = rows.iter().filter_map(|r| r.handover.as_ref()).collect();
+        assert_eq!(handed.len(), rows.len(), "every frame records its hand-over");
+        for (r, h) in rows.iter().zip(&handed) {
+            assert!((h.t_out - (r.t + s.frame_period_s)).abs() < 1e-9, "released one frame after capture");
+            assert_eq!(h.poses, None, "the poses at the release time are not known at publication");
+            assert_eq!((h.true_velocity.v.norm(), h.true_velocity.w.norm()), (0.0, 0.0), "a still block");
+        }
+        // Once the filter has observed the block, the servo is handed its (small, non-zero) velocity.
+        let last = handed[handed.len() - 1];
+        assert!(last.trusted);
+        assert!(last.velocity.v.norm() > 0.0 && last.velocity.v.norm() < 0.05, "{:?}", last.velocity);
+        assert_eq!(last.feedforward, handed[handed.len() - 2].velocity);
     }
 
     #[test]

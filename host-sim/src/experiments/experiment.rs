@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::experiments::truth::{self as eval, WrongTracking};
 pub use crate::experiments::truth::{Rms, RotationError, isometry_of, rms_columns};
-use crate::sim::board::{self as sim, Handover, SimBoard, TraceRow, World};
+use crate::sim::board::{self as sim, HandedPoses, Handover, SimBoard, TraceRow, World};
 use crate::sim::occlusion::Initial;
 use crate::sim::scenario::{HOST_POPULATION_CAPACITY, Scenario};
 
@@ -226,18 +226,18 @@ impl HandoverSummary {
         let still = |v: &evorec_core::target_motion::TargetVelocity| v.v.norm() == 0.0 && v.w.norm() == 0.0;
         let target_feedforward_frames =
             rows.iter().filter(|r| r.handover.as_ref().is_some_and(|h| !still(&h.feedforward))).count();
-        let rows: Vec<(&TraceRow, &Handover)> = rows
+        let rows: Vec<(&TraceRow, &Handover, HandedPoses)> = rows
             .iter()
             .filter(|r| r.status == Status::Tracking)
-            .filter_map(|r| r.handover.as_ref().map(|h| (r, h)))
+            .filter_map(|r| r.handover.as_ref().and_then(|h| h.poses.map(|p| (r, h, p))))
             .collect();
         if rows.is_empty() {
             return None;
         }
-        let at_capture = pose_rms(rows.iter().map(|(r, _)| (r.estimate, r.truth)));
-        let held = pose_rms(rows.iter().map(|(r, h)| (r.estimate, h.truth_out)));
-        let predicted = pose_rms(rows.iter().map(|(_, h)| (h.predicted, h.truth_out)));
-        let trusted: Vec<&Handover> = rows.iter().map(|(_, h)| *h).filter(|h| h.trusted).collect();
+        let at_capture = pose_rms(rows.iter().map(|(r, _, _)| (r.estimate, r.truth)));
+        let held = pose_rms(rows.iter().map(|(r, _, p)| (r.estimate, p.truth_out)));
+        let predicted = pose_rms(rows.iter().map(|(_, _, p)| (p.predicted, p.truth_out)));
+        let trusted: Vec<&Handover> = rows.iter().map(|(_, h, _)| *h).filter(|h| h.trusted).collect();
         let vel = rms_columns::<2>(trusted.iter().map(|h| {
             let (dv, dw) = (h.velocity.v - h.true_velocity.v, h.velocity.w - h.true_velocity.w);
             [f64::from(dv.norm()), f64::from(dw.norm())]

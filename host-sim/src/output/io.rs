@@ -287,9 +287,14 @@ pub fn trace_record(r: &TraceRow) -> Vec<String> {
     match &r.handover {
         Some(ho) => {
             rec.push(format!("{:.3}", ho.t_out));
-            for psi in [&ho.truth_out, &ho.predicted] {
-                rec.extend(psi.0[..3].iter().map(|v| format!("{:.4}", v * 1e3)));
-                rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
+            match &ho.poses {
+                Some(p) => {
+                    for psi in [&p.truth_out, &p.predicted] {
+                        rec.extend(psi.0[..3].iter().map(|v| format!("{:.4}", v * 1e3)));
+                        rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
+                    }
+                }
+                None => rec.extend(std::iter::repeat_n(String::new(), 12)),
             }
             rec.push(u8::from(ho.trusted).to_string());
             for vel in [&ho.velocity, &ho.feedforward, &ho.true_velocity] {

@@ -283,11 +283,11 @@ pub struct TraceRow {
 pub struct Handover {
     /// Output time (s).
     pub t_out: f64,
-    /// True pose in `Σ_CR` at the output time.
-    pub truth_out: Psi,
-    /// The pose predicted for the output time by the core's `TargetFilter::predict` (the held
-    /// estimate when the filter has no track).
-    pub predicted: Psi,
+    /// The true pose in `Σ_CR` at the output time and the pose predicted for it by the core's
+    /// `TargetFilter::predict` (the held estimate when the filter has no track). `None` in a
+    /// closed loop, where the arm's motion up to the output time is not yet known when the
+    /// frame is published (its trace then holds the velocities only).
+    pub poses: Option<HandedPoses>,
     /// Whether the prediction used a trusted target velocity.
     pub trusted: bool,
     /// The target velocity the prediction used (world).
@@ -299,6 +299,15 @@ pub struct Handover {
     pub feedforward: TargetVelocity,
     /// The true target velocity at capture (world).
     pub true_velocity: TargetVelocity,
+}
+
+/// The poses of a [`Handover`] at its output time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HandedPoses {
+    /// True pose in `Σ_CR` at the output time.
+    pub truth_out: Psi,
+    /// The pose predicted for the output time.
+    pub predicted: Psi,
 }
 /// Why the simulated board stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -391,7 +400,8 @@ impl ArmController for Scripted {
                 Ok(p) => (p.psi, p.trusted, p.velocity),
                 Err(_) => (estimate.psi, false, TargetVelocity::ZERO),
             };
-        Some(Handover { t_out, truth_out, predicted, trusted, velocity, feedforward, true_velocity })
+        let poses = Some(HandedPoses { truth_out, predicted });
+        Some(Handover { t_out, poses, trusted, velocity, feedforward, true_velocity })
     }
 }
 
@@ -706,7 +716,7 @@ mod tests {
             let h = pair[0].handover.unwrap_or_else(|| unreachable!("every frame has a hand-over"));
             // Default delay: one frame period; the truth then is the next frame's.
             assert!((h.t_out - pair[1].t).abs() < 1e-9);
-            assert_eq!(h.truth_out, pair[1].truth);
+            assert_eq!(h.poses.map(|p| p.truth_out), Some(pair[1].truth));
             // The block rides the conveyor along world y.
             assert_eq!((h.true_velocity.v.x, h.true_velocity.v.z), (0.0, 0.0));
         }

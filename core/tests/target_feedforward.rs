@@ -1,5 +1,6 @@
 //! Feedforward of the target's own motion (`Feedforward::OnWithTarget`, eq. 23 in full) on a
-//! synthetic sequence: a block sliding sideways in front of a still camera.
+//! synthetic sequence: a block sliding sideways in front of a still camera, and one turning in
+//! place.
 
 use evorec_core::camera::{Pinhole, StereoRig};
 use evorec_core::ga::SearchSpace;
@@ -36,6 +37,35 @@ fn truth(k: u64) -> Psi {
     Psi::from_parts(&Vector3::new(-0.15 + travel(t), 0.01, 0.75), &q)
 }
 
+/// Turn rate of the turning block (rad/s) about the camera's y axis.
+const TURN_RATE: f32 = 0.3;
+
+/// The angle (rad) between the orientations of `a` and `b`, modulo the block's colour symmetry
+/// (a half turn about any of its axes).
+fn symmetric_angle(a: &Psi, b: &Psi) -> f32 {
+    let (qa, qb) = (a.quaternion_unchecked(), b.quaternion_unchecked());
+    let half_turns = [Vector3::zeros(), Vector3::x(), Vector3::y(), Vector3::z()];
+    half_turns
+        .iter()
+        .map(|axis| {
+            let s = if axis.norm() == 0.0 {
+                nalgebra::UnitQuaternion::identity()
+            } else {
+                quat::from_angle_axis(core::f32::consts::PI, axis).unwrap()
+            };
+            (qa * (qb * s).inverse()).angle()
+        })
+        .fold(f32::MAX, f32::min)
+}
+
+/// The block turning in place at [`TURN_RATE`] from the sliding block's orientation.
+fn turning(k: u64) -> Psi {
+    let t = (k * DT_US) as f32 * 1e-6;
+    let q0 = quat::from_angle_axis(0.3, &Vector3::new(0.2, 1.0, 0.1)).unwrap();
+    let turn = quat::from_angle_axis(TURN_RATE * t, &Vector3::y()).unwrap();
+    Psi::from_parts(&Vector3::new(0.0, 0.01, 0.75), &(turn * q0))
+}
+
 /// Frames at the end over which the filter's velocity is averaged (one frame's is noisy).
 const LAST: u64 = 20;
 
@@ -43,6 +73,11 @@ const LAST: u64 = 20;
 /// 30.., the tracker, and the filter's mean world velocity and mean angular speed (rad/s) over
 /// the last [`LAST`] frames (zero where it has none).
 fn run(mode: Feedforward, seed: u64) -> (f32, Tracker, Vector3<f32>, f32) {
+    run_on(truth, mode, seed).0
+}
+
+/// [`run`] on the poses `truth`, also with the RMS rotation error (rad) over frames 30...
+fn run_on(truth: fn(u64) -> Psi, mode: Feedforward, seed: u64) -> ((f32, Tracker, Vector3<f32>, f32), f32) {
     let rig = rig();
     let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
     let config =
@@ -53,6 +88,7 @@ fn run(mode: Feedforward, seed: u64) -> (f32, Tracker, Vector3<f32>, f32) {
     let mut n = 0;
     let mut v_sum = Vector3::zeros();
     let mut w_sum = 0.0f32;
+    let mut rot_sq = 0.0f32;
     for k in 0..FRAMES {
         let (l, r) = render(&rig, &truth(k));
         let frame = frame(&l, &r, 640, 480);
@@ -62,6 +98,8 @@ fn run(mode: Feedforward, seed: u64) -> (f32, Tracker, Vector3<f32>, f32) {
         assert_eq!(e.capture_time_us, k * DT_US);
         if k >= 30 {
             sq += (e.psi.translation() - truth(k).translation()).norm_squared();
+            let err = symmetric_angle(&e.psi, &truth(k));
+            rot_sq += err * err;
             n += 1;
         }
         if k >= FRAMES - LAST {
@@ -69,7 +107,7 @@ fn run(mode: Feedforward, seed: u64) -> (f32, Tracker, Vector3<f32>, f32) {
             w_sum += tracker.target_filter().velocity().map_or(0.0, |v| v.w.norm());
         }
     }
-    ((sq / n as f32).sqrt(), tracker, v_sum / LAST as f32, w_sum / LAST as f32)
+    (((sq / n as f32).sqrt(), tracker, v_sum / LAST as f32, w_sum / LAST as f32), (rot_sq / n as f32).sqrt())
 }
 
 #[test]
@@ -138,4 +176,24 @@ fn a_reset_forgets_the_target_motion() {
     let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
     assert_eq!(tracker.target_feedforward_velocity(), TargetVelocity::ZERO);
     assert_eq!(tracker.predict(&joints, 0), Err(PredictError::NoTrack));
+}
+
+#[test]
+fn target_feedforward_follows_a_turning_block() {
+    // The model's turn fed forward follows a block that really turns (the paired test of the
+    // turn must not refuse it). Measured, medians over seeds 1–6: rotation error 0.054 rad
+    // with the target's motion fed forward against 0.104 rad with the arm's alone, the model's
+    // turn rate 0.310 rad/s.
+    let seeds = 1..=6;
+    let ff: Vec<_> = seeds.clone().map(|s| run_on(turning, Feedforward::On, s)).collect();
+    let target: Vec<_> = seeds.map(|s| run_on(turning, Feedforward::OnWithTarget, s)).collect();
+    let rot_ff = median(ff.iter().map(|r| r.1).collect());
+    let rot_target = median(target.iter().map(|r| r.1).collect());
+    let rate = median(target.iter().map(|r| r.0.3).collect());
+    let rms_target = median(target.iter().map(|r| r.0.0).collect());
+    eprintln!(
+        "medians: rotation FF {rot_ff} rad, FF + target {rot_target} rad; turn rate {rate} rad/s; position {rms_target} m"
+    );
+    assert!(rot_target < 0.75 * rot_ff, "FF + target {rot_target} rad vs FF {rot_ff} rad (medians)");
+    assert!((rate - TURN_RATE).abs() < 0.1 * TURN_RATE, "the filter's turn rate {rate} rad/s (median)");
 }

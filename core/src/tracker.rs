@@ -27,10 +27,11 @@ use crate::tuning::{POPULATION_ERROR, Tuning};
 
 /// The estimate is the mean pose of the individuals whose fitness is within this of the best's
 /// ([`Ga::crowd`](crate::ga::Ga::crowd)), and the target filter is fed their mean
-/// position with the best's orientation: the best jumps between the individuals at the top of a
+/// position and orientation: the best jumps between the individuals at the top of a
 /// flat fitness peak from frame to frame, and on a peak that moves it trails (ties go to the
 /// elite, which is not moved by the block's own motion); the centre of those individuals does
-/// both much less. 0.01 is one sample point in a hundred.
+/// both much less. The best's orientation fed to the filter reads those jumps as turns, which
+/// the filter feeds forward to the population. 0.01 is one sample point in a hundred.
 pub const MEASUREMENT_FITNESS_MARGIN: f32 = 0.01;
 
 /// Depth probes per generation in [`Feedforward::OnWithTarget`] while tracking: the last
@@ -77,7 +78,8 @@ pub struct Estimate {
     pub capture_time_us: u64,
     /// The pose the target filter was fed with this estimate
     /// ([`Feedforward::OnWithTarget`]): the mean position of the individuals within
-    /// [`MEASUREMENT_FITNESS_MARGIN`] of the best fitness, with the best's orientation; the best
+    /// [`MEASUREMENT_FITNESS_MARGIN`] of the best fitness, with the mean orientation of those
+    /// of them within one coarse mutation step of the best (the estimate's); the best
     /// individual's pose in the other modes. A
     /// consumer running its own copy of the filter
     /// ([`TargetFilter::update_from_estimate`](crate::target_motion::TargetFilter::update_from_estimate))
@@ -685,7 +687,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let (estimate, target_measurement) = if last {
             let crowd = self.ga.crowd(&best, MEASUREMENT_FITNESS_MARGIN, &reach);
             let measured = if feedforward == Feedforward::OnWithTarget {
-                Psi::new(crowd.translation, best.psi.eps().into())
+                Psi::new(crowd.translation, crowd.centre.eps().into())
             } else {
                 best.psi
             };

@@ -8,15 +8,16 @@
 //! the plateau's centre (the resolution).
 //!
 //! `cargo run --release -p evorec-sim --example depth_profile -- SCENARIO [OMEGA] [FRAMES] [STEP_S]`
+mod frames;
+
 use evorec_core::camera::StereoRig;
-use evorec_core::image::{HueImage, Image, Rgb565};
+use evorec_core::image::HueImage;
 use evorec_core::limits::NO_HUE;
 use evorec_core::pose::Psi;
 use evorec_core::synth::render_block;
 use evorec_core::tracker::StereoFrame;
 use evorec_sim::experiments::experiment::{SimTracker, tracker_config};
 use evorec_sim::sim::board::World;
-use evorec_sim::sim::render;
 use evorec_sim::sim::scenario::Scenario;
 
 const HALF_STEPS: i32 = 60;
@@ -109,13 +110,7 @@ fn main() -> anyhow::Result<()> {
     let mut exact: [Acc; 3] = Default::default();
     for i in 0..frames {
         world.advance_to(i as f64 * step_s);
-        let images = world.render();
-        render::rgb565_into(&images.left, &mut l);
-        render::rgb565_into(&images.right, &mut r);
-        let frame = StereoFrame::<Rgb565> {
-            left: Image::<&[u8], Rgb565>::new_checked(&l[..], w, h)?,
-            right: Image::<&[u8], Rgb565>::new_checked(&r[..], w, h)?,
-        };
+        let frame = frames::rgb565_frame(&mut world, &mut l, &mut r, w, h)?;
         let truth = world.truth();
         exact_frame(&rig, &s, &truth, &mut el, &mut er)?;
         let eframe =

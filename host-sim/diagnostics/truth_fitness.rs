@@ -6,12 +6,11 @@
 //!
 //! `[SCAN=1] cargo run --release -p evorec-sim --example truth_fitness -- SCENARIO TRACE.csv FIRST LAST`
 //! (`SCAN=1`: also F of the estimate moved along the right and the left camera's viewing ray, ±25 mm)
-use evorec_core::image::{Image, Rgb565};
+mod frames;
+
 use evorec_core::pose::Psi;
-use evorec_core::tracker::StereoFrame;
 use evorec_sim::experiments::experiment::{SimTracker, tracker_config};
 use evorec_sim::sim::board::World;
-use evorec_sim::sim::render;
 use evorec_sim::sim::scenario::Scenario;
 
 fn main() -> anyhow::Result<()> {
@@ -44,13 +43,7 @@ fn main() -> anyhow::Result<()> {
             break;
         }
         world.advance_to(i as f64 * s.frame_period_s);
-        let images = world.render();
-        render::rgb565_into(&images.left, &mut l);
-        render::rgb565_into(&images.right, &mut r);
-        let frame = StereoFrame::<Rgb565> {
-            left: Image::<&[u8], Rgb565>::new_checked(&l[..], w, h)?,
-            right: Image::<&[u8], Rgb565>::new_checked(&r[..], w, h)?,
-        };
+        let frame = frames::rgb565_frame(&mut world, &mut l, &mut r, w, h)?;
         let truth = world.truth();
         let v: Vec<f32> = est.iter().map(|&c| row[c].parse::<f32>()).collect::<Result<_, _>>()?;
         let e = Psi([v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3, v[3], v[4], v[5]]);
@@ -82,6 +75,28 @@ fn main() -> anyhow::Result<()> {
                 })
                 .collect();
             println!("  est along left ray {}", line.join(" "));
+            let line: Vec<String> = (0..=10)
+                .map(|k| {
+                    let a = k as f32 / 10.0;
+                    let q = Psi(core::array::from_fn(|g| e.0[g] + a * (truth.0[g] - e.0[g])));
+                    let f = tracker.fitness_of(&q, &frame).map(|f| f.total).unwrap_or(0.0);
+                    format!("{f:.3}")
+                })
+                .collect();
+            println!("  est to truth {}", line.join(" "));
+            for (name, genes) in [("position only", 0..3), ("rotation only", 3..6)] {
+                let line: Vec<String> = (0..=10)
+                    .map(|k| {
+                        let a = k as f32 / 10.0;
+                        let q = Psi(core::array::from_fn(|g| {
+                            if genes.contains(&g) { e.0[g] + a * (truth.0[g] - e.0[g]) } else { e.0[g] }
+                        }));
+                        let f = tracker.fitness_of(&q, &frame).map(|f| f.total).unwrap_or(0.0);
+                        format!("{f:.3}")
+                    })
+                    .collect();
+                println!("  {name} {}", line.join(" "));
+            }
         }
         println!(
             "{i} {:.3} {:.3} {:.3} {:.3} {:.3} {err:.1}",

@@ -30,8 +30,8 @@ use crate::tuning::{POPULATION_ERROR, Tuning};
 /// position and orientation: the best jumps between the individuals at the top of a
 /// flat fitness peak from frame to frame, and on a peak that moves it trails (ties go to the
 /// elite, which is not moved by the block's own motion); the centre of those individuals does
-/// both much less. The best's orientation fed to the filter reads those jumps as turns, which
-/// the filter feeds forward to the population. 0.01 is one sample point in a hundred.
+/// both much less. Fed the best's orientation, the filter would read those jumps as turns and
+/// feed them forward to the population. 0.01 is one sample point in a hundred.
 pub const MEASUREMENT_FITNESS_MARGIN: f32 = 0.01;
 
 /// Depth probes per generation in [`Feedforward::OnWithTarget`] while tracking: the last

@@ -309,6 +309,7 @@ pub struct HandedPoses {
     /// The pose predicted for the output time.
     pub predicted: Psi,
 }
+
 /// Why the simulated board stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SimError {

@@ -27,7 +27,7 @@ use evorec_core::kinematics::PA10;
 use evorec_core::pose::Psi;
 use evorec_core::servo::{PoseError, Servo, ServoConfig, ServoInput, ServoLimits};
 use evorec_core::status::Status;
-use evorec_core::target_motion::{self, TargetFilter, TargetVelocity};
+use evorec_core::target_motion::{self, TargetFilter};
 use evorec_core::tracker::{Estimate, Feedforward, JointSample};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
@@ -496,14 +496,13 @@ impl ArmController for ServoLoop {
         });
         // The velocities the servo is handed at the release time; the poses there depend on
         // the arm's motion until then, which the servo has not yet run.
-        let tw = world.target_twist();
         Some(Handover {
             t_out: t + self.delay_s,
             poses: None,
             trusted: self.filter.is_trusted(),
             velocity: self.filter.feedforward_velocity(),
             feedforward,
-            true_velocity: TargetVelocity { v: tw.v.cast(), w: tw.w.cast() },
+            true_velocity: world.target_velocity(),
         })
     }
 }

@@ -17,6 +17,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow};
+use evorec_core::pose::Psi;
 use nalgebra::Isometry3;
 use serde::Serialize;
 
@@ -272,15 +273,19 @@ fn write_trace_to(out: &mut dyn Write, rows: &[TraceRow]) -> Result<()> {
     Ok(())
 }
 
+/// The 6 fields of a pose in `trace.csv`: the position in mm, then ε.
+fn push_pose(rec: &mut Vec<String>, psi: &Psi) {
+    rec.extend(psi.0[..3].iter().map(|v| format!("{:.4}", v * 1e3)));
+    rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
+}
+
 /// The fields of one row of `trace.csv` (see [`trace_header`]).
 pub fn trace_record(r: &TraceRow) -> Vec<String> {
     let mut rec: Vec<String> = Vec::with_capacity(36 + HANDOVER_COLUMNS + 2);
     rec.push(format!("{:.3}", r.t));
     rec.extend(r.q.iter().chain(r.qd.iter()).map(|v| format!("{v:.6}")));
-    for psi in [&r.truth, &r.estimate] {
-        rec.extend(psi.0[..3].iter().map(|v| format!("{:.4}", v * 1e3)));
-        rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
-    }
+    push_pose(&mut rec, &r.truth);
+    push_pose(&mut rec, &r.estimate);
     rec.push(format!("{:.5}", r.fitness));
     rec.push(r.status.as_str().to_owned());
     rec.push(u8::from(r.hidden).to_string());
@@ -289,10 +294,8 @@ pub fn trace_record(r: &TraceRow) -> Vec<String> {
             rec.push(format!("{:.3}", ho.t_out));
             match &ho.poses {
                 Some(p) => {
-                    for psi in [&p.truth_out, &p.predicted] {
-                        rec.extend(psi.0[..3].iter().map(|v| format!("{:.4}", v * 1e3)));
-                        rec.extend(psi.0[3..].iter().map(|v| format!("{v:.6}")));
-                    }
+                    push_pose(&mut rec, &p.truth_out);
+                    push_pose(&mut rec, &p.predicted);
                 }
                 None => rec.extend(std::iter::repeat_n(String::new(), 12)),
             }

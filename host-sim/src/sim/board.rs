@@ -180,9 +180,11 @@ impl World {
         target_path::target_pose(&self.target, &self.path, t)
     }
 
-    /// The block's true twist in the world at the current time (scripted motion and path).
-    pub fn target_twist(&self) -> Twist {
-        target_path::target_twist(&self.target, &self.path, self.arm.time())
+    /// The block's true velocity in the world at the current time (scripted motion and path),
+    /// as the target model states it.
+    pub fn target_velocity(&self) -> TargetVelocity {
+        let tw = target_path::target_twist(&self.target, &self.path, self.arm.time());
+        TargetVelocity { v: tw.v.cast(), w: tw.w.cast() }
     }
 
     /// The true pose `^CR ψ_M` and the joint sample at a later time `t` along the scripted
@@ -383,8 +385,7 @@ impl ArmController for Scripted {
     /// Updates the target filter with `estimate` and predicts the pose at the output time
     /// `t + delay_s`.
     fn publish(&mut self, world: &World, capture: &Capture, estimate: &Estimate) -> Option<Handover> {
-        let tw = world.target_twist();
-        let true_velocity = TargetVelocity { v: tw.v.cast(), w: tw.w.cast() };
+        let true_velocity = world.target_velocity();
         let feedforward = self.filter.feedforward_velocity();
         self.filter.update_from_estimate(
             &PA10,

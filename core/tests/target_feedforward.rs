@@ -9,7 +9,7 @@ use evorec_core::pose::Psi;
 use evorec_core::quat;
 use evorec_core::target_motion::{PredictError, TargetVelocity};
 use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, Quaternion, UnitQuaternion, Vector3};
 
 mod common;
 use common::{frame, median, render};
@@ -44,15 +44,12 @@ const TURN_RATE: f32 = 0.3;
 /// (a half turn about any of its axes).
 fn symmetric_angle(a: &Psi, b: &Psi) -> f32 {
     let (qa, qb) = (a.quaternion_unchecked(), b.quaternion_unchecked());
-    let half_turns = [Vector3::zeros(), Vector3::x(), Vector3::y(), Vector3::z()];
-    half_turns
+    // The identity and the half turns about the block's x, y and z axes.
+    let symmetry = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+    symmetry
         .iter()
-        .map(|axis| {
-            let s = if axis.norm() == 0.0 {
-                nalgebra::UnitQuaternion::identity()
-            } else {
-                quat::from_angle_axis(core::f32::consts::PI, axis).unwrap()
-            };
+        .map(|&[w, x, y, z]| {
+            let s = UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z));
             (qa * (qb * s).inverse()).angle()
         })
         .fold(f32::MAX, f32::min)

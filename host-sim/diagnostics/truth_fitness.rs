@@ -12,6 +12,7 @@ use evorec_core::pose::Psi;
 use evorec_sim::experiments::experiment::{SimTracker, tracker_config};
 use evorec_sim::sim::board::World;
 use evorec_sim::sim::scenario::Scenario;
+use nalgebra::Vector3;
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -47,52 +48,34 @@ fn main() -> anyhow::Result<()> {
         let truth = world.truth();
         let v: Vec<f32> = est.iter().map(|&c| row[c].parse::<f32>()).collect::<Result<_, _>>()?;
         let e = Psi([v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3, v[3], v[4], v[5]]);
-        let err = ((0..3).map(|k| (e.0[k] - truth.0[k]).powi(2)).sum::<f32>()).sqrt() * 1e3;
+        let err = (e.translation() - truth.translation()).norm() * 1e3;
         let ft = tracker.fitness_of(&truth, &frame).map_err(|e| anyhow::anyhow!("{e:?}"))?;
         let fe = tracker.fitness_of(&e, &frame).map_err(|e| anyhow::anyhow!("{e:?}"))?;
         if std::env::var("SCAN").is_ok() {
-            let line: Vec<String> = (-25..=25)
-                .step_by(5)
-                .map(|mm| {
-                    let q = e.scaled_along_ray(1.0 + mm as f32 * 1e-3 / e.0[2]);
-                    let f = tracker.fitness_of(&q, &frame).map(|f| f.total).unwrap_or(0.0);
-                    format!("{mm}:{f:.3}")
-                })
-                .collect();
-            println!("  est along ray {}", line.join(" "));
-            let c = rig.left_from_right.inverse().translation.vector;
-            let line: Vec<String> = (-25..=25)
-                .step_by(5)
-                .map(|mm| {
-                    let mut q = e;
-                    let d = e.translation() - c;
-                    let p = c + d * (1.0 + mm as f32 * 1e-3 / d.norm());
-                    q.0[0] = p.x;
-                    q.0[1] = p.y;
-                    q.0[2] = p.z;
-                    let f = tracker.fitness_of(&q, &frame).map(|f| f.total).unwrap_or(0.0);
-                    format!("{mm}:{f:.3}")
-                })
-                .collect();
-            println!("  est along left ray {}", line.join(" "));
-            let line: Vec<String> = (0..=10)
-                .map(|k| {
-                    let a = k as f32 / 10.0;
-                    let q = Psi(core::array::from_fn(|g| e.0[g] + a * (truth.0[g] - e.0[g])));
-                    let f = tracker.fitness_of(&q, &frame).map(|f| f.total).unwrap_or(0.0);
-                    format!("{f:.3}")
-                })
-                .collect();
-            println!("  est to truth {}", line.join(" "));
-            for (name, genes) in [("position only", 0..3), ("rotation only", 3..6)] {
+            let f = |q: &Psi| tracker.fitness_of(q, &frame).map(|f| f.total).unwrap_or(0.0);
+            // Along the ray from each camera's centre (in the right camera's frame) through the
+            // estimate's centre, ±25 mm.
+            let left_centre = rig.left_from_right.inverse().translation.vector;
+            for (name, centre) in [("ray", Vector3::zeros()), ("left ray", left_centre)] {
+                let line: Vec<String> = (-25..=25)
+                    .step_by(5)
+                    .map(|mm| {
+                        let d = e.translation() - centre;
+                        let p = centre + d * (1.0 + mm as f32 * 1e-3 / d.norm());
+                        format!("{mm}:{:.3}", f(&Psi([p.x, p.y, p.z, e.0[3], e.0[4], e.0[5]])))
+                    })
+                    .collect();
+                println!("  est along {name} {}", line.join(" "));
+            }
+            // Towards the truth in tenths, in every gene, in the position's or in the turn's.
+            for (name, genes) in [("est to truth", 0..6), ("position only", 0..3), ("rotation only", 3..6)] {
                 let line: Vec<String> = (0..=10)
                     .map(|k| {
                         let a = k as f32 / 10.0;
                         let q = Psi(core::array::from_fn(|g| {
                             if genes.contains(&g) { e.0[g] + a * (truth.0[g] - e.0[g]) } else { e.0[g] }
                         }));
-                        let f = tracker.fitness_of(&q, &frame).map(|f| f.total).unwrap_or(0.0);
-                        format!("{f:.3}")
+                        format!("{:.3}", f(&q))
                     })
                     .collect();
                 println!("  {name} {}", line.join(" "));

@@ -585,9 +585,10 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// the block's half diagonal of the seed's. The seed is computed from every coloured pixel
     /// of both images, independently of the GA, so a candidate further away than the block's
     /// own extent is another hypothesis (most often a lock at a wrong depth, which scores
-    /// between the status thresholds). Without a seed yet, every candidate agrees.
+    /// between the status thresholds). Without a seed yet, or with one from blobs cut by an
+    /// image border ([`crate::acquire::Seed::cut`]), every candidate agrees.
     fn agrees_with_seed(&self, psi: &Psi) -> bool {
-        let Some(seed) = self.acquisition.seed() else { return true };
+        let Some(seed) = self.acquisition.seed().filter(|s| !s.cut) else { return true };
         let reach = self.model.half_size();
         let d = psi.translation() - seed.centre;
         d.dot(&d) <= reach.dot(&reach)

@@ -135,6 +135,9 @@ pub struct HueBlobs {
     pub sum_u: [u64; 3],
     /// Sum of their row indices.
     pub sum_v: [u64; 3],
+    /// Hits (of any axis) in the grid's outermost rows and columns: the block, or something of
+    /// its colours, reaches the image border there.
+    pub edge: u32,
 }
 
 impl HueBlobs {
@@ -152,6 +155,11 @@ impl HueBlobs {
         }
         let inv = 1.0 / n as f32;
         Some(Point2::new(*self.sum_u.get(a)? as f32 * inv + 0.5, *self.sum_v.get(a)? as f32 * inv + 0.5))
+    }
+
+    /// Whether hits lie on the grid's border (see [`HueBlobs::edge`]).
+    pub fn touches_border(&self) -> bool {
+        self.edge > 0
     }
 
     /// Counts a grid pixel at `(u, v)` whose hue-table mask is `mask`.
@@ -212,8 +220,18 @@ pub fn scan_part<B: AsRef<[u8]>, F: PixelFormat>(
         let row = pixels.get(v * w..(v + 1) * w).unwrap_or(&[]);
         let first = (i - gy * gw) as usize;
         let n = (row_end - i) as usize;
+        let before = blobs.total();
         for (k, px) in row.iter().skip(o + first * s).step_by(s).take(n).enumerate() {
             blobs.add(lut.mask(F::hue(*px)), o + (first + k) * s, v);
+        }
+        // The border: every hit of the first and last grid rows, and the first and last grid
+        // pixels of the other rows (read again: two pixels a row, none in the loop above).
+        if gy == 0 || gy + 1 == gh {
+            blobs.edge += blobs.total() - before;
+        } else {
+            let hit = |gx: usize| row.get(o + gx * s).is_some_and(|px| lut.mask(F::hue(*px)) & 0b11_1111 != 0);
+            let last = (gw as usize).saturating_sub(1);
+            blobs.edge += u32::from(first == 0 && hit(0)) + u32::from(first + n > last && hit(last));
         }
         i = row_end;
     }

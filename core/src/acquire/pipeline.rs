@@ -46,8 +46,8 @@ impl Acquisition {
     pub const fn new() -> Self {
         Self {
             stage: Stage::Scan(0),
-            left: HueBlobs { count: [0; 3], sum_u: [0; 3], sum_v: [0; 3] },
-            right: HueBlobs { count: [0; 3], sum_u: [0; 3], sum_v: [0; 3] },
+            left: HueBlobs { count: [0; 3], sum_u: [0; 3], sum_v: [0; 3], edge: 0 },
+            right: HueBlobs { count: [0; 3], sum_u: [0; 3], sum_v: [0; 3], edge: 0 },
             candidates: [None, None],
             motion: Psi::IDENTITY,
             seed: None,

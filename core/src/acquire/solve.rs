@@ -48,6 +48,10 @@ pub struct Seed {
     pub faces: u8,
     /// With one face seen, the rotation about its axis is unknown: that axis.
     pub free_axis: Option<usize>,
+    /// The blobs of either image touch its border ([`HueBlobs::touches_border`]): the
+    /// centroids and areas are those of the faces' visible parts, so the seed can be off by
+    /// more than the block's size.
+    pub cut: bool,
 }
 
 impl Seed {
@@ -183,5 +187,6 @@ pub fn seed_pose_from(
     if !centre.iter().all(|c| c.is_finite()) {
         return None;
     }
-    Some(Seed { centre, rotation, faces, free_axis })
+    let cut = left.touches_border() || right.touches_border();
+    Some(Seed { centre, rotation, faces, free_axis, cut })
 }

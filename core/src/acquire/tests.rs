@@ -48,6 +48,43 @@ fn scan_reads_a_fixed_grid_and_counts_hues_per_axis() {
 }
 
 #[test]
+fn hits_in_the_outermost_grid_rows_and_columns_mark_the_border() {
+    let (w, h) = (40u16, 30u16); // grid columns at u = 4, 12, …, 36, rows at v = 4, 12, 20, 28
+    let edge = |at: &[(usize, usize)]| {
+        let mut px = vec![NO_HUE; usize::from(w) * usize::from(h)];
+        for &(u, v) in at {
+            px[v * usize::from(w) + u] = 0;
+        }
+        let img = HueImage::new_checked(&px[..], w, h).unwrap();
+        let b = scan(&img, &lut(), 8);
+        assert_eq!(b.total(), at.len() as u32);
+        (b.edge, b.touches_border())
+    };
+    assert_eq!(edge(&[(12, 12), (28, 20)]), (0, false));
+    for corner_or_side in [(4, 12), (36, 12), (20, 4), (20, 28), (36, 28)] {
+        assert_eq!(edge(&[(12, 12), corner_or_side]), (1, true), "{corner_or_side:?}");
+    }
+}
+
+#[test]
+fn a_seed_from_a_block_cut_by_the_border_says_so() {
+    let rig = rig();
+    let half = Block::PAPER.size_m.map(|s| 0.5 * s);
+    let seed_at = |x: f32| {
+        let truth = Psi::new([x, -0.01, 0.7], [0.2, 0.3, 0.1]);
+        let (l, r) = scene(&truth);
+        let (l, r) = (HueImage::new_checked(&l[..], W, H).unwrap(), HueImage::new_checked(&r[..], W, H).unwrap());
+        let (bl, br) = (scan(&l, &lut(), 8), scan(&r, &lut(), 8));
+        (bl.touches_border() || br.touches_border(), seed_pose(&rig, &half, &bl, &br, 6).map(|s| s.cut))
+    };
+    assert_eq!(seed_at(0.02), (false, Some(false)));
+    // Far enough across the view that part of the block leaves both images.
+    let (touches, cut) = seed_at(0.17);
+    assert!(touches);
+    assert_eq!(cut, Some(true));
+}
+
+#[test]
 fn triangulation_inverts_the_projection() {
     let rig = rig();
     let p = Vector3::new(0.05, -0.03, 0.8);
@@ -95,7 +132,7 @@ fn nothing_seen_gives_no_seed_and_immigrants_draw_a_fixed_count() {
     let none = HueBlobs::default();
     assert_eq!(seed_pose(&rig, &[0.05, 0.075, 0.1], &none, &none, 6), None);
     let seed =
-        Seed { centre: Vector3::new(0.0, 0.0, 0.7), rotation: Matrix3::identity(), faces: 1, free_axis: Some(2) };
+        Seed { centre: Vector3::new(0.0, 0.0, 0.7), rotation: Matrix3::identity(), faces: 1, free_axis: Some(2), cut: false };
     let mut r1 = Xoshiro128PlusPlus::seed_from_u64(3);
     let mut r2 = Xoshiro128PlusPlus::seed_from_u64(3);
     let p0 = seed_immigrant(&seed, 0, &AcquireConfig::DEFAULT, &mut r1).unwrap();

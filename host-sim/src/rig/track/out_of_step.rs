@@ -8,8 +8,8 @@
 //! change (the mean absolute grey-level difference on a sparse grid of pixels) on the reader
 //! thread; [`PairingCheck`] correlates the two series over the last [`WINDOW`] frames at every
 //! offset up to [`MAX_OFFSET`] frames and reports an offset when the series agree well there
-//! and leave several times more unexplained in step. A scene without motion gives no verdict (nothing to compare);
-//! an offset of one frame is not told from the smoothness of the motion itself.
+//! and leave several times more unexplained in step. A scene without motion gives no verdict (nothing to compare),
+//! and neither does a motion too smooth to tell an offset of a frame or two from no offset.
 
 use std::collections::VecDeque;
 
@@ -23,9 +23,11 @@ pub const WINDOW: usize = 120;
 const EVERY: usize = 30;
 /// The largest offset looked for, in frames (either way).
 pub const MAX_OFFSET: usize = 30;
-/// The least offset reported: at one frame the two series of a smooth motion agree almost as
-/// well in step as out of it.
-const MIN_OFFSET: usize = 2;
+/// The least offset reported. An offset of one frame is found only where the motion changes
+/// from frame to frame (a block turning by jerks, a start or a stop): the two series of a smooth
+/// motion agree almost as well in step as one frame apart, and [`MIN_RESIDUAL_RATIO`] then gives
+/// no verdict either way.
+const MIN_OFFSET: usize = 1;
 /// The correlation the series must reach at the offset found.
 const MIN_CORRELATION: f64 = 0.8;
 /// How many times more of the series' variance in step than at the offset found must be left
@@ -81,9 +83,10 @@ pub struct OutOfStep {
 impl std::fmt::Display for OutOfStep {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let (later, n) = if self.offset > 0 { ("later", self.offset) } else { ("earlier", -self.offset) };
+        let frames = if n == 1 { "frame" } else { "frames" };
         write!(
             f,
-            "the stereo pairs are out of step: the right images show the motion of the left ones {n} frames {later} \
+            "the stereo pairs are out of step: the right images show the motion of the left ones {n} {frames} {later} \
              (frames {}–{}: the image motion of the two cameras correlates {:.2} at that offset, {:.2} in step); \
              pair each left image with the right one taken at the same time (check the recorder's synchroniser or \
              the images' stamps), or pass --no-pairing-check to track anyway",
@@ -151,7 +154,7 @@ fn best_offset(left: &[f32], right: &[f32]) -> Option<OutOfStep> {
 
 /// Pearson's correlation of `left[t]` with `right[t + offset]` over their overlap (the first
 /// frame of each series, a change from nothing, left out); `None` where either is constant.
-fn correlation(left: &[f32], right: &[f32], offset: i32) -> Option<f64> {
+pub fn correlation(left: &[f32], right: &[f32], offset: i32) -> Option<f64> {
     let n = left.len().min(right.len());
     let (a, b) = if offset >= 0 {
         let k = offset as usize;
@@ -208,6 +211,38 @@ mod tests {
         let v = verdict(right, left).expect("out of step the other way");
         assert_eq!(v.offset, -15, "{v}");
         assert!(v.to_string().contains("15 frames earlier"), "{v}");
+    }
+
+    /// A motion that changes from frame to frame (a block turned by jerks), with a little
+    /// noise of each camera's own (`camera` picks it).
+    fn jerky(n: usize, camera: u32) -> Vec<f32> {
+        let hash = |t: u32| (t.wrapping_mul(2_654_435_761) >> 16) % 1000;
+        (0..n as u32).map(|t| 2.0 + hash(t) as f32 * 0.003 + hash(t ^ (camera << 20)) as f32 * 0.0002).collect()
+    }
+
+    #[test]
+    fn one_frame_out_of_step_is_found_where_the_motion_changes_from_frame_to_frame() {
+        let (l, r) = (jerky(401, 1), jerky(401, 2));
+        assert_eq!(verdict(&l[..400], &r[..400]), None, "in step");
+        // Each right image shows what the left one showed a frame before.
+        let v = verdict(&l[1..], &r[..400]).expect("one frame out of step");
+        assert_eq!(v.offset, 1, "{v}");
+        assert!(v.to_string().contains("1 frame later"), "{v}");
+    }
+
+    #[test]
+    fn a_smooth_motion_in_step_with_each_cameras_own_noise_gives_no_verdict() {
+        // Over a frame the smooth motion changes less than the noise the two cameras do not
+        // share: the series agree about as well one frame apart as in step, so nothing is claimed.
+        let m = motion(400);
+        for noise in [0.05f32, 0.2, 0.5] {
+            let (l, r): (Vec<f32>, Vec<f32>) = m
+                .iter()
+                .zip(jerky(400, 1).iter().zip(jerky(400, 2)))
+                .map(|(v, (a, b))| (v + noise * (a - 3.5), v + noise * (b - 3.5)))
+                .unzip();
+            assert_eq!(verdict(&l, &r), None, "noise {noise}");
+        }
     }
 
     #[test]

@@ -37,9 +37,8 @@ fn main() -> Result<()> {
         let mut start = 0;
         while start + WINDOW <= n {
             let (wl, wr) = (&l[start..start + WINDOW], &r[start..start + WINDOW]);
-            let best = (-3..=3i32)
-                .filter_map(|k| correlation(wl, wr, k).map(|c| (k, c)))
-                .max_by(|a, b| a.1.total_cmp(&b.1));
+            let best =
+                (-3..=3i32).filter_map(|k| correlation(wl, wr, k).map(|c| (k, c))).max_by(|a, b| a.1.total_cmp(&b.1));
             if let Some((k, _)) = best {
                 peaks[(k + 3) as usize] += 1;
             }

@@ -131,8 +131,13 @@ fn nothing_seen_gives_no_seed_and_immigrants_draw_a_fixed_count() {
     let rig = rig();
     let none = HueBlobs::default();
     assert_eq!(seed_pose(&rig, &[0.05, 0.075, 0.1], &none, &none, 6), None);
-    let seed =
-        Seed { centre: Vector3::new(0.0, 0.0, 0.7), rotation: Matrix3::identity(), faces: 1, free_axis: Some(2), cut: false };
+    let seed = Seed {
+        centre: Vector3::new(0.0, 0.0, 0.7),
+        rotation: Matrix3::identity(),
+        faces: 1,
+        free_axis: Some(2),
+        cut: false,
+    };
     let mut r1 = Xoshiro128PlusPlus::seed_from_u64(3);
     let mut r2 = Xoshiro128PlusPlus::seed_from_u64(3);
     let p0 = seed_immigrant(&seed, 0, &AcquireConfig::DEFAULT, &mut r1).unwrap();

@@ -2,15 +2,15 @@
 //! (`MotionMeter`), and the correlation of the two series at offsets −3..=3 frames, with the
 //! right images as recorded and moved SHIFT frames later (each left image paired with the right
 //! one SHIFT frames before it). Prints the whole series' correlations, then for each window of
-//! `out_of_step::WINDOW` frames (every 30 frames) the offset of the best correlation.
+//! `out_of_step::WINDOW` frames (every `out_of_step::EVERY` frames) the offset of the best correlation.
 //!
 //! `cargo run --release -p evorec-sim --example pairing -- SEQ_DIR [SHIFT ...]`
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, ensure};
 use evorec_sim::recording::sequence::Sequence;
-use evorec_sim::rig::track::out_of_step::{MotionMeter, WINDOW, correlation};
+use evorec_sim::rig::track::out_of_step::{EVERY, MotionMeter, WINDOW, correlation};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -26,13 +26,13 @@ fn main() -> Result<()> {
         right.push(mr.measure(&r));
     }
     for shift in std::iter::once(0).chain(shifts) {
-        let n = left.len().saturating_sub(shift);
+        ensure!(shift < left.len(), "SHIFT {shift}: the sequence has {} frames", left.len());
+        let n = left.len() - shift;
         // Right late by `shift`: the pair i holds left i + shift and right i.
         let (l, r) = (&left[shift..shift + n], &right[..n]);
-        let row = |l: &[f32], r: &[f32]| -> Vec<String> {
-            (-3..=3).map(|k| correlation(l, r, k).map_or("-".into(), |c| format!("{c:.4}"))).collect()
-        };
-        println!("shift {shift}: r(-3..=3) = {}", row(l, r).join(" "));
+        let row: Vec<String> =
+            (-3..=3).map(|k| correlation(l, r, k).map_or("-".into(), |c| format!("{c:.4}"))).collect();
+        println!("shift {shift}: r(-3..=3) = {}", row.join(" "));
         let mut peaks = [0usize; 7];
         let mut start = 0;
         while start + WINDOW <= n {
@@ -42,7 +42,7 @@ fn main() -> Result<()> {
             if let Some((k, _)) = best {
                 peaks[(k + 3) as usize] += 1;
             }
-            start += 30;
+            start += EVERY;
         }
         println!("  windows peaking at offset -3..=3: {peaks:?}");
     }

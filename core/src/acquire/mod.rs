@@ -162,10 +162,16 @@ impl HueBlobs {
         self.edge > 0
     }
 
+    /// The block axes (bit `a`) whose faces a hue-table `mask` matches (faces `a` and `a + 3`).
+    #[inline(always)]
+    fn axes(mask: u8) -> u8 {
+        (mask | (mask >> 3)) & 0b111
+    }
+
     /// Counts a grid pixel at `(u, v)` whose hue-table mask is `mask`.
     #[inline(always)]
     fn add(&mut self, mask: u8, u: usize, v: usize) {
-        let axes = (mask | (mask >> 3)) & 0b111;
+        let axes = Self::axes(mask);
         if axes == 0 {
             return;
         }
@@ -229,7 +235,7 @@ pub fn scan_part<B: AsRef<[u8]>, F: PixelFormat>(
         if gy == 0 || gy + 1 == gh {
             blobs.edge += blobs.total() - before;
         } else {
-            let hit = |gx: usize| row.get(o + gx * s).is_some_and(|px| lut.mask(F::hue(*px)) & 0b11_1111 != 0);
+            let hit = |gx: usize| row.get(o + gx * s).is_some_and(|px| HueBlobs::axes(lut.mask(F::hue(*px))) != 0);
             let last = (gw as usize).saturating_sub(1);
             blobs.edge += u32::from(first == 0 && hit(0)) + u32::from(first + n > last && hit(last));
         }

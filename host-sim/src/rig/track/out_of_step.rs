@@ -20,7 +20,7 @@ const STRIDE: u32 = 4;
 /// Frames of both series the check correlates (4 s at 30 frames/s).
 pub const WINDOW: usize = 120;
 /// Frames between two checks once the first window is full.
-const EVERY: usize = 30;
+pub const EVERY: usize = 30;
 /// The largest offset looked for, in frames (either way).
 pub const MAX_OFFSET: usize = 30;
 /// The least offset reported. An offset of one frame is found only where the motion changes

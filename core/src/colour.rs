@@ -10,10 +10,13 @@
 //! **Two hue tables.** While the tracker is not tracking (searching, lost), every face matches
 //! its configured hue within `tolerance + MAX_HUE_SHIFT` (the *search band*, ±36° with the
 //! defaults), so that a block whose colours are off by up to ±25° is still found. While
-//! tracking, every face matches its learnt band: a centre within `MAX_HUE_SHIFT` of the
-//! configured hue and a half-width from the face's measured spread, never narrower than
-//! `tolerance` and never wider than the search band. On a flat image whose faces have their
-//! configured hues the learnt band is the configured one, so the fitness is the paper's.
+//! tracking, every face it has learnt matches its learnt band: a centre within `MAX_HUE_SHIFT`
+//! of the configured hue and a half-width from the face's measured spread, never narrower than
+//! `tolerance` and never wider than the search band. A face not learnt yet keeps the search
+//! band: its colour is known only as well as the prior says, and a narrower band would make a
+//! pose that shows that face score below one that hides it (a lock that turns the unlearnt face
+//! out of view). On a flat image whose faces have their configured hues the learnt band is the
+//! configured one, so once every face in view has been learnt the fitness is the paper's.
 //!
 //! **Learning** ([`ColourModel::learn`]). After a frame's generations, while the best pose is
 //! tracked (a pose not yet confirmed teaches the model nothing), the colour census of that pose
@@ -181,7 +184,7 @@ impl ColourModel {
         self.prior.map(|centre| Band { centre: centre % HUE_UNITS, half })
     }
 
-    /// The learnt band of every face (the configured one for a face not seen yet).
+    /// The learnt band of every face (the search band for a face not learnt yet).
     pub fn bands(&self) -> [Band; FACES] {
         core::array::from_fn(|k| self.band(k))
     }
@@ -190,6 +193,10 @@ impl ColourModel {
         let (Some(&prior), Some(face)) = (self.prior.get(k), self.faces.get(k)) else {
             return Band { centre: 0, half: self.tolerance };
         };
+        // A face not seen yet is known only to within the prior's uncertainty: its search band.
+        if face.frames == 0 {
+            return Band { centre: prior % HUE_UNITS, half: self.search_half_width() };
+        }
         let units = i32::from(HUE_UNITS);
         let centre = (i32::from(prior) + round_q(face.offset)).rem_euclid(units);
         // 1.65 standard deviations each side hold about nine in ten of a face's hues.

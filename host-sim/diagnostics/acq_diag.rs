@@ -1,4 +1,8 @@
 //! Diagnostics of one acquisition trial: per frame, the seed's and the estimate's errors.
+//! `cargo run --release -p evorec-sim --example acq_diag -- SEED [a] [FRAMES] [timing|-] [LIGHT.toml]`:
+//! SEED the trial, `a` for the motion-A case, LIGHT a `[render]` file as `evorec acquire --light` takes.
+//! With `BANDS=1` in the environment, every frame also prints the learnt hue bands, the expected
+//! fitness, and the true pose's and the estimate's fitness counts through the table after the step.
 use evorec_core::acquire;
 use evorec_sim::experiments::acquire::{Case, pose_error, scenario};
 use evorec_sim::experiments::experiment::{SimTracker, tracker_config};
@@ -10,7 +14,11 @@ fn main() -> anyhow::Result<()> {
     let case = if args.get(2).map(String::as_str) == Some("a") { Case::MotionA } else { Case::Static };
     let frames: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(60);
     let timing = args.get(4).map(String::as_str) == Some("timing");
-    let s = scenario(seed, case, false);
+    let mut s = scenario(seed, case, false);
+    // An optional fifth argument: a light file, as `evorec acquire --light` takes.
+    if let Some(path) = args.get(5) {
+        s.render = evorec_sim::sim::scenario::load_light(std::path::Path::new(path), s.frame_period_s)?;
+    }
     let mut world = World::new(&s)?;
     let mut tracker = SimTracker::new(tracker_config(&s)?).map_err(|e| anyhow::anyhow!("{e}"))?;
     let cfg = *tracker.config();
@@ -58,6 +66,24 @@ fn main() -> anyhow::Result<()> {
         let dt = if k == 0 { 0.0 } else { s.frame_period_s as f32 };
         let est = tracker.step(&frame, &joints, dt).map_err(|e| anyhow::anyhow!("{e}"))?;
         let (mm, deg) = pose_error(&est.psi, &truth);
+        if std::env::var_os("BANDS").is_some() {
+            let m = tracker.colours();
+            let ft = tracker.fitness_of(&truth, &frame).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let fe = tracker.fitness_of(&est.psi, &frame).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let bands: Vec<String> =
+                m.bands().iter().map(|b| format!("{}±{}", 2 * u16::from(b.centre), 2 * u16::from(b.half))).collect();
+            println!(
+                "    expected {:.3} bands {} | truth now {:.3} ({:?} {:?}) est now {:.3} ({:?} {:?})",
+                m.expected_fitness(),
+                bands.join(" "),
+                ft.total,
+                ft.left,
+                ft.right,
+                fe.total,
+                fe.left,
+                fe.right
+            );
+        }
         println!(
             "{k:3} F {:.3} (truth {:.3}) {:9} err {:6.1} mm {:6.1} deg | raw {:?} seed faces {:?} err {:?} | hits L {:?} R {:?}",
             est.fitness,

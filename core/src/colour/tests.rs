@@ -13,13 +13,18 @@ fn tally_of(_model: &ColourModel, k: usize, hues: &[u8], n: usize) -> Tally {
 }
 
 #[test]
-fn nothing_learnt_is_the_configured_band() {
-    let model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
-    for (k, band) in model.bands().iter().enumerate() {
-        assert_eq!(*band, Band { centre: PRIOR[k], half: DEFAULT_HUE_TOLERANCE });
-    }
+fn a_face_not_learnt_yet_keeps_its_search_band() {
+    let mut model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
     let wide = DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT;
+    assert_eq!(model.bands(), model.search_bands());
     assert!(model.search_bands().iter().all(|b| b.half == wide));
+    // Red seen at its configured hue: its band narrows to the tolerance, the others stay wide.
+    model.learn(&tally_of(&model, 0, &[0], 20));
+    for (k, band) in model.bands().iter().enumerate() {
+        let half = if k == 0 { DEFAULT_HUE_TOLERANCE } else { wide };
+        assert_eq!(*band, Band { centre: PRIOR[k], half }, "face {k}");
+    }
+    let model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
     assert_eq!(model.expected_fitness(), 1.0);
     assert_eq!(model.hue_deg(2), 240.0);
 }
@@ -100,16 +105,19 @@ fn the_table_follows_the_status_and_the_model() {
     let search = HueLut::new(&PRIOR, DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT);
     assert_eq!((*colours.lut(), colours.is_tracking()), (search, false));
     colours.select(true);
-    assert_eq!(*colours.lut(), HueLut::new(&PRIOR, DEFAULT_HUE_TOLERANCE));
+    assert_eq!(*colours.lut(), search, "nothing learnt yet: every face has its search band");
     let tally = tally_of(colours.model(), 2, &[112], 20);
     colours.learn(&tally);
-    assert_eq!(colours.lut().mask(112 - DEFAULT_HUE_TOLERANCE), 1 << 2);
+    // The learnt face at its own band; the opposite face (same prior) keeps its search band.
+    assert_eq!(colours.lut().mask(112 - DEFAULT_HUE_TOLERANCE), 1 << 2 | 1 << 5);
     assert_eq!(colours.lut().mask(112 + DEFAULT_HUE_TOLERANCE + 1) & 1 << 2, 0);
+    assert_ne!(colours.lut().mask(120 + DEFAULT_HUE_TOLERANCE + 1) & 1 << 5, 0, "the opposite face is not learnt");
     colours.select(false);
     assert_eq!(*colours.lut(), search, "the search table ignores what was learnt");
     // Learning while searching changes the model, not the table.
     colours.learn(&tally_of(colours.model(), 1, &[50], 20));
     assert_eq!(*colours.lut(), search);
     colours.select(true);
-    assert_eq!(colours.lut().mask(50), 1 << 1);
+    assert_eq!(colours.lut().mask(50), 1 << 1 | 1 << 4);
+    assert_eq!(colours.lut().mask(50 + DEFAULT_HUE_TOLERANCE + 1), 1 << 4, "learnt green is narrow, face 4 is not");
 }

@@ -180,8 +180,12 @@ impl ColourModel {
 
     /// The search bands: every face's configured hue ± [`ColourModel::search_half_width`].
     pub fn search_bands(&self) -> [Band; FACES] {
-        let half = self.search_half_width();
-        self.prior.map(|centre| Band { centre: centre % HUE_UNITS, half })
+        self.prior.map(|prior| self.search_band(prior))
+    }
+
+    /// The search band around the configured hue `prior` (hue units).
+    fn search_band(&self, prior: u8) -> Band {
+        Band { centre: prior % HUE_UNITS, half: self.search_half_width() }
     }
 
     /// The learnt band of every face (the search band for a face not learnt yet).
@@ -193,9 +197,9 @@ impl ColourModel {
         let (Some(&prior), Some(face)) = (self.prior.get(k), self.faces.get(k)) else {
             return Band { centre: 0, half: self.tolerance };
         };
-        // A face not seen yet is known only to within the prior's uncertainty: its search band.
+        // A face not learnt yet is known only to within the prior's uncertainty: its search band.
         if face.frames == 0 {
-            return Band { centre: prior % HUE_UNITS, half: self.search_half_width() };
+            return self.search_band(prior);
         }
         let units = i32::from(HUE_UNITS);
         let centre = (i32::from(prior) + round_q(face.offset)).rem_euclid(units);

@@ -207,6 +207,9 @@ mod tests {
             rms_e1: 0.001_187_65,
             rms_e2: 0.003_2,
             rms_e3: 0.000_012_3,
+            mean_x_mm: 0.0,
+            mean_y_mm: 0.0,
+            mean_z_mm: 0.0,
             rotation: None,
             frames: 2182,
         };

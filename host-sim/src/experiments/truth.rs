@@ -150,6 +150,14 @@ pub struct Rms {
     pub rms_e2: f64,
     /// RMS ε₃ error.
     pub rms_e3: f64,
+    /// Mean x error, estimate − truth (mm): the bias of the position, which the RMS holds
+    /// together with the spread (`RMS² = mean² + variance`).
+    pub mean_x_mm: f64,
+    /// Mean y error, estimate − truth (mm).
+    pub mean_y_mm: f64,
+    /// Mean z error, estimate − truth (mm): positive when the estimate is farther along the
+    /// camera's axis than the block.
+    pub mean_z_mm: f64,
     /// The rotation error, where the frames' rotation angles were taken ([`Rms::of`]).
     #[serde(flatten)]
     pub rotation: Option<RotationError>,
@@ -162,7 +170,15 @@ impl Rms {
     /// rotation error (`None` when empty).
     pub fn of_differences(diffs: impl IntoIterator<Item = [f64; 6]>) -> Option<Self> {
         let mut frames = 0usize;
-        let [x, y, z, e1, e2, e3] = rms_columns::<6>(diffs.into_iter().inspect(|_| frames += 1))?;
+        let mut sum = [0.0f64; 3];
+        let counted = diffs.into_iter().inspect(|d| {
+            frames += 1;
+            for (acc, v) in sum.iter_mut().zip(d) {
+                *acc += v;
+            }
+        });
+        let [x, y, z, e1, e2, e3] = rms_columns::<6>(counted)?;
+        let [mx, my, mz] = sum.map(|s| s / frames as f64 * 1e3);
         Some(Self {
             rms_x_mm: x * 1e3,
             rms_y_mm: y * 1e3,
@@ -170,6 +186,9 @@ impl Rms {
             rms_e1: e1,
             rms_e2: e2,
             rms_e3: e3,
+            mean_x_mm: mx,
+            mean_y_mm: my,
+            mean_z_mm: mz,
             rotation: None,
             frames,
         })
@@ -189,6 +208,9 @@ impl Rms {
         rms_e1: 0.0,
         rms_e2: 0.0,
         rms_e3: 0.0,
+        mean_x_mm: 0.0,
+        mean_y_mm: 0.0,
+        mean_z_mm: 0.0,
         rotation: None,
         frames: 0,
     };
@@ -261,12 +283,15 @@ mod tests {
         let e = |x: f64, rot: f64| FrameError { d: [x, 0.0, 0.0, 0.0, 0.0, 0.0], rot_deg: rot };
         let r = Rms::of(&[e(0.003, 1.0), e(-0.004, 7.0)]).unwrap();
         assert!((r.rms_x_mm - 12.5f64.sqrt()).abs() < 1e-12);
+        // The bias beside the RMS: (3 − 4) / 2 mm, and none on the other axes.
+        assert!((r.mean_x_mm + 0.5).abs() < 1e-12 && r.mean_y_mm == 0.0 && r.mean_z_mm == 0.0);
         let rot = r.rotation.unwrap();
         assert!((rot.rms_rot_deg - 25.0f64.sqrt()).abs() < 1e-12);
         assert_eq!((rot.max_rot_deg, r.frames), (7.0, 2));
         let d = Rms::of_differences([[0.003, 0.004, 0.0, 0.0, 0.006, 0.008]]).unwrap();
         assert!((d.position_mm() - 5.0).abs() < 1e-12 && (d.eps_norm() - 0.01).abs() < 1e-15);
         assert_eq!((d.rotation, d.frames), (None, 1));
+        assert!((d.mean_x_mm - 3.0).abs() < 1e-12 && (d.mean_y_mm - 4.0).abs() < 1e-12);
         assert_eq!(Rms::of_differences([]), None);
         assert_eq!(Rms::of(&[]), None);
         assert_eq!(rms_columns([[3.0, -4.0], [-3.0, 4.0]]), Some([3.0, 4.0]));

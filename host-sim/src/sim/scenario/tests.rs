@@ -526,3 +526,33 @@ fn the_status_counts_old_names_are_read_in_a_scenario() {
          one of them"
     );
 }
+
+#[test]
+fn the_light_parts_make_up_shading_wb() {
+    // The four parts of `light/shading_wb.toml` (docs/method.md measures each alone): every part
+    // a light of its own, no key in two parts, and together the whole light.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/light");
+    let table = |name: &str| -> toml::Table {
+        let text = std::fs::read_to_string(dir.join(name)).unwrap_or_else(|e| unreachable!("{name}: {e}"));
+        let mut t: toml::Table = text.parse().unwrap_or_else(|e| unreachable!("{name}: {e}"));
+        match t.remove("render") {
+            Some(toml::Value::Table(render)) if t.is_empty() => render,
+            other => unreachable!("{name}: a [render] table only, got {other:?}"),
+        }
+    };
+    let mut union = toml::Table::new();
+    for part in ["shading.toml", "paint.toml", "tone_curve.toml", "white_balance.toml"] {
+        let light = load_light(dir.join(part), 0.033).unwrap_or_else(|e| unreachable!("{part}: {e}"));
+        assert!(!light.is_default(), "{part}");
+        for (key, value) in table(part) {
+            assert!(union.insert(key.clone(), value).is_none(), "{part}: {key} is in another part too");
+        }
+    }
+    assert_eq!(union, table("shading_wb.toml"));
+    let whole = light_from_toml_str(
+        &toml::to_string(&toml::Table::from_iter([("render".to_owned(), union.into())]))
+            .unwrap_or_else(|e| unreachable!("{e}")),
+        0.033,
+    );
+    assert_eq!(whole.ok(), load_light(dir.join("shading_wb.toml"), 0.033).ok());
+}

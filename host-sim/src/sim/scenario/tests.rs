@@ -553,6 +553,8 @@ fn the_light_parts_make_up_shading_wb() {
         &toml::to_string(&toml::Table::from_iter([("render".to_owned(), union.into())]))
             .unwrap_or_else(|e| unreachable!("{e}")),
         0.033,
-    );
-    assert_eq!(whole.ok(), load_light(dir.join("shading_wb.toml"), 0.033).ok());
+    )
+    .unwrap_or_else(|e| unreachable!("the parts together: {e}"));
+    let shading_wb = load_light(dir.join("shading_wb.toml"), 0.033).unwrap_or_else(|e| unreachable!("{e}"));
+    assert_eq!(whole, shading_wb);
 }

@@ -110,21 +110,23 @@ fn run_on(truth: fn(u64) -> Psi, mode: Feedforward, seed: u64) -> ((f32, Tracker
 #[test]
 fn target_feedforward_follows_a_sliding_block() {
     // One GA seed's RMS error is a draw (over seeds 1–12 the default's ranged from 1.8 to
-    // 19 mm), so the errors are compared as medians over eight seeds.
-    let seeds = 1..=8;
+    // 19 mm), so the errors are compared as medians over 24 seeds.
+    let seeds = 1..=24;
     let rms_ff = median(seeds.clone().map(|s| run(Feedforward::On, s).0).collect());
     let runs: Vec<_> = seeds.map(|s| run(Feedforward::OnWithTarget, s)).collect();
     let rms_target = median(runs.iter().map(|r| r.0).collect());
     eprintln!("medians: FF {rms_ff} m, FF + target {rms_target} m");
     assert!(rms_target < 0.5 * rms_ff, "FF + target {rms_target} m vs FF {rms_ff} m (medians)");
-    // Medians over seeds 1–8, measured: FF alone 28.9 mm, FF + target 2.2 mm (the ramp from
+    // Medians over the seeds, measured: FF alone 30.3 mm, FF + target 1.7 mm (the ramp from
     // rest is where it lags).
     assert!(rms_target < 0.008, "FF + target {rms_target} m (median)");
     // The block slides without turning. The GA trades a small turn for a small shift across
     // the view, and a filter that reads it as a turn feeds it to the children; the two copies
     // of the elite moved with and without the turn let the fitness refuse it. Measured, median
-    // of the mean angular speed over the last frames: 0.042 rad/s (0.13 without the copies,
-    // measured when the model was fed the best individual's orientation).
+    // of the mean angular speed over the last frames: 0.046 rad/s (0.13 without the copies,
+    // measured when the model was fed the best individual's orientation). One seed's mean
+    // ranges from 0.02 to 0.21 rad/s: a median over eight seeds is too rough a draw for the
+    // bound (seeds 1–8 give 0.042 where seeds 1–40 give 0.053), hence 24 seeds.
     let spin = median(runs.iter().map(|r| r.3).collect());
     assert!(spin < 0.06, "the filter reads a turn of {spin} rad/s into a sliding block (median)");
 

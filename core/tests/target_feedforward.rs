@@ -136,8 +136,8 @@ fn target_feedforward_follows_a_sliding_block() {
     let expected = cam.rotation * Vector3::new(SPEED, 0.0, 0.0);
     // One frame's velocity is noisy: the mean over the last frames is tested, per seed, and
     // the median over the seeds across the line of sight (the camera's x and y) and along it,
-    // where stereo depth is seven times noisier (measured: x 0.0052, y 0.0009, z 0.0005 m/s
-    // below the truth; the seeds range from 0.066 to 0.104 m/s in x).
+    // where stereo depth is seven times noisier (measured: x 0.0013 and y 0.0001 m/s below the
+    // truth, z 0.0007 above; the seeds range from 0.080 to 0.104 m/s in x).
     let errs: Vec<Vector3<f32>> = runs.iter().map(|r| cam.rotation.inverse() * (r.2 - expected)).collect();
     let err = Vector3::from_fn(|i, _| median(errs.iter().map(|e| e[i]).collect()));
     assert!(err.x.abs() < 0.015 && err.y.abs() < 0.01 && err.z.abs() < 0.03, "median velocity error {err}");
@@ -149,8 +149,8 @@ fn target_feedforward_follows_a_sliding_block() {
     }
 
     // Hand-over: the pose 50 ms after the last capture, 5 mm ahead of the last capture's. The
-    // last frame's estimate is one draw (measured, seeds 1–8: −33 to +4.7 mm off in x, median
-    // of the magnitudes 5.0 mm), so the median is tested.
+    // last frame's estimate is one draw (measured: −14.5 to +2.2 mm off in x, median of the
+    // magnitudes 1.2 mm), so the median is tested.
     let last = (FRAMES - 1) * DT_US;
     let joints = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: last };
     let t_out = (last + 50_000) as f32 * 1e-6;

@@ -365,12 +365,13 @@ pub fn camera_counts<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
     r: &Matrix3<f32>,
     t: &Vector3<f32>,
 ) -> Counts {
-    counts_walking::<G, B, F, CONSTANT_WORK>(model, lut, cam, image, r, t)
+    counts_walking::<G, B, F, CONSTANT_WORK>(model, lut, cam, image, r, t, 0.0)
 }
 
-/// [`camera_counts`], walking every row (`WALK_ALL`, the board's constant work) or only the
-/// rows that count: the same counts either way. Out of line (the wrapper inlines, this does
-/// not, so the board's code stays in one place per instance).
+/// [`camera_counts`] with the nearest silhouette rows moved outwards by `edge_shift_px` pixel
+/// widths ([`crate::edge`]), walking every row (`WALK_ALL`, the board's constant work) or only
+/// the rows that count: the same counts either way. Out of line (the wrapper inlines, this
+/// does not, so the board's code stays in one place per instance).
 #[inline(never)]
 fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat, const WALK_ALL: bool>(
     model: &SurfaceStrips<G>,
@@ -379,6 +380,7 @@ fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat, const WALK_ALL
     image: &Image<B, F>,
     r: &Matrix3<f32>,
     t: &Vector3<f32>,
+    edge_shift_px: f32,
 ) -> Counts {
     let view = View::of(image);
     let faces = face_plan(model, cam, r, t);
@@ -386,12 +388,12 @@ fn counts_walking<const G: usize, B: AsRef<[u8]>, F: PixelFormat, const WALK_ALL
     if cam.distortion().is_none() {
         // K with the pixel coordinates in 16.16 fixed point (scaled by 2¹⁶, exactly).
         let proj = Projector::new([fx * FIX_ONE, fy * FIX_ONE, cam.cx() * FIX_ONE, cam.cy() * FIX_ONE], r, t);
-        count_faces::<G, WALK_ALL>(model, lut, &Affine { view: &view }, &proj, &faces, FIX_ONE)
+        count_faces::<G, WALK_ALL>(model, lut, &Affine { view: &view }, &proj, &faces, FIX_ONE, edge_shift_px)
     } else {
         // Normalised coordinates, then the lens, then K'. Beyond `r2_max` the plumb_bob
         // polynomial is outside the calibrated field (and may fold back into the image):
         // such points read as outside.
-        distorted_counts::<G, F, WALK_ALL>(model, lut, &view, cam, r, t, &faces)
+        distorted_counts::<G, F, WALK_ALL>(model, lut, &view, cam, (r, t), &faces, edge_shift_px)
     }
 }
 
@@ -455,9 +457,9 @@ fn distorted_counts<const G: usize, F: PixelFormat, const WALK_ALL: bool>(
     lut: &HueLut,
     view: &View<'_, F>,
     cam: &Pinhole,
-    r: &Matrix3<f32>,
-    t: &Vector3<f32>,
+    (r, t): (&Matrix3<f32>, &Vector3<f32>),
     faces: &FacePlan,
+    edge_shift_px: f32,
 ) -> Counts {
     let (fx, fy, cx1, cy1) = (cam.fx(), cam.fy(), cam.cx() + 1.0, cam.cy() + 1.0);
     let (d, r2_max) = (*cam.distortion(), distortion_field_r2(cam));
@@ -470,7 +472,7 @@ fn distorted_counts<const G: usize, F: PixelFormat, const WALK_ALL: bool>(
     };
     // One pixel is `1 / f` in normalised coordinates (the lens itself aside).
     let px_unit = 1.0 / min_finite(fx, fy);
-    count_faces::<G, WALK_ALL>(model, lut, &Lens { view, to_pixel }, &proj, faces, px_unit)
+    count_faces::<G, WALK_ALL>(model, lut, &Lens { view, to_pixel }, &proj, faces, px_unit, edge_shift_px)
 }
 
 /// The squared normalised radius within which a distorted camera's model is used: twice the
@@ -500,7 +502,8 @@ struct FacePlan {
 const CONSTANT_WORK: bool = cfg!(target_arch = "arm");
 
 /// The counts of the planned faces, with `walk` counting the rows (every row with
-/// `WALK_ALL`, see [`CONSTANT_WORK`]).
+/// `WALK_ALL`, see [`CONSTANT_WORK`]) and the nearest silhouette rows moved outwards by
+/// `edge_shift_px`.
 #[inline(always)]
 fn count_faces<const G: usize, const WALK_ALL: bool>(
     model: &SurfaceStrips<G>,
@@ -509,12 +512,14 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
     proj: &Projector,
     faces: &FacePlan,
     px_unit: f32,
+    edge_shift_px: f32,
 ) -> Counts {
     // The block is axis-aligned in Σ_M, so every row vector is a multiple of one column of
     // `proj.m` (the projected axis): per axis, its half size, row start, step and row offsets.
     let (half, reach, row_step) = (model.half_size(), model.row_reach(), model.row_step());
     let axes: [AxisRows; 3] = core::array::from_fn(|x| AxisRows::new(proj, x, half[x], reach[x], row_step[x]));
     let visible_mask = faces.visible_mask;
+    let (sil_in_px, sil_out_px) = (SILHOUETTE_INNER_PX - edge_shift_px, SILHOUETTE_OUTER_PX + edge_shift_px);
 
     let mut counts = Counts { visible: visible_mask, ..Counts::default() };
     let mut outer_edges = 0usize;
@@ -541,8 +546,7 @@ fn count_faces<const G: usize, const WALK_ALL: bool>(
                 let d = min_finite(px * mpp, NEAR_ROW_CAP_M);
                 s.col.map(|v| d * v)
             };
-            let (sil_in, sil_out, fold_in) =
-                (near(SILHOUETTE_INNER_PX), near(SILHOUETTE_OUTER_PX), near(FOLD_INNER_PX));
+            let (sil_in, sil_out, fold_in) = (near(sil_in_px), near(sil_out_px), near(FOLD_INNER_PX));
             for positive in [true, false] {
                 let (base, neighbour) = if positive {
                     (add(add(centre, s.half), l.start), side)
@@ -655,7 +659,8 @@ fn metres_per_pixel(col_b: &[f32; 3], col_c: &[f32; 3], centre: [f32; 3], px_uni
     [q * width(jc), q * width(jb)]
 }
 
-/// Evaluates poses against a stereo pair: the model, its hue table and the rig, bundled.
+/// Evaluates poses against a stereo pair: the model, its hue table and the rig, bundled, with
+/// the learnt shift of the nearest silhouette rows ([`crate::edge`]; none unless set).
 #[derive(Debug, Clone, Copy)]
 pub struct Evaluator<'m, const G: usize> {
     model: &'m SurfaceStrips<G>,
@@ -663,13 +668,36 @@ pub struct Evaluator<'m, const G: usize> {
     rig: &'m StereoRig,
     left_r: Matrix3<f32>,
     left_t: Vector3<f32>,
+    edge_shift_px: f32,
 }
 
 impl<'m, const G: usize> Evaluator<'m, G> {
-    /// Bundles a model, its hue table and a rig.
+    /// Bundles a model, its hue table and a rig; the silhouette rows where
+    /// [`SILHOUETTE_INNER_PX`] and [`SILHOUETTE_OUTER_PX`] put them.
     pub fn new(model: &'m SurfaceStrips<G>, lut: &'m HueLut, rig: &'m StereoRig) -> Self {
         let lr = &rig.left_from_right;
-        Self { model, lut, rig, left_r: crate::quat::to_rotation_matrix(&lr.rotation), left_t: lr.translation.vector }
+        Self {
+            model,
+            lut,
+            rig,
+            left_r: crate::quat::to_rotation_matrix(&lr.rotation),
+            left_t: lr.translation.vector,
+            edge_shift_px: 0.0,
+        }
+    }
+
+    /// Builder: the nearest silhouette rows moved outwards by `px` pixel widths (inwards for
+    /// `px < 0`), clamped to [`EDGE_SHIFT_RANGE_PX`](crate::limits::EDGE_SHIFT_RANGE_PX) so that
+    /// they stay on their sides of the edge (NaN: no shift).
+    #[must_use]
+    pub fn with_edge_shift(mut self, px: f32) -> Self {
+        self.edge_shift_px = crate::edge::clamp_shift(px);
+        self
+    }
+
+    /// The rig the poses are evaluated against.
+    pub fn rig(&self) -> &StereoRig {
+        self.rig
     }
 
     /// `F(ψ)` (eq. 35) for a pose given as rotation `r` and translation `t` in `Σ_CR`.
@@ -680,9 +708,32 @@ impl<'m, const G: usize> Evaluator<'m, G> {
         left: &Image<B, F>,
         right: &Image<B, F>,
     ) -> Fitness {
-        let right_counts = camera_counts(self.model, self.lut, &self.rig.right, right, r, t);
-        let (r_left, t_left) = (self.left_r * r, self.left_r * t + self.left_t);
-        let left_counts = camera_counts(self.model, self.lut, &self.rig.left, left, &r_left, &t_left);
+        self.evaluate_apart(r, [t, t], left, right)
+    }
+
+    /// `F(ψ)` with each camera seeing the block at its own translation, `t_right` in the right
+    /// camera and `t_left` in the left one (both in `Σ_CR`, same rotation `r`): a block whose
+    /// disparity differs from its pose's (the disparity test of [`crate::edge`]).
+    pub fn evaluate_apart<B: AsRef<[u8]>, F: PixelFormat>(
+        &self,
+        r: &Matrix3<f32>,
+        [t_right, t_left]: [&Vector3<f32>; 2],
+        left: &Image<B, F>,
+        right: &Image<B, F>,
+    ) -> Fitness {
+        let shift = self.edge_shift_px;
+        let right_counts =
+            counts_walking::<G, B, F, CONSTANT_WORK>(self.model, self.lut, &self.rig.right, right, r, t_right, shift);
+        let (r_left, t_left) = (self.left_r * r, self.left_r * t_left + self.left_t);
+        let left_counts = counts_walking::<G, B, F, CONSTANT_WORK>(
+            self.model,
+            self.lut,
+            &self.rig.left,
+            left,
+            &r_left,
+            &t_left,
+            shift,
+        );
         Fitness { total: 0.5 * (left_counts.score() + right_counts.score()), left: left_counts, right: right_counts }
     }
 

@@ -17,7 +17,8 @@
 //! - [`camera`]: pinhole cameras and the stereo rig (eq. 26–31).
 //! - [`image`]: validated image views in the sensor's pixel format (hue bytes or raw RGB565,
 //!   converted to hue only where the sample points hit); [`hue`]: RGB→hue, the hue match table.
-//! - [`model`]: the surface-strips block model; [`fitness`]: eq. 34–35.
+//! - [`model`]: the surface-strips block model; [`fitness`]: eq. 34–35; [`edge`]: where a
+//!   camera's partly covered pixels put a silhouette, learnt from the disparity.
 //! - [`ga`]: the 1-step GA; [`kinematics`]: serial chains (from DH or URDF), the PA-10, Jacobians;
 //!   [`feedforward`]: eq. 15–25; [`target_motion`]: the target's own motion (eq. 23's
 //!   `J_n` term) and the hand-over of a pose to a later time; [`servo`]: a position-based
@@ -93,6 +94,8 @@ pub mod board;
 pub mod camera;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod colour;
+#[cfg_attr(not(test), deny(clippy::indexing_slicing))]
+pub mod edge;
 #[cfg_attr(not(test), deny(clippy::indexing_slicing))]
 pub mod feedforward;
 pub mod fitness;

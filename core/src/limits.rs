@@ -141,3 +141,38 @@ pub const DEFAULT_SCAN_STRIDE: u16 = 8;
 /// Default number of individuals replaced by poses seeded from the colour blobs
 /// ([`crate::acquire`]) in each generation while the tracker is not tracking.
 pub const DEFAULT_SEED_IMMIGRANTS: usize = 8;
+
+/// Bounds of the learnt shift of the nearest silhouette rows ([`crate::edge`]), in pixel widths
+/// outwards: from `−¾` (the inner row 1¼ px inside the edge, the outer ¼ px outside) to `+¼`
+/// (¼ px inside, 1¼ px outside). Both rows stay on their sides of the edge (checked at compile
+/// time below), a camera reads a pixel as the face once the face covers some share `a*` of it,
+/// and the rows centred on the true edge for `a* = ¼` (the fixed rows) move by `¼ − a*`.
+pub const EDGE_SHIFT_RANGE_PX: [f32; 2] = [-0.75, 0.25];
+
+/// How far one disparity test moves the learnt shift ([`crate::edge`]), in pixel widths: half a
+/// pixel in 50 tests, which at one test every [`EDGE_PROBE_EVERY`] tracked frames is 200 frames,
+/// about 7 s at 30 frames per second. Small, because every test steps one way or the other and
+/// the shift wanders about its balance by a few steps.
+pub const EDGE_SHIFT_STEP_PX: f32 = 0.0025 * EDGE_PROBE_EVERY as f32;
+
+/// The disparity test runs on one tracked frame in this many ([`crate::edge`]).
+pub const EDGE_PROBE_EVERY: u8 = 4;
+
+/// The change of disparity (pixels) between the two poses the disparity test compares: the
+/// cameras' views of the best pose moved this much apart and this much together, half in each
+/// camera.
+pub const EDGE_PROBE_DISPARITY_PX: f32 = 0.5;
+
+/// Individuals the last generation of a frame that runs the disparity test leaves unevaluated
+/// (the last ones: the immigrants' slots first), to pay for the test's four single-camera
+/// evaluations (two individuals' worth) with a margin, so that the generation's work stays
+/// within the tracked generations' constant ([`TRACKING_IDLE`]).
+pub const EDGE_PROBE_IDLE: usize = 3;
+
+/// Individuals the last generation of every other tracked frame leaves unevaluated (the last
+/// one, the immigrant's slot): the margin of the board's budget while tracking.
+pub const TRACKING_IDLE: usize = 1;
+
+const _: () = assert!(EDGE_SHIFT_RANGE_PX[0] > -SILHOUETTE_OUTER_PX && EDGE_SHIFT_RANGE_PX[1] < SILHOUETTE_INNER_PX);
+const _: () = assert!(EDGE_SHIFT_RANGE_PX[0] < 0.0 && EDGE_SHIFT_RANGE_PX[1] > 0.0 && EDGE_SHIFT_STEP_PX > 0.0);
+const _: () = assert!(EDGE_PROBE_EVERY > 0 && EDGE_PROBE_IDLE >= TRACKING_IDLE);

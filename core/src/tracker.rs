@@ -12,13 +12,14 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 use crate::acquire::{self, Acquisition, HueBlobs};
 use crate::camera::{Pinhole, StereoRig};
 use crate::colour::{ColourModel, Colours, LEARN_CAMERA_RATIO, Tally};
+use crate::edge::{self, EdgeShift};
 use crate::feedforward;
 use crate::fitness::{Evaluator, Fitness};
 use crate::ga::{Best, Ga, GaParams, SearchSpace};
 use crate::image::{Hue, Image, PixelFormat};
 pub use crate::kinematics::JointSample;
 use crate::kinematics::{Chain, PA10};
-use crate::limits::{DEFAULT_GRID, MIN_DEPTH_M, PA10_DOF, POPULATION_CAPACITY};
+use crate::limits::{DEFAULT_GRID, EDGE_PROBE_IDLE, MIN_DEPTH_M, PA10_DOF, POPULATION_CAPACITY, TRACKING_IDLE};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
 use crate::status::{Status, StatusMonitor};
@@ -265,6 +266,7 @@ pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = POPULATION_CAPA
     monitor: StatusMonitor,
     acquisition: Acquisition,
     target: TargetFilter,
+    edge: EdgeShift,
 }
 
 impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
@@ -288,6 +290,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             monitor: StatusMonitor::new(Status::Searching),
             acquisition: Acquisition::new(),
             target: TargetFilter::tuned(config.tuning.target, Optics::of(&config.rig, &config.block)),
+            edge: EdgeShift::NONE,
         })
     }
 
@@ -317,6 +320,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         t.monitor = StatusMonitor::new(Status::Searching);
         t.acquisition.reset();
         t.target = TargetFilter::tuned(t.config.tuning.target, Optics::of(&t.config.rig, &t.config.block));
+        t.edge = EdgeShift::NONE;
         // Checked by `check_config` (2 ≤ population ≤ P), so this cannot fail.
         t.ga.set_population(&t.config.tuning.ga).map_err(|_| POPULATION_ERROR)?;
         t.ga.reset_uniform(&t.config.search, &mut t.rng);
@@ -338,6 +342,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             monitor: StatusMonitor::new(Status::Searching),
             acquisition: Acquisition::new(),
             target: TargetFilter::with_defaults(),
+            edge: EdgeShift::NONE,
         })
     }
 
@@ -384,6 +389,16 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// (`evorec timing`); the tracker decides its status itself otherwise.
     pub fn set_status(&mut self, status: Status) {
         self.monitor = StatusMonitor::new(status);
+    }
+
+    /// The learnt shift of the nearest silhouette rows, pixel widths outwards ([`crate::edge`]).
+    pub fn edge_shift_px(&self) -> f32 {
+        self.edge.px()
+    }
+
+    /// The evaluator of the current hue table and silhouette shift.
+    fn evaluator(&self) -> Evaluator<'_, G> {
+        Evaluator::new(&self.model, self.colours.lut(), &self.config.rig).with_edge_shift(self.edge.px())
     }
 
     /// The filter of the target's own motion, updated with every estimate.
@@ -456,8 +471,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     pub fn fitness_of<F: PixelFormat>(&self, psi: &Psi, frame: &StereoFrame<'_, F>) -> Result<Fitness, StepError> {
         self.check_frame(frame)?;
         psi.validate().map_err(StepError::Pose)?;
-        let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
-        Ok(eval.evaluate_psi(psi, &frame.left, &frame.right))
+        Ok(self.evaluator().evaluate_psi(psi, &frame.left, &frame.right))
     }
 
     fn check_frame<F: PixelFormat>(&self, frame: &StereoFrame<'_, F>) -> Result<(), StepError> {
@@ -520,6 +534,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // hue table: the learnt one while tracking, the search one otherwise.
         let acquiring = self.monitor.status() != Status::Tracking;
         self.colours.select(!acquiring);
+        // A tracked frame in every few tests where the silhouettes are (`crate::edge`).
+        let edge_test = !acquiring && self.edge.is_due();
         probe.mark(Phase::Feedforward);
         match feedforward {
             Feedforward::Off => {}
@@ -539,10 +555,10 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
 
         for _ in 1..self.config.tuning.generations_per_frame {
-            self.generation_on(frame, feedforward, acquiring, false, probe);
+            self.generation_on(frame, feedforward, acquiring, None, probe);
         }
         let Outcome { best, cameras, estimate, target_measurement } =
-            self.generation_on(frame, feedforward, acquiring, true, probe);
+            self.generation_on(frame, feedforward, acquiring, Some(edge_test), probe);
         // The status is decided on the fitness relative to what the true pose can score under
         // the current light (`crate::colour`), so that its thresholds mean the same in every light.
         let expected = self.colours.model().expected_fitness();
@@ -555,6 +571,17 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             self.acquisition.reset();
         }
         let alike = cameras[0].min(cameras[1]) >= LEARN_CAMERA_RATIO * cameras[0].max(cameras[1]);
+        if edge_test {
+            // The test runs on every due frame (the board's work is the same whether it teaches
+            // or not); it teaches as the colours do, from a tracked pose both cameras see alike.
+            let pull = edge::disparity_pull(&self.evaluator(), &best.psi, &frame.left, &frame.right);
+            if alike && status == Status::Tracking {
+                self.edge.learn(pull);
+            }
+        }
+        if !acquiring {
+            self.edge.tick();
+        }
         if alike && status == Status::Tracking {
             self.learn_colours(frame, &best);
         }
@@ -657,19 +684,30 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// One generation on `frame` (the population already moved by the feedforward): evaluate,
     /// breed (with the depth probes in [`Feedforward::OnWithTarget`] while tracking, with
     /// immigrants seeded from the colour blobs while `acquiring`). Returns the best of the
-    /// evaluated population and, on the frame's `last` generation, the estimate and, in
+    /// evaluated population and, on the frame's last generation (`last` is `Some(edge_test)`,
+    /// whether the frame runs the disparity test), the estimate and, in
     /// [`Feedforward::OnWithTarget`], the target filter's measurement (else the best).
     fn generation_on<F: PixelFormat>(
         &mut self,
         frame: &StereoFrame<'_, F>,
         feedforward: Feedforward,
         acquiring: bool,
-        last: bool,
+        last: Option<bool>,
         probe: &mut impl PhaseProbe,
     ) -> Outcome {
         probe.mark(Phase::Evaluate);
-        let idle = if acquiring { self.config.tuning.acquire.idle_individuals } else { 0 };
-        let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
+        // The individuals left unevaluated pay for the frame's other work: the acquisition's
+        // scan, the disparity test, the tracked frames' margin (see `crate::edge`).
+        let idle = match (acquiring, last) {
+            (true, _) => self.config.tuning.acquire.idle_individuals,
+            (false, Some(true)) => EDGE_PROBE_IDLE,
+            (false, Some(false)) => TRACKING_IDLE,
+            (false, None) => 0,
+        };
+        let idle = idle.min(self.ga.len().saturating_sub(1));
+        let last = last.is_some();
+        // Field by field (the population is borrowed mutably beside it).
+        let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig).with_edge_shift(self.edge.px());
         // The per-camera scores of the best are kept as the population is evaluated, by
         // `Ga::evaluate_first`'s own rule (the first strictly larger fitness, NaN as 0), so
         // that no pose is evaluated twice.

@@ -1,0 +1,141 @@
+//! Where a camera puts a silhouette: the learnt shift of the nearest silhouette rows (our
+//! addition to the fitness of §4.2; `docs/method.md`, "Depth under a camera's light").
+//!
+//! A pixel that a silhouette edge partly covers reads as the face once the face covers some
+//! share `a*` of it, and `a*` is the camera's: it depends on the face's saturation against the
+//! background, the tone curve, the white balance and the sensor. The fitness's nearest rows
+//! ([`SILHOUETTE_INNER_PX`] inside the edge, [`SILHOUETTE_OUTER_PX`] outside) centre the best
+//! poses on the edge for `a* = ¼`; a camera with a larger `a*` shows a smaller block, which
+//! the fitness puts farther away (millimetres of depth bias, nearly all of the error under a
+//! camera's light). A shift `s` moves both rows outwards by `s` pixel widths; `s = ¼ − a*`
+//! centres them again.
+//!
+//! The evidence is the **disparity**, which the bias does not touch: moving an edge moves it
+//! by the same amount in both images. On a frame due for the test ([`EdgeShift::is_due`]) the
+//! best pose is scored with the two cameras' views moved [`EDGE_PROBE_DISPARITY_PX`] apart
+//! (the block nearer, as the disparity sees it) and as much together (farther), each half in
+//! each camera, four single-camera evaluations ([`disparity_pull`]). If the images prefer the
+//! nearer disparity, the pose is too far for its disparity: its silhouette is too small, so the
+//! rows move inwards by [`EDGE_SHIFT_STEP_PX`]; if they prefer the farther one, outwards; a tie
+//! leaves them. The shift only learns from a tracked pose seen alike by both cameras, as the
+//! colour model does ([`crate::colour`]), and stays within [`EDGE_SHIFT_RANGE_PX`].
+//!
+//! **Bounded work.** The test runs on one tracked frame in [`EDGE_PROBE_EVERY`], whether or
+//! not it teaches, and the last generation of that frame leaves [`EDGE_PROBE_IDLE`]
+//! individuals unevaluated to pay for it; the other tracked frames leave
+//! [`TRACKING_IDLE`]. The shift changes where the rows are, not how many.
+
+use nalgebra::Vector3;
+
+use crate::fitness::Evaluator;
+use crate::image::{Image, PixelFormat};
+use crate::limits::{EDGE_PROBE_DISPARITY_PX, EDGE_PROBE_EVERY, EDGE_SHIFT_RANGE_PX, EDGE_SHIFT_STEP_PX, MIN_DEPTH_M};
+#[cfg(doc)]
+use crate::limits::{EDGE_PROBE_IDLE, SILHOUETTE_INNER_PX, SILHOUETTE_OUTER_PX, TRACKING_IDLE};
+use crate::pose::Psi;
+
+/// Which way the disparity test pulls the silhouette rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pull {
+    /// The images prefer the block nearer than the pose's disparity: the rows move inwards.
+    Inwards,
+    /// The images prefer the block farther: the rows move outwards.
+    Outwards,
+    /// Both disparities score the same (or the pose cannot be tested): no step.
+    Neither,
+}
+
+/// The learnt shift of the nearest silhouette rows, and which tracked frame the disparity
+/// test runs on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EdgeShift {
+    px: f32,
+    frame: u8,
+}
+
+impl EdgeShift {
+    /// No shift; the next tracked frame is due for the test.
+    pub const NONE: Self = Self { px: 0.0, frame: 0 };
+
+    /// The shift, pixel widths outwards (within [`EDGE_SHIFT_RANGE_PX`]).
+    pub fn px(&self) -> f32 {
+        self.px
+    }
+
+    /// Whether the tracked frame about to run is due for the disparity test: one in
+    /// [`EDGE_PROBE_EVERY`].
+    pub fn is_due(&self) -> bool {
+        self.frame == 0
+    }
+
+    /// One tracked frame has run.
+    pub fn tick(&mut self) {
+        self.frame = (self.frame + 1) % EDGE_PROBE_EVERY;
+    }
+
+    /// One step of [`EDGE_SHIFT_STEP_PX`] the way `pull` says.
+    pub fn learn(&mut self, pull: Pull) {
+        let step = match pull {
+            Pull::Inwards => -EDGE_SHIFT_STEP_PX,
+            Pull::Outwards => EDGE_SHIFT_STEP_PX,
+            Pull::Neither => return,
+        };
+        self.px = clamp_shift(self.px + step);
+    }
+}
+
+impl Default for EdgeShift {
+    fn default() -> Self {
+        Self::NONE
+    }
+}
+
+/// `px` within [`EDGE_SHIFT_RANGE_PX`]; NaN gives 0.
+pub fn clamp_shift(px: f32) -> f32 {
+    let [lo, hi] = EDGE_SHIFT_RANGE_PX;
+    if px.is_nan() { 0.0 } else { crate::math::clamp(px, lo, hi) }
+}
+
+/// The disparity test of `psi` (see the module docs): the fitness with the cameras' views
+/// moved [`EDGE_PROBE_DISPARITY_PX`] apart against that with them moved as much together,
+/// through `eval` (with its current shift). [`Pull::Neither`] on a tie, a non-finite score, or
+/// a pose too near the cameras to test.
+pub fn disparity_pull<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
+    eval: &Evaluator<'_, G>,
+    psi: &Psi,
+    left: &Image<B, F>,
+    right: &Image<B, F>,
+) -> Pull {
+    let (r, t) = (psi.rotation_unchecked(), psi.translation());
+    let Some(half) = half_step(eval, &t) else { return Pull::Neither };
+    // Seen from the right camera the block moves by `+half` (towards the left camera), from the
+    // left one by `−half`: the baseline looks longer by `2·half`, the block nearer.
+    let (towards, away) = (t + half, t - half);
+    let nearer = eval.evaluate_apart(&r, [&towards, &away], left, right).total;
+    let farther = eval.evaluate_apart(&r, [&away, &towards], left, right).total;
+    if nearer > farther {
+        Pull::Inwards
+    } else if farther > nearer {
+        Pull::Outwards
+    } else {
+        Pull::Neither
+    }
+}
+
+/// Half the test's displacement, along the baseline from the right camera towards the left
+/// one (`Σ_CR`): `EDGE_PROBE_DISPARITY_PX · Z / (2·f)` metres, so that the disparity changes by
+/// [`EDGE_PROBE_DISPARITY_PX`] in all. `None` for a pose nearer than [`MIN_DEPTH_M`], not
+/// finite, or a rig whose cameras coincide.
+fn half_step<const G: usize>(eval: &Evaluator<'_, G>, t: &Vector3<f32>) -> Option<Vector3<f32>> {
+    let rig = eval.rig();
+    let lr = &rig.left_from_right;
+    // The left camera's centre in Σ_CR: `−Rᵀ·t` of the left-from-right transform.
+    let centre = -(crate::quat::to_rotation_matrix(&lr.rotation).transpose() * lr.translation.vector);
+    let length = crate::math::sqrt(centre.dot(&centre));
+    let metres = EDGE_PROBE_DISPARITY_PX * t.z / (2.0 * rig.right.fx());
+    let half = centre * (metres / length);
+    (t.z > MIN_DEPTH_M && length > 0.0 && half.iter().all(|v| v.is_finite())).then_some(half)
+}
+
+#[cfg(test)]
+mod tests;

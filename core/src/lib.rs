@@ -36,7 +36,11 @@
 //! two cameras and breeds `P − 1` children with a fixed number of random draws each. No loop
 //! depends on the data, so the worst case is the typical case. A frame runs
 //! [`Tuning::generations_per_frame`](tuning::Tuning::generations_per_frame)
-//! such generations after one feedforward shift, and one target-filter update.
+//! such generations after one feedforward shift, and one target-filter update. Fixed numbers
+//! of individuals are left unevaluated to pay for a frame's other work: in every generation
+//! while not tracking, for the acquisition's stage; while tracking, in a frame's last
+//! generation, for the disparity test of [`edge`] on one frame in
+//! [`EDGE_PROBE_EVERY`](limits::EDGE_PROBE_EVERY), and as the budget's margin on the others.
 //!
 //! ## Example
 //! ```

@@ -41,6 +41,8 @@ pub struct ColourReport {
     pub expected_fitness: f32,
     /// Frames tracked, and the first of them.
     pub tracked_frames: usize,
+    /// The shift of the silhouette rows learnt (pixel widths outwards, `evorec_core::edge`).
+    pub edge_shift_px: f32,
 }
 
 impl ColourReport {
@@ -61,7 +63,12 @@ impl ColourReport {
             band_deg: 2.0 * f32::from(bands[k].half),
             frames: model.frames_seen(k),
         });
-        Ok(Self { faces, expected_fitness: model.expected_fitness(), tracked_frames: tracked })
+        Ok(Self {
+            faces,
+            expected_fitness: model.expected_fitness(),
+            tracked_frames: tracked,
+            edge_shift_px: out.edge_shift_px,
+        })
     }
 
     /// A table for a terminal.
@@ -74,8 +81,9 @@ impl ColourReport {
         }
         let _ = write!(
             s,
-            "expected score of the true pose under this light: {:.3} ({} frames tracked)",
-            self.expected_fitness, self.tracked_frames
+            "expected score of the true pose under this light: {:.3} ({} frames tracked)\n\
+             silhouette rows learnt {:+.2} px outwards (learnt while tracking, never configured)",
+            self.expected_fitness, self.tracked_frames, self.edge_shift_px
         );
         s
     }
@@ -113,13 +121,13 @@ mod tests {
             band_deg: 20.0,
             frames: if k < 3 { 40 } else { 0 },
         });
-        let report = ColourReport { faces, expected_fitness: 0.9, tracked_frames: 40 };
+        let report = ColourReport { faces, expected_fitness: 0.9, tracked_frames: 40, edge_shift_px: -0.25 };
         let toml_text = report.to_toml("SEQ");
         assert!(toml_text.contains("face_hues_deg = [-10.0, 110.0, 230.0, 0.0, 120.0, 240.0]"), "{toml_text}");
         assert!(toml_text.contains("Not seen, so as configured: -x -y -z."));
         let parsed: toml::Table = toml::from_str(&toml_text).unwrap();
         assert_eq!(parsed["target"]["face_hues_deg"].as_array().unwrap().len(), 6);
         let text = report.describe();
-        assert!(text.contains("not seen") && text.contains("0.900"), "{text}");
+        assert!(text.contains("not seen") && text.contains("0.900") && text.contains("-0.25 px"), "{text}");
     }
 }

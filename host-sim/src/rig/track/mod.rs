@@ -122,6 +122,9 @@ pub struct TrackOutput {
     pub options: TrackOptions,
     /// The colour model of the block's faces as the tracker learnt it by the last frame.
     pub colours: ColourModel,
+    /// The shift of the silhouette rows the tracker learnt by the last frame (pixel widths
+    /// outwards, `evorec_core::edge`).
+    pub edge_shift_px: f32,
 }
 
 fn check_sizes(opts: &TrackOptions) -> Result<()> {
@@ -252,8 +255,8 @@ fn run_format<const DOF: usize, F: SensorPixels, const G: usize>(
         p.finish_and_clear();
     }
     let stats = stats.map_err(|e| anyhow!("tracking stopped: {e}"))?;
-    let colours = *tracker.colours();
-    Ok(TrackOutput { tracked, rejected: stats.rejected, kept, seconds, options: opts.clone(), colours })
+    let (colours, edge_shift_px) = (*tracker.colours(), tracker.edge_shift_px());
+    Ok(TrackOutput { tracked, rejected: stats.rejected, kept, seconds, options: opts.clone(), colours, edge_shift_px })
 }
 
 fn progress_bar(len: u64) -> ProgressBar {

@@ -69,6 +69,10 @@ pub struct TrackSummary {
     pub symmetries: Vec<&'static str>,
     /// Frames per second of the tracking loop, PNG decoding included.
     pub frames_per_s: f64,
+    /// The shift of the silhouette rows learnt by the last frame, pixel widths outwards
+    /// (`evorec_core::edge`; 0 until the block is tracked, negative for a camera that needs
+    /// more than a quarter of a pixel covered to read it as the face).
+    pub edge_shift_px: f32,
     /// Version of evorec.
     pub evorec_version: &'static str,
     /// What was found in the ROS 2 bag tracked (absent for a sequence directory): the bag
@@ -170,6 +174,7 @@ pub fn evaluate(seq: &Sequence, out: &TrackOutput) -> Evaluation {
         wrong_tracking: (!checked.is_empty()).then(|| WrongTracking::of(checked)),
         symmetries: syms.iter().map(|(n, _)| *n).collect(),
         frames_per_s: out.tracked.len() as f64 / out.seconds.max(1e-9),
+        edge_shift_px: out.edge_shift_px,
         evorec_version: env!("CARGO_PKG_VERSION"),
         bag: None,
         partial: false,

@@ -28,7 +28,9 @@
 //! move by more than four pixels without moving a point across it: a dead band of several
 //! millimetres in depth, where 1 mm moves an edge by 0.1–0.25 px. Between rows half a pixel
 //! apart the dead band is half a pixel of edge motion. Same rows, same work: only their offsets
-//! change.
+//! change. An [`Evaluator`] with a learnt shift ([`Evaluator::with_edge_shift`], see
+//! [`crate::edge`]) moves both silhouette rows outwards by it, for a camera that needs more (or
+//! less) of a pixel covered than a quarter to read it as the face.
 //!
 //! **Bounded work.** Of each pair of opposite faces exactly one can face a camera, so each
 //! camera evaluates three faces (the one of each pair on the camera's side): on the board their inner rows

@@ -1,29 +1,15 @@
 //! The colour model on synthetic frames whose faces do not have the configured hues: the
 //! block is found, its colours are learnt, and the status scale follows the light.
 
-use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::ga::SearchSpace;
 use evorec_core::limits::{DEFAULT_HUE_TOLERANCE, MAX_HUE_SHIFT};
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
 use evorec_core::status::Status;
-use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::Vector3;
 
 mod common;
-use common::{frame, render_block};
-
-const W: u16 = 320;
-const H: u16 = 240;
-const STILL: JointSample<7> = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
-
-fn tracker(seed: u64) -> Tracker<7, 40, 8> {
-    let rig = StereoRig::parallel(Pinhole::new_checked(400.0, 400.0, 160.0, 120.0, W, H).unwrap(), 0.1).unwrap();
-    let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space);
-    Tracker::new(config.with_seed(seed).with_feedforward(Feedforward::Off)).unwrap()
-}
+use common::{H, STILL, W, frame, render_block, tracker_320};
 
 /// The paper's block as a camera sees it whose colours are off: red at +22°, green at −24°,
 /// blue at −16° (within the ±25° the search band allows for).
@@ -39,7 +25,7 @@ fn a_block_whose_hues_are_off_is_found_and_its_colours_learnt() {
     );
     let block = shifted_block();
     for seed in [1, 2, 3] {
-        let mut t = tracker(seed);
+        let mut t = tracker_320(seed);
         let rig = t.config().rig;
         let (l, r) = render_block(&rig, &block, &truth);
         let mut first = None;
@@ -85,7 +71,7 @@ fn a_block_whose_hues_are_beyond_the_search_band_is_not_taken_for_the_block() {
     let half = f32::from(DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT) * 2.0;
     let block = Block { face_hues_deg: Block::PAPER.face_hues_deg.map(|h| h + half + 30.0), ..Block::PAPER };
     let truth = Psi::new([0.0, 0.0, 0.75], [0.1, 0.3, 0.1]);
-    let mut t = tracker(1);
+    let mut t = tracker_320(1);
     let rig = t.config().rig;
     let (l, r) = render_block(&rig, &block, &truth);
     for _ in 0..40 {
@@ -107,7 +93,7 @@ fn a_face_turned_into_view_counts_before_its_colour_is_learnt() {
     let centre = Vector3::new(0.03, -0.02, 0.75);
     let (truth_a, truth_b) = (Psi::from_parts(&centre, &a), Psi::from_parts(&centre, &b));
     let block = shifted_block();
-    let mut t = tracker(1);
+    let mut t = tracker_320(1);
     let rig = t.config().rig;
     let (la, ra) = render_block(&rig, &block, &truth_a);
     let frame_a = frame(&la, &ra, W, H);

@@ -2,27 +2,12 @@
 //! when half covered: synthetic frames sampled at pixel centres, where the fixed rows (centred
 //! for a quarter) put the block too far. The disparity test learns the shift that removes it.
 
-use evorec_core::camera::{Pinhole, StereoRig};
-use evorec_core::ga::SearchSpace;
-use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::quat;
-use evorec_core::tracker::{Feedforward, JointSample, Tracker, TrackerConfig};
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::Vector3;
 
 mod common;
-use common::{frame, median, render};
-
-const W: u16 = 320;
-const H: u16 = 240;
-const STILL: JointSample<7> = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
-
-fn tracker(seed: u64) -> Tracker<7, 40, 8> {
-    let rig = StereoRig::parallel(Pinhole::new_checked(400.0, 400.0, 160.0, 120.0, W, H).unwrap(), 0.1).unwrap();
-    let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
-    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space);
-    Tracker::new(config.with_seed(seed).with_feedforward(Feedforward::Off)).unwrap()
-}
+use common::{H, STILL, W, frame, median, render, tracker_320};
 
 /// The block swaying ±5 mm across the view and ±3 mm in depth, so that its edges cross the
 /// pixels at every phase (a camera's edges do; on a still, noise-free frame every test reads
@@ -38,7 +23,7 @@ fn truth_at(i: usize) -> Psi {
 /// Mean depth errors (m, estimate − truth) over frames 5–24 and over the second half of
 /// `frames`, and the shift at the end, for one GA seed.
 fn run(seed: u64, frames: usize) -> (f32, f32, f32) {
-    let mut t = tracker(seed);
+    let mut t = tracker_320(seed);
     t.reset_around(&truth_at(0), &[0.002, 0.002, 0.002, 0.01, 0.01, 0.01]).unwrap();
     let rig = t.config().rig;
     let (mut early, mut late) = (Vec::new(), Vec::new());

@@ -1,12 +1,34 @@
 //! What the integration tests of the core share: synthetic stereo frames of the paper's block.
 
-use evorec_core::camera::StereoRig;
+use evorec_core::camera::{Pinhole, StereoRig};
+use evorec_core::ga::SearchSpace;
 use evorec_core::image::HueImage;
 use evorec_core::limits::NO_HUE;
 use evorec_core::model::Block;
 use evorec_core::pose::Psi;
 use evorec_core::synth;
-use evorec_core::tracker::StereoFrame;
+use evorec_core::tracker::{Feedforward, JointSample, StereoFrame, Tracker, TrackerConfig};
+use nalgebra::Isometry3;
+
+/// Width of [`tracker_320`]'s images.
+#[allow(dead_code)]
+pub const W: u16 = 320;
+/// Height of [`tracker_320`]'s images.
+#[allow(dead_code)]
+pub const H: u16 = 240;
+/// The joints of an arm that stands still.
+#[allow(dead_code)]
+pub const STILL: JointSample<7> = JointSample { q: [0.0; 7], qd: [0.0; 7], time_us: 0 };
+
+/// A tracker of [`Block::PAPER`] on a still arm without feedforward: a parallel rig of
+/// `W × H` cameras with f = 400 px and a 0.1 m baseline, searching 0.3–1.3 m ahead.
+#[allow(dead_code)]
+pub fn tracker_320(seed: u64) -> Tracker<7, 40, 8> {
+    let rig = StereoRig::parallel(Pinhole::new_checked(400.0, 400.0, 160.0, 120.0, W, H).unwrap(), 0.1).unwrap();
+    let space = SearchSpace::new_checked([-0.4, -0.4, 0.3], [0.4, 0.4, 1.3]).unwrap();
+    let config = TrackerConfig::pa10(rig, Block::PAPER, Isometry3::identity(), space);
+    Tracker::new(config.with_seed(seed).with_feedforward(Feedforward::Off)).unwrap()
+}
 
 #[allow(dead_code)]
 /// The left and right hue images of [`Block::PAPER`] at `truth` (right camera frame), the size

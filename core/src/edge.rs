@@ -27,11 +27,11 @@
 
 use nalgebra::Vector3;
 
-use crate::fitness::Evaluator;
+use crate::fitness::{Evaluator, clamp_edge_shift};
 use crate::image::{Image, PixelFormat};
-use crate::limits::{EDGE_PROBE_DISPARITY_PX, EDGE_PROBE_EVERY, EDGE_SHIFT_RANGE_PX, EDGE_SHIFT_STEP_PX, MIN_DEPTH_M};
+use crate::limits::{EDGE_PROBE_DISPARITY_PX, EDGE_PROBE_EVERY, EDGE_SHIFT_STEP_PX, MIN_DEPTH_M};
 #[cfg(doc)]
-use crate::limits::{EDGE_PROBE_IDLE, SILHOUETTE_INNER_PX, SILHOUETTE_OUTER_PX, TRACKING_IDLE};
+use crate::limits::{EDGE_PROBE_IDLE, EDGE_SHIFT_RANGE_PX, SILHOUETTE_INNER_PX, SILHOUETTE_OUTER_PX, TRACKING_IDLE};
 use crate::pose::Psi;
 
 /// Which way the disparity test pulls the silhouette rows.
@@ -80,7 +80,7 @@ impl EdgeShift {
             Pull::Outwards => EDGE_SHIFT_STEP_PX,
             Pull::Neither => return,
         };
-        self.px = clamp_shift(self.px + step);
+        self.px = clamp_edge_shift(self.px + step);
     }
 }
 
@@ -88,12 +88,6 @@ impl Default for EdgeShift {
     fn default() -> Self {
         Self::NONE
     }
-}
-
-/// `px` within [`EDGE_SHIFT_RANGE_PX`]; NaN gives 0.
-pub fn clamp_shift(px: f32) -> f32 {
-    let [lo, hi] = EDGE_SHIFT_RANGE_PX;
-    if px.is_nan() { 0.0 } else { crate::math::clamp(px, lo, hi) }
 }
 
 /// The disparity test of `psi` (see the module docs): the fitness with the cameras' views

@@ -661,6 +661,13 @@ fn metres_per_pixel(col_b: &[f32; 3], col_c: &[f32; 3], centre: [f32; 3], px_uni
     [q * width(jc), q * width(jb)]
 }
 
+/// `px` within [`EDGE_SHIFT_RANGE_PX`](crate::limits::EDGE_SHIFT_RANGE_PX), the shifts of the
+/// silhouette rows that keep both rows on their sides of the edge; NaN gives 0.
+pub fn clamp_edge_shift(px: f32) -> f32 {
+    let [lo, hi] = crate::limits::EDGE_SHIFT_RANGE_PX;
+    if px.is_nan() { 0.0 } else { crate::math::clamp(px, lo, hi) }
+}
+
 /// Evaluates poses against a stereo pair: the model, its hue table and the rig, bundled, with
 /// the learnt shift of the nearest silhouette rows ([`crate::edge`]; none unless set).
 #[derive(Debug, Clone, Copy)]
@@ -693,7 +700,7 @@ impl<'m, const G: usize> Evaluator<'m, G> {
     /// they stay on their sides of the edge (NaN: no shift).
     #[must_use]
     pub fn with_edge_shift(mut self, px: f32) -> Self {
-        self.edge_shift_px = crate::edge::clamp_shift(px);
+        self.edge_shift_px = clamp_edge_shift(px);
         self
     }
 

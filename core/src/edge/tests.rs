@@ -4,7 +4,7 @@
 use super::*;
 use crate::hue::HueLut;
 use crate::image::HueImage;
-use crate::limits::DEFAULT_HUE_TOLERANCE;
+use crate::limits::{DEFAULT_HUE_TOLERANCE, EDGE_SHIFT_RANGE_PX};
 use crate::model::{Block, SurfaceStrips};
 use crate::synth::test_scene::{H, W, rig, scene};
 
@@ -42,9 +42,9 @@ fn each_pull_steps_once_and_the_shift_stays_in_range() {
         shift.learn(Pull::Inwards);
     }
     assert_eq!(shift.px(), EDGE_SHIFT_RANGE_PX[0]);
-    assert_eq!(clamp_shift(f32::NAN), 0.0);
-    assert_eq!(clamp_shift(-5.0), EDGE_SHIFT_RANGE_PX[0]);
-    assert_eq!(clamp_shift(0.1), 0.1);
+    assert_eq!(clamp_edge_shift(f32::NAN), 0.0);
+    assert_eq!(clamp_edge_shift(-5.0), EDGE_SHIFT_RANGE_PX[0]);
+    assert_eq!(clamp_edge_shift(0.1), 0.1);
 }
 
 #[test]

@@ -382,8 +382,10 @@ pub struct ClosedLoopSummary<'a> {
 /// No `[servo]` section, or the world, tracker or servo cannot be built.
 pub fn run(s: &Scenario, opts: &LoopOptions, on_frame: impl FnMut()) -> Result<ClosedLoopOutput> {
     let mut board = ServoBoard::closed_loop(s, opts)?;
-    let (_, rejected) = run_host_tracker(s, &mut board, on_frame)?;
-    Ok(board.finish(rejected))
+    let (tracker, rejected) = run_host_tracker(s, &mut board, on_frame)?;
+    let mut out = board.finish(rejected);
+    out.run.summary.edge_shift_px = Some(tracker.edge_shift_px());
+    Ok(out)
 }
 
 /// Drives `board` to its end with the host's tracker (the core's `board::run`); returns the

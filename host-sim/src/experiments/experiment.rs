@@ -277,6 +277,11 @@ pub struct Summary {
     pub wrong_tracking: WrongTracking,
     /// Frames refused by the tracker (should be 0).
     pub rejected: u32,
+    /// The shift of the silhouette rows the tracker learnt by the last frame, pixel widths
+    /// outwards (`evorec_core::edge`); absent where the tracker ran on the firmware (`evorec
+    /// hil`), whose link does not report it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub edge_shift_px: Option<f32>,
     /// The hand-over at the output time (`None` where not simulated).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub handover: Option<HandoverSummary>,
@@ -295,6 +300,7 @@ impl Summary {
             status: StatusCounts::of(rows),
             wrong_tracking: wrong_tracking(rows, &scenario.target.face_hues_deg),
             rejected,
+            edge_shift_px: None,
             handover: HandoverSummary::of(rows, scenario.start.delay_s),
             scenario: *scenario,
             evorec_version: env!("CARGO_PKG_VERSION"),
@@ -349,7 +355,7 @@ pub fn run_with_rows<const G: usize>(s: &Scenario, mut on_frame: impl FnMut()) -
     let stats = board::run(&mut board, &mut tracker, &mut left, &mut right, u32::MAX)
         .map_err(|e| anyhow::anyhow!("simulated board: {e:?}"))?;
     let rows = board.inner.into_rows();
-    let summary = Summary::of(&rows, stats.rejected, s);
+    let summary = Summary { edge_shift_px: Some(tracker.edge_shift_px()), ..Summary::of(&rows, stats.rejected, s) };
     Ok(RunOutput { rows, summary })
 }
 
@@ -406,4 +412,31 @@ pub fn write_estimate(out: &RunOutput, dir: &Path) -> Result<()> {
     let poses: Vec<_> = out.rows.iter().map(|r| (r.t, isometry_of(&r.estimate))).collect();
     crate::output::io::write_estimate_tum(dir, &poses, crate::output::io::TumTimes::Plain)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use evorec_core::limits::EDGE_SHIFT_RANGE_PX;
+    use evorec_core::tuning::Feedforward;
+
+    #[test]
+    fn a_host_run_states_the_learnt_shift_and_a_summary_without_it_omits_the_field() {
+        let mut s = Scenario::new(3, 1.0, Feedforward::On);
+        s.camera.width = 160;
+        s.camera.height = 120;
+        s.camera.fx = 200.0;
+        s.camera.fy = 200.0;
+        s.camera.cx = 80.0;
+        s.camera.cy = 60.0;
+        let out = run(&s, || {}).unwrap_or_else(|e| unreachable!("{e}"));
+        let px = out.summary.edge_shift_px.unwrap_or_else(|| unreachable!("a host run knows its tracker"));
+        assert!((EDGE_SHIFT_RANGE_PX[0]..=EDGE_SHIFT_RANGE_PX[1]).contains(&px), "{px}");
+        let json = serde_json::to_value(&out.summary).unwrap_or_else(|e| unreachable!("{e}"));
+        assert_eq!(json["edge_shift_px"].as_f64(), Some(f64::from(px)));
+        // As `evorec hil` writes it: the firmware does not report the shift.
+        let board = Summary::of(&out.rows, 0, &s);
+        let json = serde_json::to_value(&board).unwrap_or_else(|e| unreachable!("{e}"));
+        assert!(json.get("edge_shift_px").is_none(), "{json}");
+    }
 }

@@ -422,13 +422,7 @@ mod tests {
 
     #[test]
     fn a_host_run_states_the_learnt_shift_and_a_summary_without_it_omits_the_field() {
-        let mut s = Scenario::new(3, 1.0, Feedforward::On);
-        s.camera.width = 160;
-        s.camera.height = 120;
-        s.camera.fx = 200.0;
-        s.camera.fy = 200.0;
-        s.camera.cx = 80.0;
-        s.camera.cy = 60.0;
+        let s = Scenario::small(3, 1.0, Feedforward::On);
         let out = run(&s, || {}).unwrap_or_else(|e| unreachable!("{e}"));
         let px = out.summary.edge_shift_px.unwrap_or_else(|| unreachable!("a host run knows its tracker"));
         assert!((EDGE_SHIFT_RANGE_PX[0]..=EDGE_SHIFT_RANGE_PX[1]).contains(&px), "{px}");

@@ -696,13 +696,7 @@ mod tests {
 
     /// A 1 s run at 160×120 of the block on a 0.2 m/s conveyor, static arm.
     fn conveyor_run(method: Feedforward) -> Vec<TraceRow> {
-        let mut s = Scenario::new(3, 1.0, method);
-        s.camera.width = 160;
-        s.camera.height = 120;
-        s.camera.fx = 200.0;
-        s.camera.fy = 200.0;
-        s.camera.cx = 80.0;
-        s.camera.cy = 60.0;
+        let mut s = Scenario::small(3, 1.0, method);
         s.camera.supersample = 1;
         s.target.conveyor_speed_m_s = 0.2;
         s.target.conveyor_accel_m_s2 = 2.0;

@@ -189,13 +189,7 @@ mod tests {
         use crate::sim::board::World;
         use crate::sim::scenario::Scenario;
         use evorec_core::tuning::Feedforward;
-        let mut s = Scenario::new(5, 3.0, Feedforward::On);
-        s.camera.width = 160;
-        s.camera.height = 120;
-        s.camera.fx = 200.0;
-        s.camera.fy = 200.0;
-        s.camera.cx = 80.0;
-        s.camera.cy = 60.0;
+        let mut s = Scenario::small(5, 3.0, Feedforward::On);
         s.occlusion = Occlusions::from_slice(&[
             Occlusion { start_s: 0.0, duration_s: 1.0, kind: OcclusionKind::Occluder },
             Occlusion { start_s: 1.0, duration_s: 1.0, kind: OcclusionKind::Removed },

@@ -458,6 +458,16 @@ impl Scenario {
         }
     }
 
+    /// [`Scenario::new`] with 160×120 cameras of f = 200 px (the board's frame size): quick
+    /// runs for tests.
+    #[cfg(test)]
+    pub(crate) fn small(seed: u64, duration_s: f64, method: Feedforward) -> Self {
+        let mut s = Self::new(seed, duration_s, method);
+        (s.camera.width, s.camera.height) = (160, 120);
+        (s.camera.fx, s.camera.fy, s.camera.cx, s.camera.cy) = (200.0, 200.0, 80.0, 60.0);
+        s
+    }
+
     /// The recognition method (`[tracker] method`).
     pub fn method(&self) -> Feedforward {
         self.tracker.0.feedforward

@@ -122,9 +122,7 @@ pub fn disparity_pull<const G: usize, B: AsRef<[u8]>, F: PixelFormat>(
 /// finite, or a rig whose cameras coincide.
 fn half_step<const G: usize>(eval: &Evaluator<'_, G>, t: &Vector3<f32>) -> Option<Vector3<f32>> {
     let rig = eval.rig();
-    let lr = &rig.left_from_right;
-    // The left camera's centre in Σ_CR: `−Rᵀ·t` of the left-from-right transform.
-    let centre = -(crate::quat::to_rotation_matrix(&lr.rotation).transpose() * lr.translation.vector);
+    let centre = rig.left_center_in_right();
     let length = crate::math::sqrt(centre.dot(&centre));
     let metres = EDGE_PROBE_DISPARITY_PX * t.z / (2.0 * rig.right.fx());
     let half = centre * (metres / length);

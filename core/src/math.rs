@@ -12,6 +12,12 @@ pub fn sqrt(x: f32) -> f32 {
     libm::sqrtf(x)
 }
 
+/// `eˣ`.
+#[inline(always)]
+pub fn exp(x: f32) -> f32 {
+    libm::expf(x)
+}
+
 /// Sine of an angle in radians.
 #[inline(always)]
 pub fn sin(x: f32) -> f32 {

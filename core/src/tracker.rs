@@ -625,7 +625,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// [`crate::colour`]): called while it is tracked, so that a pose not yet confirmed teaches
     /// the model nothing.
     fn learn_colours<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>, best: &Best) {
-        let eval = Evaluator::new(&self.model, self.colours.lut(), &self.config.rig);
+        let eval = self.evaluator();
         let mut tally = Tally::EMPTY;
         let (r, t) = (best.psi.rotation_unchecked(), best.psi.translation());
         eval.census(&r, &t, &frame.left, &frame.right, &mut |k, row| tally.add(k, row));

@@ -22,6 +22,9 @@ use crate::ga::GaParams;
 use crate::limits::{DEFAULT_HUE_TOLERANCE, HUE_UNITS, MAX_GENERATIONS_PER_FRAME};
 use crate::status::StatusConfig;
 
+/// `1/√3`: the standard deviation of a uniform distribution over ±1.
+const FRAC_1_SQRT_3: f32 = 0.577_350_26;
+
 /// Whether the arm's motion, and the target's own, is fed forward to the population (eq. 36).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Feedforward {
@@ -161,6 +164,20 @@ impl TargetFilterParams {
         image_noise_px: 0.5,
         max_gap_s: 0.5,
     };
+
+    /// The manoeuvre time (s) of the hand-over's model ([`crate::target_motion`]): how long the
+    /// largest acceleration expected takes to bring the block to the largest speed expected,
+    /// `max_speed_m_s / acceleration_m_s2` (0.5 s by default). An acceleration is expected to
+    /// last about that long: a conveyor's start, stop or reversal.
+    pub fn manoeuvre_s(&self) -> f32 {
+        self.max_speed_m_s / self.acceleration_m_s2
+    }
+
+    /// The standard deviation of the hand-over model's acceleration (m/s²): an acceleration
+    /// anywhere between ± `acceleration_m_s2` alike (Singer's uniform case), `acceleration_m_s2 / √3`.
+    pub fn acceleration_sd(&self) -> f32 {
+        self.acceleration_m_s2 * FRAC_1_SQRT_3
+    }
 
     /// Checks that every field is finite and positive (the `target.` rows of [`FIELDS`]).
     ///

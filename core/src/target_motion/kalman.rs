@@ -8,9 +8,14 @@
 //! full 3 × 3 covariance `R`, so an axis poorly seen (depth along the line of sight) weighs
 //! less in every world axis it projects on.
 //!
+//! [`SingerFilter`] is the same on `[x, ẋ, ẍ]`: the acceleration is a state too, which
+//! decays towards zero over a manoeuvre time (Singer's model).
+//!
 //! Work per call is a fixed number of 3 × 3 products and one 3 × 3 inverse: no loops over data.
 
 use nalgebra::{Matrix3, Vector3};
+
+use crate::math;
 
 /// One constant-velocity filter (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,4 +84,88 @@ impl CvFilter {
 /// `(m + mᵀ) / 2`: keeps a covariance symmetric against rounding.
 fn symmetric(m: &Matrix3<f32>) -> Matrix3<f32> {
     (m + m.transpose()) * 0.5
+}
+
+/// A manoeuvring-target filter on three coupled axes (Singer, "Estimating optimal tracking
+/// filter performance for manned maneuvering targets", IEEE Trans. AES-6, 1970): state
+/// `[x, ẋ, ẍ]`, covariance kept as six 3 × 3 blocks `P = [[A, B, D], [Bᵀ, C, E], [Dᵀ, Eᵀ, G]]`.
+///
+/// The acceleration is a first-order Markov process: over a step `dt` it decays by
+/// `ρ = e^(−dt/τ)` (`τ` the manoeuvre time) and gains a white increment of variance
+/// `σ_a² (1 − ρ²)` per axis, so its standard deviation stays `σ_a` (the largest acceleration
+/// expected). The increment enters position and velocity as a constant acceleration over the
+/// step would, `γ = [dt²/2, dt, 1]` (the discrete form of Bar-Shalom et al., §6.3.3, for
+/// `dt ≪ τ`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct SingerFilter {
+    pub(super) x: Vector3<f32>,
+    pub(super) v: Vector3<f32>,
+    pub(super) acc: Vector3<f32>,
+    a: Matrix3<f32>,
+    b: Matrix3<f32>,
+    d: Matrix3<f32>,
+    c: Matrix3<f32>,
+    e: Matrix3<f32>,
+    g: Matrix3<f32>,
+}
+
+impl SingerFilter {
+    /// A filter at `x` (covariance `r`) with an unknown velocity and acceleration of standard
+    /// deviations `sd_v` and `sd_a` per axis.
+    pub(super) fn start(x: Vector3<f32>, r: &Matrix3<f32>, sd_v: f32, sd_a: f32) -> Self {
+        let (i, z, zero) = (Matrix3::identity(), Matrix3::zeros(), Vector3::zeros());
+        Self { x, v: zero, acc: zero, a: *r, b: z, d: z, c: i * (sd_v * sd_v), e: z, g: i * (sd_a * sd_a) }
+    }
+
+    /// Moves the state on by `dt` (s): the acceleration decays by `rho = e^(−dt/τ)` and gains
+    /// the white increment of variance `sd_a² (1 − rho²)`.
+    pub(super) fn predict(&mut self, dt: f32, rho: f32, sd_a: f32) {
+        let (h, h2) = (dt, 0.5 * dt * dt);
+        self.x += self.v * h + self.acc * h2;
+        self.v += self.acc * h;
+        self.acc *= rho;
+        let (a, b, d, c, e, g) = (self.a, self.b, self.d, self.c, self.e, self.g);
+        // F·P by block rows (F = [[I, h, h2], [0, I, h], [0, 0, ρ]]), then ·Fᵀ by block columns.
+        let r1 = [a + b.transpose() * h + d.transpose() * h2, b + c * h + e.transpose() * h2, d + e * h + g * h2];
+        let r2 = [c + e.transpose() * h, e + g * h];
+        let q = sd_a * sd_a * (1.0 - rho * rho);
+        let i = Matrix3::<f32>::identity();
+        self.a = symmetric(&(r1[0] + r1[1] * h + r1[2] * h2)) + i * (q * h2 * h2);
+        self.b = r1[1] + r1[2] * h + i * (q * h2 * h);
+        self.d = r1[2] * rho + i * (q * h2);
+        self.c = symmetric(&(r2[0] + r2[1] * h)) + i * (q * h * h);
+        self.e = r2[1] * rho + i * (q * h);
+        self.g = g * (rho * rho) + i * q;
+    }
+
+    /// The innovation of measurement `z` of covariance `r`; `None` when `S` is singular.
+    pub(super) fn innovation(&self, z: &Vector3<f32>, r: &Matrix3<f32>) -> Option<Innovation> {
+        let s_inv = (self.a + r).try_inverse()?;
+        Some(Innovation { y: z - self.x, s_inv })
+    }
+
+    /// The measurement update with innovation `inn`.
+    pub(super) fn update(&mut self, inn: &Innovation) {
+        let kx = self.a * inn.s_inv;
+        let kv = self.b.transpose() * inn.s_inv;
+        let ka = self.d.transpose() * inn.s_inv;
+        self.x += kx * inn.y;
+        self.v += kv * inn.y;
+        self.acc += ka * inn.y;
+        let (a, b, d) = (self.a, self.b, self.d);
+        self.a = symmetric(&(a - kx * a));
+        self.b = b - kx * b;
+        self.d = d - kx * d;
+        self.c = symmetric(&(self.c - kv * b));
+        self.e -= kv * d;
+        self.g = symmetric(&(self.g - ka * d));
+    }
+
+    /// The mean position and velocity `tau` seconds on (`tau ≥ 0`), the acceleration decaying
+    /// with `manoeuvre_s`: `ẋ + ẍ·τ_m(1 − e^(−τ/τ_m))` and its integral.
+    pub(super) fn ahead(&self, tau: f32, manoeuvre_s: f32) -> (Vector3<f32>, Vector3<f32>) {
+        let decayed = manoeuvre_s * (1.0 - math::exp(-tau / manoeuvre_s));
+        let x = self.x + self.v * tau + self.acc * (manoeuvre_s * (tau - decayed));
+        (x, self.v + self.acc * decayed)
+    }
 }

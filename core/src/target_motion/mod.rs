@@ -42,9 +42,17 @@
 //! dozen floats, and all transcendental functions go through [`crate::math`], so the filter is
 //! bit-identical on host and board.
 //!
-//! [`TargetFilter::predict`] hands the pose over to a later time `t`: the filtered pose moved
-//! by the filtered velocity over `t − t_update`, seen from the camera at the joint state of `t`
-//! (`q + q̇ (t − t_joints)`, forward kinematics).
+//! [`TargetFilter::predict`] hands the pose over to a later time `t`, seen from the camera at the
+//! joint state of `t` (`q + q̇ (t − t_joints)`, forward kinematics). **A manoeuvre is handed over
+//! too.** The constant-velocity model learns a reversal only after it, and a servo handed its
+//! velocity a frame or two later lags by the latency as well; so the filter also keeps Singer's
+//! manoeuvring-target model of the centre (an acceleration state that decays over the manoeuvre
+//! time [`TargetFilterParams::manoeuvre_s`], of standard deviation
+//! [`TargetFilterParams::acceleration_sd`]), fed the same estimates, and the centre is handed
+//! over with its mean motion; the orientation with the constant-velocity model's turn. The
+//! velocity fed forward to the population stays the constant-velocity model's: an acceleration
+//! state there reads the estimate's slow drift in depth as an acceleration (measured in
+//! `docs/method.md`, "Hand-over of a manoeuvring block").
 
 use nalgebra::{Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
@@ -59,7 +67,7 @@ mod kalman;
 mod predict;
 use crate::tuning::ConfigError;
 pub use crate::tuning::TargetFilterParams;
-use kalman::CvFilter;
+use kalman::{CvFilter, SingerFilter};
 pub use predict::{PredictError, Prediction};
 
 /// The target's velocity screw in the world frame `Σ_W` (`^W ψ̇_M` with the angular part as
@@ -128,6 +136,8 @@ pub enum UpdateOutcome {
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Track {
     pos: CvFilter,
+    /// The manoeuvring model of the position, for the hand-over ([`TargetFilter::predict`]).
+    ahead: SingerFilter,
     /// The orientation's error state (its position part is 0 between updates).
     rot: CvFilter,
     orientation: UnitQuaternion<f32>,
@@ -324,6 +334,7 @@ impl TargetFilter {
         let p = self.params;
         let mut next = *track;
         next.pos.predict(dt, p.acceleration_m_s2);
+        next.ahead.predict(dt, math::exp(-dt / p.manoeuvre_s()), p.acceleration_sd());
         next.rot.predict(dt, p.angular_acceleration_rad_s2);
         next.orientation = exp_rotation(&next.rot.x) * next.orientation;
         next.rot.set_position(Vector3::zeros());
@@ -332,12 +343,14 @@ impl TargetFilter {
         let turn = log_rotation(&(measured.rotation * next.orientation.inverse()));
         let (pos_inn, rot_inn) =
             (next.pos.innovation(&measured.translation.vector, &r_pos), next.rot.innovation(&turn, &r_rot));
-        let (Some(pos_inn), Some(rot_inn)) = (pos_inn, rot_inn) else {
+        let ahead_inn = next.ahead.innovation(&measured.translation.vector, &r_pos);
+        let (Some(pos_inn), Some(rot_inn), Some(ahead_inn)) = (pos_inn, rot_inn, ahead_inn) else {
             self.start(measured, &r_pos, &r_rot, time_us);
             return UpdateOutcome::Started;
         };
         self.last_innovation = [pos_inn.y.x, pos_inn.y.y, pos_inn.y.z, rot_inn.y.x, rot_inn.y.y, rot_inn.y.z];
         next.pos.update(&pos_inn);
+        next.ahead.update(&ahead_inn);
         let correction = next.rot.update(&rot_inn);
         next.orientation = exp_rotation(&correction) * next.orientation;
         next.rot.set_position(Vector3::zeros());
@@ -350,6 +363,7 @@ impl TargetFilter {
         let p = &self.params;
         self.track = Some(Track {
             pos: CvFilter::start(measured.translation.vector, r_pos, p.max_speed_m_s),
+            ahead: SingerFilter::start(measured.translation.vector, r_pos, p.max_speed_m_s, p.acceleration_sd()),
             rot: CvFilter::start(Vector3::zeros(), r_rot, p.max_rate_rad_s),
             orientation: measured.rotation,
             time_us,
@@ -376,6 +390,12 @@ impl TargetFilter {
     /// The velocity to feed forward: the filter's once observed, zero before.
     pub fn feedforward_velocity(&self) -> TargetVelocity {
         self.velocity().unwrap_or(TargetVelocity::ZERO)
+    }
+
+    /// The manoeuvring model's acceleration of the block's centre (m/s², world) at the last
+    /// update (`None` without a track): what [`TargetFilter::predict`] extrapolates with.
+    pub fn acceleration_estimate(&self) -> Option<Vector3<f32>> {
+        self.track.as_ref().map(|t| t.ahead.acc)
     }
 
     /// The filtered world pose `^W T_M` at the last update (`None` without a track).

@@ -1,6 +1,6 @@
 //! The hand-over of the target's pose to a later time ([`TargetFilter::predict`]).
 
-use nalgebra::{Isometry3, Translation3};
+use nalgebra::{Isometry3, Translation3, Vector3};
 
 use super::{TargetFilter, TargetVelocity, exp_rotation};
 use crate::kinematics::{Chain, JointSample};
@@ -49,15 +49,17 @@ impl TargetFilter {
             return Err(PredictError::NonFiniteJoint);
         }
         let trusted = self.is_trusted();
-        let velocity = self.feedforward_velocity();
         let tau = seconds_between(track.time_us, t_us);
         let dtj = seconds_between(joints.time_us, t_us);
         let q: [f32; DOF] = core::array::from_fn(|i| joints.q[i] + joints.qd[i] * dtj);
         let camera = chain.forward(&q) * flange_to_camera;
-        let target = Isometry3::from_parts(
-            Translation3::from(track.pos.x + velocity.v * tau),
-            exp_rotation(&(velocity.w * tau)) * track.orientation,
-        );
+        // The centre from the manoeuvring model once it has seen the motion; the turn from the
+        // orientation's constant-velocity model.
+        let w = self.feedforward_velocity().w;
+        let (centre, v) =
+            if trusted { track.ahead.ahead(tau, self.params.manoeuvre_s()) } else { (track.pos.x, Vector3::zeros()) };
+        let velocity = TargetVelocity { v, w };
+        let target = Isometry3::from_parts(Translation3::from(centre), exp_rotation(&(w * tau)) * track.orientation);
         let psi = Psi::from_isometry(&(camera.inverse() * target));
         Ok(Prediction { psi, velocity, trusted, base_time_us: track.time_us })
     }

@@ -34,7 +34,7 @@ const BLOCK_OPEN: &str = "<!-- generated:";
 const BLOCK_CLOSE: &str = "<!-- /generated -->";
 
 /// The sentence blocks the README states (each also in `docs/results.md`).
-const README_SENTENCE_BLOCKS: [&str; 3] = ["belts-axial", "belt-reversing", "pr-seeds"];
+const README_SENTENCE_BLOCKS: [&str; 4] = ["belts-axial", "belt-reversing", "pr-seeds", "servo-reversing"];
 
 /// Numbers of six or more digits (with thousands separators) that may stand outside the
 /// generated blocks: sizes that follow from the code's constants, not from a run.

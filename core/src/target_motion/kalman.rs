@@ -161,11 +161,13 @@ impl SingerFilter {
         self.g = symmetric(&(self.g - ka * d));
     }
 
-    /// The mean position and velocity `tau` seconds on (`tau ≥ 0`), the acceleration decaying
-    /// with `manoeuvre_s`: `ẋ + ẍ·τ_m(1 − e^(−τ/τ_m))` and its integral.
+    /// The mean position and velocity `tau` seconds on, the acceleration decaying with
+    /// `manoeuvre_s`: `ẋ + ẍ·τ_m(1 − e^(−τ/τ_m))` and its integral. Backwards in time (`tau < 0`)
+    /// only the velocity is extrapolated.
     pub(super) fn ahead(&self, tau: f32, manoeuvre_s: f32) -> (Vector3<f32>, Vector3<f32>) {
-        let decayed = manoeuvre_s * (1.0 - math::exp(-tau / manoeuvre_s));
-        let x = self.x + self.v * tau + self.acc * (manoeuvre_s * (tau - decayed));
+        let on = tau.max(0.0);
+        let decayed = manoeuvre_s * (1.0 - math::exp(-on / manoeuvre_s));
+        let x = self.x + self.v * tau + self.acc * (manoeuvre_s * (on - decayed));
         (x, self.v + self.acc * decayed)
     }
 }

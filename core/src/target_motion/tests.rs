@@ -277,6 +277,23 @@ fn the_hand_over_does_not_extrapolate_an_acceleration_for_long() {
     // The belt's speed, the acceleration over one manoeuvre time, and the estimates' spread.
     let bound = 0.1 + a.norm() * f.params().manoeuvre_s() + 0.02;
     assert!(p.velocity.v.norm() < bound && bound < a.norm() * 2.0, "{} vs {bound}", p.velocity.v.norm());
+    // Before the last estimate, and with a manoeuvre time as short or as long as the fields
+    // allow, the hand-over stays finite.
+    let back = f.predict(&PA10, &Isometry3::identity(), &joints, 0).unwrap();
+    assert!(back.psi.0.iter().all(|v| v.is_finite()) && back.velocity.v.iter().all(|v| v.is_finite()));
+    for (speed, accel) in [(1e-6, 1e6), (1e6, 1e-6)] {
+        let params =
+            TargetFilterParams { max_speed_m_s: speed, acceleration_m_s2: accel, ..TargetFilterParams::DEFAULT };
+        let mut g = TargetFilter::new(params).unwrap();
+        for k in 0..40u64 {
+            let t = (k * DT_US) as f32 * 1e-6;
+            g.update(&Isometry3::translation(0.7, reversing(t, 0.1, 0.5, 0.5).0, 0.0), &CAMERA, k * DT_US);
+        }
+        for t_us in [0, 39 * DT_US + 50_000, 39 * DT_US + 100_000_000] {
+            let p = g.predict(&PA10, &Isometry3::identity(), &joints, t_us).unwrap();
+            assert!(p.psi.0.iter().all(|v| v.is_finite()), "{speed} {accel} {t_us}: {:?}", p.psi);
+        }
+    }
 }
 
 #[test]

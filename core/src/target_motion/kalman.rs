@@ -171,3 +171,86 @@ impl SingerFilter {
         (x, self.v + self.acc * decayed)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{SMatrix, SVector};
+
+    type M9 = SMatrix<f32, 9, 9>;
+
+    /// The filter's covariance as one 9 × 9 matrix.
+    fn dense(f: &SingerFilter) -> M9 {
+        let blocks = [[f.a, f.b, f.d], [f.b.transpose(), f.c, f.e], [f.d.transpose(), f.e.transpose(), f.g]];
+        let mut p = M9::zeros();
+        for (r, row) in blocks.iter().enumerate() {
+            for (c, m) in row.iter().enumerate() {
+                p.fixed_view_mut::<3, 3>(3 * r, 3 * c).copy_from(m);
+            }
+        }
+        p
+    }
+
+    /// A filter with a full, positive definite covariance (an update after a few steps).
+    fn filter() -> SingerFilter {
+        let r = Matrix3::new(4e-6, 1e-6, 0.0, 1e-6, 9e-6, 2e-6, 0.0, 2e-6, 1e-5);
+        let mut f = SingerFilter::start(Vector3::new(0.7, 0.1, -0.05), &r, 0.5, 0.6);
+        for k in 0..5 {
+            f.predict(0.033, 0.94, 0.6);
+            let z = Vector3::new(0.7, 0.1 + 0.003 * k as f32, -0.05);
+            let inn = f.innovation(&z, &r).unwrap();
+            f.update(&inn);
+        }
+        f
+    }
+
+    #[test]
+    fn the_singer_blocks_are_the_dense_kalman_filter() {
+        let (dt, rho, sd) = (0.033f32, 0.936f32, 0.58f32);
+        let mut f = filter();
+        let p = dense(&f);
+        // F = [[I, dt, dt²/2], [0, I, dt], [0, 0, ρ]] ⊗ blocks, Q = σ²(1 − ρ²) γγᵀ, γ = [dt²/2, dt, 1].
+        let mut big_f = M9::identity();
+        let i3 = Matrix3::<f32>::identity();
+        big_f.fixed_view_mut::<3, 3>(0, 3).copy_from(&(i3 * dt));
+        big_f.fixed_view_mut::<3, 3>(0, 6).copy_from(&(i3 * (0.5 * dt * dt)));
+        big_f.fixed_view_mut::<3, 3>(3, 6).copy_from(&(i3 * dt));
+        big_f.fixed_view_mut::<3, 3>(6, 6).copy_from(&(i3 * rho));
+        let gamma = [0.5 * dt * dt, dt, 1.0];
+        let q = sd * sd * (1.0 - rho * rho);
+        let mut big_q = M9::zeros();
+        for r in 0..3 {
+            for c in 0..3 {
+                big_q.fixed_view_mut::<3, 3>(3 * r, 3 * c).copy_from(&(i3 * (q * gamma[r] * gamma[c])));
+            }
+        }
+        let state = SVector::<f32, 9>::from_iterator(f.x.iter().chain(f.v.iter()).chain(f.acc.iter()).copied());
+        let want_state = big_f * state;
+        let want = big_f * p * big_f.transpose() + big_q;
+        f.predict(dt, rho, sd);
+        let got = dense(&f);
+        let scale = want.amax();
+        assert!((got - want).amax() < 1e-5 * scale, "predict: {}", (got - want).amax() / scale);
+        let got_state = SVector::<f32, 9>::from_iterator(f.x.iter().chain(f.v.iter()).chain(f.acc.iter()).copied());
+        assert!((got_state - want_state).amax() < 1e-6);
+
+        // The update with H = [I 0 0]: K = P Hᵀ S⁻¹, P' = (I − K H) P.
+        let r = Matrix3::new(5e-6, 0.0, 0.0, 0.0, 5e-6, 0.0, 0.0, 0.0, 3e-5);
+        let z = Vector3::new(0.705, 0.12, -0.049);
+        let p = dense(&f);
+        let mut h = SMatrix::<f32, 3, 9>::zeros();
+        h.fixed_view_mut::<3, 3>(0, 0).copy_from(&i3);
+        let s_inv = (h * p * h.transpose() + r).try_inverse().unwrap();
+        let k = p * h.transpose() * s_inv;
+        let state = SVector::<f32, 9>::from_iterator(f.x.iter().chain(f.v.iter()).chain(f.acc.iter()).copied());
+        let want_state = state + k * (z - h * state);
+        let want = (M9::identity() - k * h) * p;
+        let inn = f.innovation(&z, &r).unwrap();
+        f.update(&inn);
+        let got = dense(&f);
+        let scale = p.amax();
+        assert!((got - want).amax() < 1e-4 * scale, "update: {}", (got - want).amax() / scale);
+        let got_state = SVector::<f32, 9>::from_iterator(f.x.iter().chain(f.v.iter()).chain(f.acc.iter()).copied());
+        assert!((got_state - want_state).amax() < 1e-4 * want_state.amax(), "{got_state} vs {want_state}");
+    }
+}

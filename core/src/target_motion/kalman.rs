@@ -34,6 +34,15 @@ pub(super) struct Innovation {
     s_inv: Matrix3<f32>,
 }
 
+impl Innovation {
+    /// The innovation of measurement `z` (covariance `r`) of a position estimate `x` of
+    /// covariance `p`: `y = z − x`, `S⁻¹ = (p + r)⁻¹`; `None` when `S` is singular.
+    fn of(x: &Vector3<f32>, p: &Matrix3<f32>, z: &Vector3<f32>, r: &Matrix3<f32>) -> Option<Self> {
+        let s_inv = (p + r).try_inverse()?;
+        Some(Self { y: z - x, s_inv })
+    }
+}
+
 impl CvFilter {
     /// A filter at `x` (covariance `r`) with an unknown velocity of standard deviation `sd_v`
     /// per axis.
@@ -57,8 +66,7 @@ impl CvFilter {
     /// The innovation of measurement `z` of covariance `r`; `None` when `S` is singular
     /// (never for a positive definite `r`).
     pub(super) fn innovation(&self, z: &Vector3<f32>, r: &Matrix3<f32>) -> Option<Innovation> {
-        let s_inv = (self.a + r).try_inverse()?;
-        Some(Innovation { y: z - self.x, s_inv })
+        Innovation::of(&self.x, &self.a, z, r)
     }
 
     /// The measurement update with innovation `inn`; returns the correction of `x`.
@@ -92,8 +100,7 @@ fn symmetric(m: &Matrix3<f32>) -> Matrix3<f32> {
 ///
 /// The acceleration is a first-order Markov process: over a step `dt` it decays by
 /// `ρ = e^(−dt/τ)` (`τ` the manoeuvre time) and gains a white increment of variance
-/// `σ_a² (1 − ρ²)` per axis, so its standard deviation stays `σ_a` (the largest acceleration
-/// expected). The increment enters position and velocity as a constant acceleration over the
+/// `σ_a² (1 − ρ²)` per axis, so its standard deviation stays `σ_a`. The increment enters position and velocity as a constant acceleration over the
 /// step would, `γ = [dt²/2, dt, 1]` (the discrete form of Bar-Shalom et al., §6.3.3, for
 /// `dt ≪ τ`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -140,8 +147,7 @@ impl SingerFilter {
 
     /// The innovation of measurement `z` of covariance `r`; `None` when `S` is singular.
     pub(super) fn innovation(&self, z: &Vector3<f32>, r: &Matrix3<f32>) -> Option<Innovation> {
-        let s_inv = (self.a + r).try_inverse()?;
-        Some(Innovation { y: z - self.x, s_inv })
+        Innovation::of(&self.x, &self.a, z, r)
     }
 
     /// The measurement update with innovation `inn`.
@@ -191,6 +197,11 @@ mod tests {
         p
     }
 
+    /// The filter's state `[x, ẋ, ẍ]` as one vector.
+    fn state(f: &SingerFilter) -> SVector<f32, 9> {
+        SVector::from_iterator(f.x.iter().chain(f.v.iter()).chain(f.acc.iter()).copied())
+    }
+
     /// A filter with a full, positive definite covariance (an update after a few steps).
     fn filter() -> SingerFilter {
         let r = Matrix3::new(4e-6, 1e-6, 0.0, 1e-6, 9e-6, 2e-6, 0.0, 2e-6, 1e-5);
@@ -224,15 +235,13 @@ mod tests {
                 big_q.fixed_view_mut::<3, 3>(3 * r, 3 * c).copy_from(&(i3 * (q * gamma[r] * gamma[c])));
             }
         }
-        let state = SVector::<f32, 9>::from_iterator(f.x.iter().chain(f.v.iter()).chain(f.acc.iter()).copied());
-        let want_state = big_f * state;
+        let want_state = big_f * state(&f);
         let want = big_f * p * big_f.transpose() + big_q;
         f.predict(dt, rho, sd);
         let got = dense(&f);
         let scale = want.amax();
         assert!((got - want).amax() < 1e-5 * scale, "predict: {}", (got - want).amax() / scale);
-        let got_state = SVector::<f32, 9>::from_iterator(f.x.iter().chain(f.v.iter()).chain(f.acc.iter()).copied());
-        assert!((got_state - want_state).amax() < 1e-6);
+        assert!((state(&f) - want_state).amax() < 1e-6);
 
         // The update with H = [I 0 0]: K = P Hᵀ S⁻¹, P' = (I − K H) P.
         let r = Matrix3::new(5e-6, 0.0, 0.0, 0.0, 5e-6, 0.0, 0.0, 0.0, 3e-5);
@@ -242,15 +251,15 @@ mod tests {
         h.fixed_view_mut::<3, 3>(0, 0).copy_from(&i3);
         let s_inv = (h * p * h.transpose() + r).try_inverse().unwrap();
         let k = p * h.transpose() * s_inv;
-        let state = SVector::<f32, 9>::from_iterator(f.x.iter().chain(f.v.iter()).chain(f.acc.iter()).copied());
-        let want_state = state + k * (z - h * state);
+        let before = state(&f);
+        let want_state = before + k * (z - h * before);
         let want = (M9::identity() - k * h) * p;
         let inn = f.innovation(&z, &r).unwrap();
         f.update(&inn);
         let got = dense(&f);
         let scale = p.amax();
         assert!((got - want).amax() < 1e-4 * scale, "update: {}", (got - want).amax() / scale);
-        let got_state = SVector::<f32, 9>::from_iterator(f.x.iter().chain(f.v.iter()).chain(f.acc.iter()).copied());
+        let got_state = state(&f);
         assert!((got_state - want_state).amax() < 1e-4 * want_state.amax(), "{got_state} vs {want_state}");
     }
 }

@@ -26,7 +26,7 @@
 //!   [`ServoLimits::max_rot_speed_rad_s`] (norms, direction kept).
 //! - The command moves towards them by at most `max_accel · dt` per update (norm), so it never
 //!   jumps, also when servoing starts or resumes.
-//! - Without a measurement (the tracker does not report tracking) the target twist is zero:
+//! - Without a measurement (the tracker does not hold the block) the target twist is zero:
 //!   the camera decelerates to a stop at the same acceleration limits, within
 //!   `max_speed / max_accel` seconds.
 //!
@@ -112,7 +112,7 @@ impl ServoConfig {
     }
 }
 
-/// What the law is given at a command time while the tracker reports tracking.
+/// What the law is given at a command time while the tracker holds the block.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ServoInput {
     /// `^CR T_M`: the block's pose in the camera at the command time.
@@ -230,7 +230,7 @@ impl Servo {
         (CameraTwist { v, w }, err)
     }
 
-    /// One command period of `dt_s` seconds: with `Some(input)` (the tracker reports tracking)
+    /// One command period of `dt_s` seconds: with `Some(input)` (the tracker holds the block)
     /// the command moves towards the clamped law, without it towards rest, in both cases by at
     /// most the acceleration limits times `dt_s`.
     ///

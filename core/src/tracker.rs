@@ -59,7 +59,7 @@ pub struct StereoFrame<'a, F: PixelFormat = Hue> {
 /// The tracker's output for one frame pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Estimate {
-    /// The pose `^CR ψ_M` of this frame: while [`Status::Tracking`], the mean pose of the
+    /// The pose `^CR ψ_M` of this frame: while the block is held ([`Status::holds`]), the mean pose of the
     /// individuals within [`MEASUREMENT_FITNESS_MARGIN`] of the best fitness of its last
     /// generation and within one coarse mutation step of the best
     /// ([`Ga::crowd`](crate::ga::Ga::crowd)); otherwise the best individual's.
@@ -506,7 +506,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     /// best itself); the filter's measurement
     /// ([`Estimate::target_measurement`]), taken into the world at `joints.q`, updates the
     /// target filter.
-    /// While the status is not [`Status::Tracking`], the last
+    /// While the block is not held ([`Status::holds`]), the last
     /// [`AcquireConfig::seed_immigrants`](crate::acquire::AcquireConfig::seed_immigrants) children are replaced by poses seeded from the
     /// colour blobs of the frame ([`crate::acquire`]). `dt_s` is the time since the previous
     /// frame (0 for the first). `probe` is told when each [`Phase`] begins.
@@ -532,7 +532,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
 
         // The work of this generation is decided by the status it starts in, and so is the
         // hue table: the learnt one while tracking, the search one otherwise.
-        let acquiring = self.monitor.status() != Status::Tracking;
+        let acquiring = !self.monitor.status().holds();
         self.colours.select(!acquiring);
         // A tracked frame in every few tests where the silhouettes are (`crate::edge`).
         let edge_test = !acquiring && self.edge.is_due();
@@ -562,12 +562,14 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // The status is decided on the fitness relative to what the true pose can score under
         // the current light (`crate::colour`), so that its thresholds mean the same in every light.
         let expected = self.colours.model().expected_fitness();
-        let relative = best.fitness / expected;
+        let (relative, lower) = (best.fitness / expected, cameras[0].min(cameras[1]) / expected);
         // A pose is not confirmed while the seed from the colour blobs puts the block elsewhere
         // (see `agrees_with_seed`): the frame then counts as one without a find.
         let confirmable = !acquiring || self.agrees_with_seed(&best.psi);
-        let status = self.monitor.update(if confirmable { relative } else { 0.0 }, &self.config.tuning.status);
-        if status == Status::Tracking && acquiring {
+        let (relative, lower) = if confirmable { (relative, lower) } else { (0.0, 0.0) };
+        let status = self.monitor.update(relative, lower, &self.config.tuning.status);
+        let holds = status.holds();
+        if holds && acquiring {
             self.acquisition.reset();
         }
         let alike = cameras[0].min(cameras[1]) >= LEARN_CAMERA_RATIO * cameras[0].max(cameras[1]);
@@ -575,14 +577,14 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             // The test runs on every due frame (the board's work is the same whether it teaches
             // or not); it teaches as the colours do, from a tracked pose both cameras see alike.
             let pull = edge::disparity_pull(&self.evaluator(), &best.psi, &frame.left, &frame.right);
-            if alike && status == Status::Tracking {
+            if alike && holds {
                 self.edge.learn(pull);
             }
         }
         if !acquiring {
             self.edge.tick();
         }
-        if alike && status == Status::Tracking {
+        if alike && holds {
             self.learn_colours(frame, &best);
         }
         // The target filter (one forward kinematics and a data-dependent update) runs only in the
@@ -596,7 +598,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // The centre of the near-best crowd is one peak's only while tracking: a searching
         // population's near-best individuals may sit on different peaks (the colour symmetry's
         // twins among them), whose mean is neither.
-        let psi = if status == Status::Tracking { estimate } else { best.psi };
+        let psi = if holds { estimate } else { best.psi };
         Ok(Estimate {
             psi,
             fitness: best.fitness,

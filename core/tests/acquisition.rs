@@ -43,21 +43,29 @@ fn finds_the_block_says_so_loses_it_on_blank_frames_and_recovers() {
     for seed in [1, 2, 3] {
         let mut t = tracker(seed);
         assert_eq!(t.status(), Status::Searching);
-        let mut first_tracking = None;
+        let (mut first_held, mut first_tracking, mut worst_tracked) = (None, None, 0.0f32);
         let mut last = None;
         // 40 generations: the refinement seeds the GA within ~4 mm by generation 10; the GA
         // then trades depth against orientation for a few generations (1 px of disparity is
         // 16 mm at 0.8 m in this 320 x 240 rig) and settles within 10 mm by generation ~30.
         for i in 0..40 {
             let e = t.step(&frame(&l, &r, W, H), &STILL, 0.033).unwrap();
-            if e.status == Status::Tracking && first_tracking.is_none() {
-                first_tracking = Some(i);
+            if e.status.holds() && first_held.is_none() {
+                first_held = Some(i);
+            }
+            if e.status == Status::Tracking {
+                first_tracking = first_tracking.or(Some(i));
+                worst_tracked = worst_tracked.max((e.psi.translation() - truth.translation()).norm());
             }
             last = Some(e);
         }
         let e = last.unwrap();
         let err = (e.psi.translation() - truth.translation()).norm();
-        assert!(first_tracking.is_some_and(|i| i <= 10), "seed {seed}: first tracking {first_tracking:?}");
+        // Held once a candidate fits; reported tracking once both cameras confirm it, and then
+        // within the stated accuracy.
+        assert!(first_held.is_some_and(|i| i <= 10), "seed {seed}: first held {first_held:?}");
+        assert!(first_tracking.is_some_and(|i| i <= 20), "seed {seed}: first tracking {first_tracking:?}");
+        assert!(worst_tracked < 0.01, "seed {seed}: tracking {worst_tracked} m off");
         assert_eq!(e.status, Status::Tracking);
         assert!(err < 0.01, "seed {seed}: {err} m");
         // The block disappears: lost at once, never tracking while it is gone.

@@ -53,7 +53,7 @@ fn assert_identical(method: Feedforward, on_board: &ClosedLoopOutput, on_host: &
     let last = on_board.servo.len() - 1;
     assert!((err(0) - 0.1).abs() < 2e-3, "{}", err(0));
     assert!(err(last) < 0.03, "{}", err(last));
-    assert!(on_board.servo[last].tracking);
+    assert!(on_board.servo[last].held);
 }
 
 #[test]

@@ -31,8 +31,8 @@
 //! the fitness is flat (depth above all), and the filter reads that back as motion.
 //!
 //! **Restarts.** A time step backwards or longer than [`TargetFilterParams::max_gap_s`] restarts
-//! the filter at the newest estimate; an estimate the tracker does not report as
-//! [`Status::Tracking`] resets it. No estimate is gated out as an outlier: a GA estimate's errors
+//! the filter at the newest estimate; an estimate of a block the tracker does not hold
+//! ([`Status::holds`]: searching or lost) resets it. No estimate is gated out as an outlier: a GA estimate's errors
 //! are not Gaussian (it keeps its elite for frames, then jumps to a better individual), and a
 //! gate sized for the camera model's noise rejects those jumps, restarts the filter and loses a
 //! block in the middle of a reversal; a block that is really gone is the tracker's status to
@@ -294,9 +294,9 @@ impl TargetFilter {
 
     /// Feeds the tracker's estimate `psi` (`^CR ψ_M`, with its `status`) of the frame captured
     /// with `joints`: the estimate taken into the world through `chain` at `joints.q` and
-    /// `flange_to_camera` ([`world_pose`]) at `joints.time_us`. An estimate that is not
-    /// [`Status::Tracking`] is no measurement of the block (searching, or carried along after
-    /// the block was lost), so the filter resets. The tracker feeds its own filter with this
+    /// `flange_to_camera` ([`world_pose`]) at `joints.time_us`. An estimate of a block that is
+    /// not held ([`Status::holds`]) is no measurement of it (searching, or carried along after
+    /// the block was lost), so the filter resets; an [`Status::Uncertain`] one is. The tracker feeds its own filter with this
     /// call; a board that receives only the estimates feeds its copy with the same call on the
     /// same numbers, so its predictions are the tracker's.
     pub fn update_from_estimate<const DOF: usize>(
@@ -307,7 +307,7 @@ impl TargetFilter {
         psi: &Psi,
         status: Status,
     ) -> UpdateOutcome {
-        if status != Status::Tracking {
+        if !status.holds() {
             self.track = None;
             self.last_outcome = Some(UpdateOutcome::Lost);
             return UpdateOutcome::Lost;

@@ -4,7 +4,7 @@ use super::{Feedforward, Field, Kind, Rule, Tuning, Value, count, int, method_na
 
 /// Every tuning field, in order: the run's mode and limits, the GA, the acquisition, the
 /// status thresholds, the target motion model.
-pub const FIELDS: [Field; 55] = [
+pub const FIELDS: [Field; 56] = [
     Field {
         name: "method",
         unit: "",
@@ -266,8 +266,15 @@ pub const FIELDS: [Field; 55] = [
         "status.confirm_frames",
         "frames",
         AtLeastOne,
-        "frames in a row found before tracking (one status decision per frame)",
+        "frames in a row found before held, and certain before tracking (one status decision per frame)",
         status.confirm_frames
+    ),
+    real!(
+        "status.certain_fitness",
+        "fitness",
+        Unit,
+        "lower camera's fitness relative to the expected score at or above which a held pose is reported tracking",
+        status.certain_fitness
     ),
     real!(
         "status.lose_fitness",

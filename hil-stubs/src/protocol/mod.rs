@@ -77,7 +77,8 @@ pub const DOF: usize = PA10_DOF;
 
 /// First four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"EVRC";
-/// Protocol version carried in every header (11: `ESTIMATE` carries the target filter's whole
+/// Protocol version carried in every header (13: estimates may carry the status `uncertain`
+/// (code 3), and `CONFIG` the tuning field `status.certain_fitness`; 11: `ESTIMATE` carries the target filter's whole
 /// measurement ψ\[6\]; 10: `CONFIG` carries the whole tuning as the
 /// core's field table, [`evorec_core::tuning::FIELDS`], acquisition and status included; 9:
 /// `CONFIG` carries the six parameters of the target motion model; 8: `CONFIG` carries the target filter's
@@ -86,7 +87,7 @@ pub const MAGIC: [u8; 4] = *b"EVRC";
 /// header flags, drop counts in `DONE`; 4: `CONFIG` carries the population size; 3:
 /// estimates carry the tracker's status; 2: frames carry the sensor's RGB565 pixels; 1: hue
 /// frames).
-pub const VERSION: u8 = 12;
+pub const VERSION: u8 = 13;
 /// The pixel format of a frame's images on the link: the camera sensor's own RGB565, so the
 /// hue is computed on the board (see [`evorec_core::image::Rgb565`]).
 pub type LinkFormat = evorec_core::image::Rgb565;

@@ -97,14 +97,14 @@ fn report_handover(h: Option<&experiment::HandoverSummary>) {
 
 fn report_servo(s: &closed_loop::ServoSummary) {
     println!(
-        "servo (t >= {:.1} s): RMS error {:.2} mm / {:.3} deg, spread {:.2} mm / {:.3} deg, {} frames not tracking, \
+        "servo (t >= {:.1} s): RMS error {:.2} mm / {:.3} deg, spread {:.2} mm / {:.3} deg, {} frames not held, \
          max camera speed {:.3} m/s: {}",
         s.steady_from_s,
         s.rms_err_mm,
         s.rms_err_deg,
         s.spread_mm,
         s.spread_deg,
-        s.frames_not_tracking,
+        s.frames_not_held,
         s.max_camera_speed_m_s,
         s.outcome.as_str()
     );

@@ -15,9 +15,12 @@
 //!    same [`ServoBoard`]; the estimate (with the tracker's status) updates the board's copy
 //!    of the target filter and is queued until it reaches the servo.
 //!
-//! The servo moves only on estimates whose status is [`Status::Tracking`] (the tracker's own
-//! decision, with its confirmation generations: see `evorec_core::status`); otherwise it
-//! decelerates to a stop within its limits and resumes when the tracker says tracking again.
+//! The servo moves only on estimates of a block the tracker holds ([`Status::holds`](evorec_core::status::Status::holds): tracking,
+//! or uncertain — followed, its pose not confirmed to the stated accuracy; see
+//! `evorec_core::status`); otherwise it decelerates to a stop within its limits and resumes when
+//! the tracker holds the block again. A velocity servo corrects an approximate pose frame by
+//! frame, and a block that manoeuvres is held but uncertain on many frames: a servo that stopped
+//! on them would lose it. A robot that acts on the absolute pose (a grasp) waits for tracking.
 
 use std::collections::VecDeque;
 
@@ -26,7 +29,6 @@ use evorec_core::feedforward::{self, CameraTwist};
 use evorec_core::kinematics::PA10;
 use evorec_core::pose::Psi;
 use evorec_core::servo::{PoseError, Servo, ServoConfig, ServoInput, ServoLimits};
-use evorec_core::status::Status;
 use evorec_core::target_motion::{self, TargetFilter};
 use evorec_core::tracker::{Estimate, Feedforward, JointSample};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
@@ -79,8 +81,8 @@ pub struct ServoRow {
     pub command: CameraTwist,
     /// True servo error: the true relative pose against the desired one.
     pub error: PoseError,
-    /// Whether the servo was acting on a tracked estimate at `t`.
-    pub tracking: bool,
+    /// Whether the servo was acting on an estimate of a held block at `t`.
+    pub held: bool,
     /// Whether the block was hidden in this frame.
     pub occluded: bool,
     /// Largest true camera speed since the previous frame (m/s, from `q̇`).
@@ -107,7 +109,7 @@ pub const SERVO_COLUMNS: [&str; 15] = [
     "servo_ez_mm",
     "servo_err_mm",
     "servo_err_deg",
-    "tracking",
+    "held",
     "occluded",
     "camera_speed_m_s",
     "camera_rot_speed_rad_s",
@@ -121,7 +123,7 @@ impl ServoRow {
         rec.extend(self.error.translation.iter().map(|v| format!("{:.4}", v * 1e3)));
         rec.push(format!("{:.4}", self.error.translation_norm() * 1e3));
         rec.push(format!("{:.4}", self.error.rotation_norm().to_degrees()));
-        rec.push(u8::from(self.tracking).to_string());
+        rec.push(u8::from(self.held).to_string());
         rec.push(u8::from(self.occluded).to_string());
         rec.push(format!("{:.6}", self.camera_speed_m_s));
         rec.push(format!("{:.6}", self.camera_rot_speed_rad_s));
@@ -140,7 +142,7 @@ pub enum Outcome {
     Oscillating,
     /// The servo error grows or exceeds [`DIVERGED_MM`] / [`DIVERGED_DEG`].
     Diverged,
-    /// The tracker lost the block (not tracking outside an occlusion in the second half, or
+    /// The tracker lost the block (not held outside an occlusion in the second half, or
     /// its error above [`LOST_TRACKER_M`] at the end).
     Lost,
 }
@@ -184,8 +186,8 @@ pub struct ServoSummary {
     pub spread_mm: f64,
     /// Standard deviation of the rotation error about its mean (degrees).
     pub spread_deg: f64,
-    /// Frames in which the servo was not acting on a tracked estimate.
-    pub frames_not_tracking: usize,
+    /// Frames in which the servo was not acting on an estimate of a held block.
+    pub frames_not_held: usize,
     /// Largest true camera speed over the run (m/s).
     pub max_camera_speed_m_s: f64,
     /// Largest commanded speed over the run (m/s).
@@ -222,7 +224,7 @@ impl ServoSummary {
             max_err_mm: max_t * 1e3,
             spread_mm: (var_t / n).sqrt() * 1e3,
             spread_deg: (var_r / n).sqrt().to_degrees(),
-            frames_not_tracking: rows.iter().filter(|r| !r.tracking).count(),
+            frames_not_held: rows.iter().filter(|r| !r.held).count(),
             max_camera_speed_m_s: rows.iter().map(|r| r.camera_speed_m_s).fold(0.0, f64::max),
             max_command_speed_m_s: rows.iter().map(|r| norm(&r.command.v)).fold(0.0, f64::max),
             outcome: Outcome::Converged,
@@ -232,7 +234,7 @@ impl ServoSummary {
 }
 
 fn classify(s: &ServoSummary, steady: &[&ServoRow]) -> Outcome {
-    let lost_frames = steady.iter().any(|r| !r.tracking && !r.occluded);
+    let lost_frames = steady.iter().any(|r| !r.held && !r.occluded);
     let lost_end = steady.last().is_none_or(|r| r.tracker_error_m > LOST_TRACKER_M);
     if lost_frames || lost_end {
         return Outcome::Lost;
@@ -259,7 +261,7 @@ struct Released {
     psi: Psi,
     q: [f32; DOF],
     filter: TargetFilter,
-    tracking: bool,
+    held: bool,
 }
 
 /// The servo side of the 1 kHz loop: hand-over, law, setpoint integration.
@@ -270,7 +272,7 @@ struct Controller {
     setpoint: Option<Isometry3<f64>>,
     pending: VecDeque<(f64, Released)>,
     latest: Option<Released>,
-    tracking: bool,
+    held: bool,
     target_velocity: bool,
     speed: f64,
     rot_speed: f64,
@@ -298,12 +300,12 @@ impl Controller {
         let now = arm.time();
         while self.pending.front().is_some_and(|(t, _)| *t <= now + 1e-6) {
             if let Some((_, r)) = self.pending.pop_front() {
-                self.tracking = r.tracking;
+                self.held = r.held;
                 self.latest = Some(r);
             }
         }
         let joints = arm.joint_sample();
-        let input = if self.tracking { self.latest.as_ref().and_then(|r| self.hand_over(r, &joints)) } else { None };
+        let input = if self.held { self.latest.as_ref().and_then(|r| self.hand_over(r, &joints)) } else { None };
         let dt = CONTROL_PERIOD_S as f32;
         let out = match self.servo.update(input.as_ref(), dt) {
             Ok(o) => o.command,
@@ -446,7 +448,7 @@ impl ServoLoop {
             setpoint: None,
             pending: VecDeque::new(),
             latest: None,
-            tracking: false,
+            held: false,
             target_velocity: opts.target_velocity,
             speed: 0.0,
             rot_speed: 0.0,
@@ -481,15 +483,15 @@ impl ArmController for ServoLoop {
             let measured = &est.target_measurement;
             self.filter.update_from_estimate(&PA10, &self.ctl.mount, &joints, measured, est.status);
         }
-        let tracking = est.status == Status::Tracking;
-        let released = Released { psi: est.psi, q: joints.q, filter: self.filter, tracking };
+        let held = est.status.holds();
+        let released = Released { psi: est.psi, q: joints.q, filter: self.filter, held };
         self.ctl.pending.push_back((t + self.delay_s, released));
         let true_rel: Isometry3<f32> = world.target_in_camera().cast();
         self.rows.push(ServoRow {
             t,
             command: *self.ctl.servo.command(),
             error: PoseError::between(&true_rel, &self.desired),
-            tracking: self.ctl.tracking,
+            held: self.ctl.held,
             occluded: hidden,
             camera_speed_m_s: std::mem::take(&mut self.ctl.speed),
             camera_rot_speed_rad_s: std::mem::take(&mut self.ctl.rot_speed),
@@ -663,14 +665,14 @@ mod tests {
             start + (2.0 + f64::from(sec.delay_frames)) * s.frame_period_s + sec.max_speed_m_s / sec.max_accel_m_s2;
         for r in rows.iter().filter(|r| r.t > stop_by && r.t < start + duration) {
             assert!(r.camera_speed_m_s < 1e-3, "still moving at t = {}: {} m/s", r.t, r.camera_speed_m_s);
-            assert!(!r.tracking);
+            assert!(!r.held);
         }
         // Never above the speed limit, also when it resumes.
         for r in rows {
             assert!(r.camera_speed_m_s <= sec.max_speed_m_s * 1.02, "t = {}: {} m/s", r.t, r.camera_speed_m_s);
         }
         // Tracking again within 0.5 s of reappearance, and converged at the end.
-        let back = rows.iter().find(|r| r.t >= start + duration && r.tracking).map(|r| r.t);
+        let back = rows.iter().find(|r| r.t >= start + duration && r.held).map(|r| r.t);
         assert!(back.is_some_and(|t| t < start + duration + 0.5), "{back:?}");
         let last = rows.last().map(|r| r.error.translation_norm()).unwrap_or(1.0);
         assert!(last < 0.005, "{last}");

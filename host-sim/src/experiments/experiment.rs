@@ -137,6 +137,8 @@ pub struct StatusCounts {
     pub tracking: usize,
     /// Frames reported as lost.
     pub lost: usize,
+    /// Frames reported as uncertain (the block held, its pose not confirmed).
+    pub uncertain: usize,
     /// Frames in which the block was hidden (occluded or removed).
     pub hidden: usize,
     /// Hidden frames reported as tracking.
@@ -154,6 +156,7 @@ impl StatusCounts {
                 Status::Searching => c.searching += 1,
                 Status::Tracking => c.tracking += 1,
                 Status::Lost => c.lost += 1,
+                Status::Uncertain => c.uncertain += 1,
             }
             c.hidden += usize::from(r.hidden);
             c.tracking_while_hidden += usize::from(r.hidden && r.status == Status::Tracking);

@@ -202,13 +202,13 @@ fn write_error_series(rows: &[closed_loop::ServoRow], dir: &Path) -> Result<()> 
                 format!("{:.3}", r.t),
                 format!("{:.4}", r.error.translation_norm() * 1e3),
                 format!("{:.4}", r.error.rotation_norm().to_degrees()),
-                u8::from(r.tracking).to_string(),
+                u8::from(r.held).to_string(),
                 format!("{:.5}", r.camera_speed_m_s),
                 format!("{:.4}", r.tracker_error_m * 1e3),
             ]
         })
         .collect();
-    let columns = ["t", "servo_err_mm", "servo_err_deg", "tracking", "camera_speed_m_s", "tracker_err_mm"];
+    let columns = ["t", "servo_err_mm", "servo_err_deg", "held", "camera_speed_m_s", "tracker_err_mm"];
     io::write_csv(&dir.join("servo_error.csv"), &columns, &records)
 }
 
@@ -223,7 +223,7 @@ pub const COLUMNS: [&str; 12] = [
     "max_err_mm",
     "spread_mm",
     "spread_deg",
-    "frames_not_tracking",
+    "frames_not_held",
     "max_camera_speed_m_s",
     "outcome",
 ];
@@ -239,7 +239,7 @@ fn fields(c: &Cell, s: &ServoSummary) -> [String; 12] {
         format!("{:.2}", s.max_err_mm),
         format!("{:.2}", s.spread_mm),
         format!("{:.3}", s.spread_deg),
-        s.frames_not_tracking.to_string(),
+        s.frames_not_held.to_string(),
         format!("{:.3}", s.max_camera_speed_m_s),
         s.outcome.as_str().to_owned(),
     ]

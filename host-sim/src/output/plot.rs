@@ -291,6 +291,7 @@ fn fitness_plot(fitness: &Path, trace: &Trace, title: &str) -> anyhow::Result<()
             ("searching", RGBColor(150, 150, 150)),
             ("tracking", RGBColor(44, 160, 44)),
             ("lost", RGBColor(214, 39, 40)),
+            ("uncertain", RGBColor(255, 127, 14)),
         ] {
             let marks: Vec<(f64, f64)> = trace
                 .column("t")

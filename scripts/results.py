@@ -28,6 +28,8 @@ Runs, into WORK (default target/results), each step named as it runs:
                                                           (written to WORK/seeds/scenarios/)
            evorec run scenarios/conveyor_ff_target.toml --seed N --out WORK/seeds/conveyor/seed-N
                                                           the sideways reversing belt
+           evorec run scenarios/belt_{stop_start,reverse}.toml --seed N --out WORK/seeds/{stop-start,reverse}/seed-N
+                                                          the belts that stop, start and reverse
            evorec track WORK/bags/pr-iiwa-sway --seed N --out WORK/seeds/pr-iiwa-sway/seed-N
                                                           the camera-like bag, if under BAGS
            evorec run scenarios/servo_belt_reverse.toml --seed N --out WORK/seeds/servo-belt/seed-N
@@ -113,6 +115,8 @@ BLOCK_DOCS = ['README.md', os.path.join('docs', 'timing.md'), os.path.join('docs
 AXIAL_BELTS = [(name, f'scenarios/{name}_ff_target.toml', speed)
                for name in ('approach', 'recede') for speed in ('0.05', '0.1', '0.2')]
 REVERSING_BELT = 'scenarios/conveyor_ff_target.toml'
+# The belts that stop, start and reverse hard: (WORK/seeds name, scenario).
+MANOEUVRE_BELTS = [('stop-start', 'scenarios/belt_stop_start.toml'), ('reverse', 'scenarios/belt_reverse.toml')]
 SEEDS_BAG = 'pr-iiwa-sway'
 # The closed loop against a reversing belt: its seeds, and the time from which its servo error counts.
 SERVO_BELT = 'scenarios/servo_belt_reverse.toml'
@@ -354,28 +358,39 @@ def axial_section(w, seeds):
     return '\n'.join(head + rows + foot), sentence
 
 
-def reversing_section(w, seeds):
-    """(results.md section, belt-reversing sentence) of the sideways reversing belt."""
-    runs = summaries(seed_dirs(f'{w}/seeds/conveyor', seeds))
+def belt_table(w, seeds, name):
+    """(results.md table, medians, pooled wrong (frames, tracking frames, percent), runs lost) of
+    the belt whose seed runs are under WORK/seeds/NAME."""
+    runs = summaries(seed_dirs(f'{w}/seeds/{name}', seeds))
     head = ['| seed | RMS x mm | RMS y mm | RMS z mm | RMS rotation ° | F̄ | frames `tracking` | of them wrong | '
-            '`tracking_wrong_fraction` | frames `lost` |', '|---|---|---|---|---|---|---|---|---|---|']
+            '`tracking_wrong_fraction` | longest wrong | frames `uncertain` | frames `lost` |',
+            '|---|---|---|---|---|---|---|---|---|---|---|---|']
     rows = [f"| {n} | {s['rms_x_mm']:.2f} | {s['rms_y_mm']:.2f} | {s['rms_z_mm']:.2f} | {s['rms_rot_deg']:.2f} | "
             f"{s['F_mean']:.4f} | {s['tracking_frames']} | {s['tracking_wrong_frames']} | "
-            f"{s['tracking_wrong_fraction']:.4f} | {s['status']['lost']} |" for n, s in enumerate(runs, 1)]
+            f"{s['tracking_wrong_fraction']:.4f} | {s['longest_wrong_tracking_frames']} | "
+            f"{s['status'].get('uncertain', 0)} | {s['status']['lost']} |" for n, s in enumerate(runs, 1)]
     med = {k: statistics.median(s[k] for s in runs) for k in ('rms_x_mm', 'rms_y_mm', 'rms_z_mm', 'rms_rot_deg', 'F_mean',
                                                                'tracking_wrong_fraction')}
-    wrong, tracking, pct = pooled_wrong(runs)
+    wrong = pooled_wrong(runs)
     lost = sum(1 for s in runs if s['status']['lost'] > 0)
+    longest = max(s['longest_wrong_tracking_frames'] for s in runs)
+    frames = sum(s['frames'] for s in runs)
     foot = [f"| median | **{med['rms_x_mm']:.2f}** | **{med['rms_y_mm']:.2f}** | **{med['rms_z_mm']:.2f}** | "
-            f"{med['rms_rot_deg']:.2f} | {med['F_mean']:.4f} | | | {med['tracking_wrong_fraction']:.4f} | |",
-            f"| all seeds | | | | | | {tracking} | {wrong} | **{wrong / tracking if tracking else 0:.4f}** (pooled) | "
-            f'{lost} of {seeds} runs |']
+            f"{med['rms_rot_deg']:.2f} | {med['F_mean']:.4f} | | | {med['tracking_wrong_fraction']:.4f} | | | |",
+            f"| all seeds | | | | | | {wrong[1]} of {frames} | {wrong[0]} | **{wrong[2] / 100:.4f}** (pooled) | "
+            f"{longest} (max) | {sum(s['status'].get('uncertain', 0) for s in runs)} | {lost} of {seeds} runs |"]
+    return '\n'.join(head + rows + foot), med, wrong, lost
+
+
+def reversing_section(w, seeds):
+    """(results.md section, belt-reversing sentence) of the sideways reversing belt."""
+    table, med, (_, _, pct), lost = belt_table(w, seeds, 'conveyor')
     speed = re.search(r'(?m)^conveyor_speed_m_s = (\S+)', open(os.path.join(ROOT, REVERSING_BELT), encoding='utf-8').read())
     sentence = (f'A block crossing the view at {speed.group(1) if speed else "?"} m/s and reversing, GA seeds '
                 f"1–{seeds}: median RMS x / y / z {med['rms_x_mm']:.2f} / {med['rms_y_mm']:.2f} / {med['rms_z_mm']:.2f} "
-                f'mm; {pct:.1f} % of the frames reported `tracking` over 10 mm or 5° off; `lost` reported in {lost} of '
+                f'mm; {pct:.2f} % of the frames reported `tracking` over 10 mm or 5° off; `lost` reported in {lost} of '
                 f'{seeds} runs.')
-    return '\n'.join(head + rows + foot), sentence
+    return table, sentence
 
 
 def pr_section(w, seeds, tracked):
@@ -606,6 +621,9 @@ def main():
                       for n, d in enumerate(seed_dirs(f'{w}/seeds/{name}-{speed}', a.seeds), 1)]
     seed_runs += [([evorec, '-q', 'run', os.path.join(ROOT, REVERSING_BELT), '--seed', str(n), '--out', d], d)
                   for n, d in enumerate(seed_dirs(f'{w}/seeds/conveyor', a.seeds), 1)]
+    for name, path in MANOEUVRE_BELTS:
+        seed_runs += [([evorec, '-q', 'run', os.path.join(ROOT, path), '--seed', str(n), '--out', d], d)
+                      for n, d in enumerate(seed_dirs(f'{w}/seeds/{name}', a.seeds), 1)]
     bag_seq = f'{w}/bags/{SEEDS_BAG}'
     pr_tracked = any(name == SEEDS_BAG for name, *_ in bags_with_truth(a.bags))
     if pr_tracked:
@@ -625,6 +643,8 @@ def main():
     paper_md, readme_table = paper_sections(f'{w}/paper')
     axial_md, axial = axial_section(w, a.seeds)
     reversing_md, reversing = reversing_section(w, a.seeds)
+    manoeuvre_md = '\n\n'.join(f'`evorec run {path} --seed N --out DIR`, N = 1–{a.seeds}:\n\n' + belt_table(w, a.seeds, name)[0]
+                               for name, path in MANOEUVRE_BELTS)
     pr_md, pr = pr_section(w, a.seeds, pr_tracked)
     servo_md, servo = servo_section(f'{w}/servo')
     servo_belt_md, servo_belt = servo_belt_section(w, servo_seeds)
@@ -683,6 +703,13 @@ row "all seeds" pools the frames of every seed (the figure stated elsewhere):
 {reversing_md}
 
 {block('belt-reversing')}
+
+## Belts that stop, start and reverse
+
+The block on a belt that stops and starts, and on one that reverses hard (the scenarios' first
+lines say how; GA seeds 1–{a.seeds}, 72 s each); columns as above:
+
+{manoeuvre_md}
 
 ## `{SEEDS_BAG}` over GA seeds
 

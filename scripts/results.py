@@ -417,11 +417,13 @@ def pr_section(w, seeds, tracked):
         return text, f'`{SEEDS_BAG}`, GA seeds 1–{seeds}: found in none of the seeds.'
     med = lambda k: statistics.median(s['after_within'][k] for s in found)
     frame = statistics.median(s['within_from_frame'] for s in found)
+    frames = sum(s['frames'] for s in runs)
     foot = [f"| median | **{frame:g}** | **{med('rms_x_mm'):.2f} / {med('rms_y_mm'):.2f} / {med('rms_z_mm'):.2f}** | "
             f"**{med('rms_rot_deg'):.2f}** | {tracking} (all) | {wrong} (all) |"]
     sentence = (f'`{SEEDS_BAG}`, GA seeds 1–{seeds}: found in {len(found)} of {seeds} at frame {frame:g} (median), '
                 f"then median RMS x / y / z {med('rms_x_mm'):.2f} / {med('rms_y_mm'):.2f} / {med('rms_z_mm'):.2f} mm "
-                f"and rotation {med('rms_rot_deg'):.2f}°; {wrong} of {tracking:,} frames reported `tracking` over 10 mm or 5° off.")
+                f"and rotation {med('rms_rot_deg'):.2f}°; `tracking` on {100 * tracking / frames:.0f} % of the frames, "
+                f"{wrong} of them over 10 mm or 5° off.")
     return '\n'.join(head + rows + foot), sentence
 
 

@@ -10,7 +10,7 @@
 //!   ([`super::results`]); **only while the status is `tracking`**, so a consumer never takes a
 //!   searching or lost estimate for the block.
 //! - `/evorec/status` — `diagnostic_msgs/msg/DiagnosticArray`, every frame: one status named
-//!   `evorec: block`, level `OK` while tracking and `WARN` while searching or lost, the status
+//!   `evorec: block`, level `OK` while tracking and `WARN` while searching, uncertain or lost, the status
 //!   as its message and the values `status` and `fitness` (status and fitness in one message of
 //!   the type ROS tools such as `rqt_robot_monitor` show).
 //! - `/tf` — `tf2_msgs/msg/TFMessage`, while tracking: right camera → `evorec_block` (the

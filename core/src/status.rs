@@ -33,8 +33,8 @@
 //! 2. **Confirmed or not**, while held: the pose is reported [`Status::Tracking`] once the lower
 //!    of the two cameras' relative fitness `F_min` has been at or above `certain_fitness` for
 //!    `confirm_frames` in a row, and [`Status::Uncertain`] from the first frame below. Both
-//!    cameras must fit on their own: a lock one camera sees well and the other does not (a wrong
-//!    depth, a pair whose images are not of one instant) is not confirmed.
+//!    cameras must fit on their own: a lock one camera sees well and the other does not (most
+//!    often a wrong depth) is not confirmed.
 //!
 //! `F` is the fraction of the model's inner points that see their face's hue, minus the
 //! contour points that see a face hue (eq. 34–35). Without the block in the images no pose

@@ -325,6 +325,58 @@ mod tests {
         assert_eq!(alike(&mut m, 0.1, &c), Status::Searching);
     }
 
+    /// The held decision as it was before the confirmation: three statuses on the mean fitness.
+    fn held_reference(status: Status, good: u16, bad: u16, doubt: u16, lost_for: &mut u16, c: &StatusConfig) -> Status {
+        match status {
+            Status::Tracking if bad >= c.lose_frames || doubt >= DOUBT_FRAMES => {
+                *lost_for = 0;
+                Status::Lost
+            }
+            Status::Tracking => Status::Tracking,
+            Status::Searching | Status::Lost if good >= c.confirm_frames => Status::Tracking,
+            Status::Lost => {
+                *lost_for = lost_for.saturating_add(1);
+                if *lost_for >= c.lost_frames_to_search { Status::Searching } else { Status::Lost }
+            }
+            other => other,
+        }
+    }
+
+    /// Fitness levels on every side of the thresholds, the frames above the held bar likeliest.
+    fn level() -> impl proptest::strategy::Strategy<Value = f32> {
+        proptest::sample::select(std::vec![0.0f32, 0.3, 0.4, 0.6, 0.75, 0.85, 0.89, 0.9, 0.95, 1.0, 1.0, f32::NAN])
+    }
+
+    proptest::proptest! {
+        /// Whatever the fitness, the block is held exactly when the three-status machine on the
+        /// mean fitness says tracking (so the tracker's work is what it was), and a frame is
+        /// reported `tracking` only with its lower camera at the bar.
+        #[test]
+        fn held_is_the_mean_fitness_machine_and_tracking_needs_the_lower_camera(
+            runs in proptest::collection::vec((level(), level(), 1usize..16), 1..60),
+            lost_frames_to_search in 1u16..20,
+        ) {
+            let c = StatusConfig { lost_frames_to_search, ..StatusConfig::DEFAULT };
+            let mut m = StatusMonitor::new(Status::Searching);
+            let (mut reference, mut good, mut bad, mut doubt, mut lost_for) = (Status::Searching, 0u16, 0u16, 0u16, 0u16);
+            // Runs of equal frames, so that every counter reaches its threshold.
+            let frames = runs.iter().flat_map(|&(mean, lower, n)| core::iter::repeat_n((mean, lower), n));
+            for (mean, lower) in frames {
+                let status = m.update(mean, lower, &c);
+                let ok = mean >= c.acquire_fitness;
+                good = if ok { good + 1 } else { 0 };
+                bad = if mean >= c.lose_fitness { 0 } else { bad + 1 };
+                doubt = if ok { 0 } else { doubt + 1 };
+                reference = held_reference(reference, good, bad, doubt, &mut lost_for, &c);
+                proptest::prop_assert_eq!(status.holds(), reference == Status::Tracking);
+                if !status.holds() {
+                    proptest::prop_assert_eq!(status, reference);
+                }
+                proptest::prop_assert!(status != Status::Tracking || lower >= c.certain_fitness);
+            }
+        }
+    }
+
     #[test]
     fn codes_round_trip() {
         for s in Status::ALL {

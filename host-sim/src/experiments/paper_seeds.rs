@@ -219,6 +219,8 @@ mod tests {
             tracking_wrong_frames: 25,
             tracking_wrong_fraction: 0.0125,
             longest_wrong_tracking_frames: 7,
+            uncertain_frames: 150,
+            uncertain_wrong_frames: 30,
         };
         let rec = record(&SeedRun { cell, seed: 4, accuracy, wrong_tracking });
         assert_eq!(rec.join(","), "B,0.125,4,0.9984,0.362515,0.41,1.98,0.00118765,0.0032,1.23e-05,0.0125,7");

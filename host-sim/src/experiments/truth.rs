@@ -240,6 +240,10 @@ pub struct WrongTracking {
     pub tracking_wrong_fraction: f64,
     /// The longest run of consecutive frames reported as tracking and wrong.
     pub longest_wrong_tracking_frames: usize,
+    /// Frames reported as uncertain (the block held, its pose not confirmed).
+    pub uncertain_frames: usize,
+    /// Of those, the frames whose estimate is not within 10 mm and 5° of the truth.
+    pub uncertain_wrong_frames: usize,
 }
 
 impl WrongTracking {
@@ -254,6 +258,9 @@ impl WrongTracking {
             w.tracking_wrong_frames += usize::from(wrong);
             run = if wrong { run + 1 } else { 0 };
             w.longest_wrong_tracking_frames = w.longest_wrong_tracking_frames.max(run);
+            let uncertain = status == Status::Uncertain;
+            w.uncertain_frames += usize::from(uncertain);
+            w.uncertain_wrong_frames += usize::from(uncertain && !within);
         }
         if w.tracking_frames > 0 {
             w.tracking_wrong_fraction = w.tracking_wrong_frames as f64 / w.tracking_frames as f64;
@@ -325,9 +332,12 @@ mod tests {
 
     #[test]
     fn wrong_tracking_counts_tracking_frames_off_the_truth() {
-        let (t, s, l) = (Status::Tracking, Status::Searching, Status::Lost);
-        let w = WrongTracking::of([(s, false), (t, true), (t, false), (t, false), (l, false), (t, false), (t, true)]);
+        let (t, s, l, u) = (Status::Tracking, Status::Searching, Status::Lost, Status::Uncertain);
+        let frames =
+            [(s, false), (t, true), (t, false), (t, false), (u, false), (l, false), (t, false), (u, true), (t, true)];
+        let w = WrongTracking::of(frames);
         assert_eq!((w.tracking_frames, w.tracking_wrong_frames, w.longest_wrong_tracking_frames), (5, 3, 2));
+        assert_eq!((w.uncertain_frames, w.uncertain_wrong_frames), (2, 1));
         assert!((w.tracking_wrong_fraction - 0.6).abs() < 1e-12);
         assert_eq!(WrongTracking::of([(s, false), (l, true)]), WrongTracking::default());
     }

@@ -208,6 +208,7 @@ fn print_track(s: &track::output::TrackSummary, t0: Instant, out: &Path) {
         s.frames_per_s,
         s.f_mean
     );
+    print!(", tracking {:.0} % of the frames", 100.0 * s.tracking_fraction);
     if let Some(a) = &s.all {
         print!(", RMS x/y/z {:.2}/{:.2}/{:.2} mm", a.rms_x_mm, a.rms_y_mm, a.rms_z_mm);
         if let Some(r) = &a.rotation {

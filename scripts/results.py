@@ -359,7 +359,7 @@ def axial_section(w, seeds):
 
 
 def belt_table(w, seeds, name):
-    """(results.md table, medians, pooled wrong (frames, tracking frames, percent), runs lost) of
+    """(results.md table, medians, percent of the tracking frames wrong (pooled), runs lost) of
     the belt whose seed runs are under WORK/seeds/NAME."""
     runs = summaries(seed_dirs(f'{w}/seeds/{name}', seeds))
     head = ['| seed | RMS x mm | RMS y mm | RMS z mm | RMS rotation ° | F̄ | frames `tracking` | of them wrong | '
@@ -371,20 +371,20 @@ def belt_table(w, seeds, name):
             f"{s['status'].get('uncertain', 0)} | {s['status']['lost']} |" for n, s in enumerate(runs, 1)]
     med = {k: statistics.median(s[k] for s in runs) for k in ('rms_x_mm', 'rms_y_mm', 'rms_z_mm', 'rms_rot_deg', 'F_mean',
                                                                'tracking_wrong_fraction')}
-    wrong = pooled_wrong(runs)
+    wrong, tracking, pct = pooled_wrong(runs)
     lost = sum(1 for s in runs if s['status']['lost'] > 0)
     longest = max(s['longest_wrong_tracking_frames'] for s in runs)
     frames = sum(s['frames'] for s in runs)
     foot = [f"| median | **{med['rms_x_mm']:.2f}** | **{med['rms_y_mm']:.2f}** | **{med['rms_z_mm']:.2f}** | "
             f"{med['rms_rot_deg']:.2f} | {med['F_mean']:.4f} | | | {med['tracking_wrong_fraction']:.4f} | | | |",
-            f"| all seeds | | | | | | {wrong[1]} of {frames} | {wrong[0]} | **{wrong[2] / 100:.4f}** (pooled) | "
+            f"| all seeds | | | | | | {tracking} of {frames} | {wrong} | **{pct / 100:.4f}** (pooled) | "
             f"{longest} (max) | {sum(s['status'].get('uncertain', 0) for s in runs)} | {lost} of {seeds} runs |"]
-    return '\n'.join(head + rows + foot), med, wrong, lost
+    return '\n'.join(head + rows + foot), med, pct, lost
 
 
 def reversing_section(w, seeds):
     """(results.md section, belt-reversing sentence) of the sideways reversing belt."""
-    table, med, (_, _, pct), lost = belt_table(w, seeds, 'conveyor')
+    table, med, pct, lost = belt_table(w, seeds, 'conveyor')
     speed = re.search(r'(?m)^conveyor_speed_m_s = (\S+)', open(os.path.join(ROOT, REVERSING_BELT), encoding='utf-8').read())
     sentence = (f'A block crossing the view at {speed.group(1) if speed else "?"} m/s and reversing, GA seeds '
                 f"1–{seeds}: median RMS x / y / z {med['rms_x_mm']:.2f} / {med['rms_y_mm']:.2f} / {med['rms_z_mm']:.2f} "

@@ -18,11 +18,11 @@
 //! out of view). On a flat image whose faces have their configured hues the learnt band is the
 //! configured one, so once every face in view has been learnt the fitness is the paper's.
 //!
-//! **Learning** ([`ColourModel::learn`]). After a frame's generations, while the best pose is
-//! tracked (a pose not yet confirmed teaches the model nothing), the colour census of that pose
-//! (`Evaluator::census`: the hue under the two deeper inner rows of every face it shows each
-//! camera, 64·G points per visible face and camera, away from the anti-aliased edges) is
-//! tallied per face ([`Tally`]). Only hues within the search band around the face's current
+//! **Learning** ([`ColourModel::learn`]). After a frame's generations, while the block is held
+//! (`tracking` or `uncertain`; a candidate not yet held teaches the model nothing), the colour
+//! census of that pose (`Evaluator::census`: the hue under the two deeper inner rows of every
+//! face it shows each camera, 64·G points per visible face and camera, away from the
+//! anti-aliased edges) is tallied per face ([`Tally`]). Only hues within the search band around the face's current
 //! centre count (a highlight has no hue, a shadow no hue, and a neighbour's colour at a
 //! partly occluded face lies outside the band). Their mean offset from the current centre moves
 //! the centre (one mean-shift step per frame); their standard deviation is the face's spread,

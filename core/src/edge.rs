@@ -17,7 +17,7 @@
 //! each camera, four single-camera evaluations ([`disparity_pull`]). If the images prefer the
 //! nearer disparity, the pose is too far for its disparity: its silhouette is too small, so the
 //! rows move inwards by [`EDGE_SHIFT_STEP_PX`]; if they prefer the farther one, outwards; a tie
-//! leaves them. The shift only learns from a tracked pose seen alike by both cameras, as the
+//! leaves them. The shift only learns from a held pose seen alike by both cameras, as the
 //! colour model does ([`crate::colour`]), and stays within [`EDGE_SHIFT_RANGE_PX`].
 //!
 //! **Bounded work.** The test runs on one tracked frame in [`EDGE_PROBE_EVERY`], whether or

@@ -531,7 +531,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
 
         // The work of this generation is decided by the status it starts in, and so is the
-        // hue table: the learnt one while tracking, the search one otherwise.
+        // hue table: the learnt one while the block is held, the search one otherwise.
         let acquiring = !self.monitor.status().holds();
         self.colours.select(!acquiring);
         // A tracked frame in every few tests where the silhouettes are (`crate::edge`).
@@ -562,20 +562,20 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // The status is decided on the fitness relative to what the true pose can score under
         // the current light (`crate::colour`), so that its thresholds mean the same in every light.
         let expected = self.colours.model().expected_fitness();
-        let (relative, lower) = (best.fitness / expected, cameras[0].min(cameras[1]) / expected);
+        let worse = cameras[0].min(cameras[1]);
         // A pose is not confirmed while the seed from the colour blobs puts the block elsewhere
         // (see `agrees_with_seed`): the frame then counts as one without a find.
         let confirmable = !acquiring || self.agrees_with_seed(&best.psi);
-        let (relative, lower) = if confirmable { (relative, lower) } else { (0.0, 0.0) };
+        let (relative, lower) = if confirmable { (best.fitness / expected, worse / expected) } else { (0.0, 0.0) };
         let status = self.monitor.update(relative, lower, &self.config.tuning.status);
         let holds = status.holds();
         if holds && acquiring {
             self.acquisition.reset();
         }
-        let alike = cameras[0].min(cameras[1]) >= LEARN_CAMERA_RATIO * cameras[0].max(cameras[1]);
+        let alike = worse >= LEARN_CAMERA_RATIO * cameras[0].max(cameras[1]);
         if edge_test {
             // The test runs on every due frame (the board's work is the same whether it teaches
-            // or not); it teaches as the colours do, from a tracked pose both cameras see alike.
+            // or not); it teaches as the colours do, from a held pose both cameras see alike.
             let pull = edge::disparity_pull(&self.evaluator(), &best.psi, &frame.left, &frame.right);
             if alike && holds {
                 self.edge.learn(pull);
@@ -595,7 +595,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
         probe.mark(Phase::Done);
 
-        // The centre of the near-best crowd is one peak's only while tracking: a searching
+        // The centre of the near-best crowd is one peak's only while the block is held: a searching
         // population's near-best individuals may sit on different peaks (the colour symmetry's
         // twins among them), whose mean is neither.
         let psi = if holds { estimate } else { best.psi };
@@ -624,8 +624,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     }
 
     /// Learns the face colours from the census of the frame's best pose (see
-    /// [`crate::colour`]): called while it is tracked, so that a pose not yet confirmed teaches
-    /// the model nothing.
+    /// [`crate::colour`]): called while the block is held, so that a candidate not yet held
+    /// teaches the model nothing.
     fn learn_colours<F: PixelFormat>(&mut self, frame: &StereoFrame<'_, F>, best: &Best) {
         let eval = self.evaluator();
         let mut tally = Tally::EMPTY;

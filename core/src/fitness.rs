@@ -746,6 +746,17 @@ impl<'m, const G: usize> Evaluator<'m, G> {
         Fitness { total: 0.5 * (left_counts.score() + right_counts.score()), left: left_counts, right: right_counts }
     }
 
+    /// How many faces of the pose `(r, t)` (in `Σ_CR`) each camera sees at full weight (see
+    /// [`FULL_VISIBLE_COS`]), `[left, right]`: a few operations per face, no image access.
+    pub fn full_faces(&self, r: &Matrix3<f32>, t: &Vector3<f32>) -> [u32; 2] {
+        let full = |plan: FacePlan| plan.weight.iter().filter(|&&w| w >= FACE_WEIGHT_ONE).count() as u32;
+        let (r_left, t_left) = (self.left_r * r, self.left_r * t + self.left_t);
+        [
+            full(face_plan(self.model, &self.rig.left, &r_left, &t_left)),
+            full(face_plan(self.model, &self.rig.right, r, t)),
+        ]
+    }
+
     /// The colour census of a pose given as rotation `r` and translation `t` in `Σ_CR` in
     /// both cameras: `visit(k, hues)` with the hue bytes under the census points of each row
     /// of every visible face `k` (see [`crate::colour`]).

@@ -88,6 +88,16 @@ pub const FULL_VISIBLE_COS: f32 = 0.2;
 /// counts fully.
 pub const FULL_FACE_PX: f32 = 8.0;
 
+/// A pose is confirmed ([`crate::status::Status::Tracking`]) only while each camera sees at
+/// least this many of its faces at full weight ([`FULL_VISIBLE_COS`], [`FULL_FACE_PX`]). The
+/// fitness weighs a face turning into view from nothing at [`MIN_VISIBLE_COS`] (84° from its
+/// normal) to full at [`FULL_VISIBLE_COS`] (78.5°), so a pose that shows one face at full weight
+/// can tilt towards or away from a neighbouring face by up to 6–12° and trade the tilt for a
+/// shift with almost no change of its score: such a view does not pin the orientation to the
+/// 5° the status states. The second face seen at full weight does: a tilt about either axis of
+/// the face seen whole then moves the outline of one of the two faces.
+pub const CONFIRM_FULL_FACES: u32 = 2;
+
 /// The fixed-point unit of a face's weight: weights are whole multiples of `1 / FACE_WEIGHT_ONE`,
 /// so that the weighted counts stay integers (exact, the same on every target).
 pub const FACE_WEIGHT_ONE: u32 = 256;

@@ -19,7 +19,9 @@ use crate::ga::{Best, Ga, GaParams, SearchSpace};
 use crate::image::{Hue, Image, PixelFormat};
 pub use crate::kinematics::JointSample;
 use crate::kinematics::{Chain, PA10};
-use crate::limits::{DEFAULT_GRID, EDGE_PROBE_IDLE, MIN_DEPTH_M, PA10_DOF, POPULATION_CAPACITY, TRACKING_IDLE};
+use crate::limits::{
+    CONFIRM_FULL_FACES, DEFAULT_GRID, EDGE_PROBE_IDLE, MIN_DEPTH_M, PA10_DOF, POPULATION_CAPACITY, TRACKING_IDLE,
+};
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
 use crate::status::{Status, StatusMonitor};
@@ -567,6 +569,9 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // (see `agrees_with_seed`): the frame then counts as one without a find.
         let confirmable = !acquiring || self.agrees_with_seed(&best.psi);
         let (relative, lower) = if confirmable { (best.fitness / expected, worse / expected) } else { (0.0, 0.0) };
+        // Nor is a pose reported tracking where the view leaves its orientation open: it is then
+        // held and uncertain (`pins_orientation`).
+        let lower = if self.pins_orientation(&best.psi) { lower } else { 0.0 };
         let status = self.monitor.update(relative, lower, &self.config.tuning.status);
         let holds = status.holds();
         if holds && acquiring {
@@ -621,6 +626,13 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let reach = self.model.half_size();
         let d = psi.translation() - seed.centre;
         d.dot(&d) <= reach.dot(&reach)
+    }
+
+    /// Whether both cameras see at least [`CONFIRM_FULL_FACES`] faces of `psi` at full weight:
+    /// the views in which the fitness pins the orientation down to the status's accuracy.
+    fn pins_orientation(&self, psi: &Psi) -> bool {
+        let full = self.evaluator().full_faces(&psi.rotation_unchecked(), &psi.translation());
+        full.iter().all(|&n| n >= CONFIRM_FULL_FACES)
     }
 
     /// Learns the face colours from the census of the frame's best pose (see

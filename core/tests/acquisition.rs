@@ -89,7 +89,8 @@ fn finds_the_block_says_so_loses_it_on_blank_frames_and_recovers() {
 #[test]
 fn a_known_start_is_tracking_and_set_status_forces_a_status() {
     let rig = rig();
-    let truth = Psi::new([0.0, 0.0, 0.7], [0.1, 0.2, 0.0]);
+    // Three faces seen whole by both cameras: a view that confirms the orientation.
+    let truth = Psi::new([0.0, 0.0, 0.7], [0.2, 0.3, 0.0]);
     let (l, r) = render(&rig, &truth);
     let mut t = tracker(4);
     t.reset_around(&truth, &[0.002; 6]).unwrap();

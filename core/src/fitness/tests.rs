@@ -282,3 +282,26 @@ fn score_clamps_at_zero() {
     let c = Counts { weighted_matched: 7, weighted_total: 10, weighted_strip: 2, visible: 1, ..Counts::default() };
     assert!((c.score() - 0.5).abs() < 1e-7);
 }
+
+#[test]
+fn full_faces_counts_the_faces_each_camera_sees_whole() {
+    let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
+    let hues = model.faces().map(|f| f.hue);
+    let lut = HueLut::new(&hues, DEFAULT_HUE_TOLERANCE);
+    let rig = rig();
+    let eval = Evaluator::new(&model, &lut, &rig);
+    let at =
+        |q: &nalgebra::UnitQuaternion<f32>, t: Vector3<f32>| eval.full_faces(&crate::quat::to_rotation_matrix(q), &t);
+    // Face-on to the right camera: its −z face whole, the side faces edge-on; the left camera,
+    // a baseline away, sees one side face under less than the full-weight angle.
+    let ahead = Vector3::new(0.0, 0.0, 0.8);
+    assert_eq!(at(&nalgebra::UnitQuaternion::identity(), ahead), [1, 1]);
+    // A corner towards the cameras: three faces whole in both.
+    let corner = crate::quat::from_angle_axis(2.0, &Vector3::new(-1.0, 1.0, 0.1)).unwrap();
+    assert_eq!(at(&corner, ahead), [3, 3]);
+    // Turned 30° about the vertical: two faces whole.
+    let turned = crate::quat::from_angle_axis(0.52, &Vector3::y()).unwrap();
+    assert_eq!(at(&turned, ahead), [2, 2]);
+    // Behind the cameras: none.
+    assert_eq!(at(&corner, -ahead), [0, 0]);
+}

@@ -69,3 +69,28 @@ fn a_seed_from_a_block_cut_by_the_image_border_refuses_no_candidate() {
     assert!(t.agrees_with_seed(&truth));
     assert!(t.agrees_with_seed(&along(2.0 * reach)));
 }
+
+/// The statuses of `frames` frames of a tracker started on the block at `truth`.
+fn statuses_from_the_truth(truth: &Psi, frames: usize) -> std::vec::Vec<Status> {
+    let (mut t, l, r) = tracker_and_frame(truth);
+    let frame = StereoFrame {
+        left: HueImage::new_checked(&l[..], W, H).unwrap(),
+        right: HueImage::new_checked(&r[..], W, H).unwrap(),
+    };
+    t.reset_around(truth, &[0.0; 6]).unwrap();
+    t.set_status(Status::Uncertain);
+    (0..frames).map(|_| t.step(&frame, &STILL, 0.033).unwrap().status).collect()
+}
+
+#[test]
+fn a_view_of_one_whole_face_is_held_but_never_confirmed() {
+    // Face-on to the right camera: one face whole, the sides edge-on (the left camera sees one
+    // under less than the full-weight angle). The tilt is not pinned down to 5°.
+    let face_on = Psi::from_parts(&Vector3::new(0.0, 0.0, 0.8), &nalgebra::UnitQuaternion::identity());
+    let seen = statuses_from_the_truth(&face_on, 20);
+    assert!(seen.iter().all(|s| *s == Status::Uncertain), "{seen:?}");
+    // The same block turned to show two faces whole is confirmed.
+    let q = quat::from_angle_axis(0.52, &Vector3::y()).unwrap();
+    let seen = statuses_from_the_truth(&Psi::from_parts(&Vector3::new(0.0, 0.0, 0.8), &q), 20);
+    assert!(seen.iter().all(|s| s.holds()) && seen.contains(&Status::Tracking), "{seen:?}");
+}

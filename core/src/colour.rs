@@ -34,7 +34,12 @@
 //! points that match their face's learnt band, averaged over the frames it was learnt from. It
 //! is what the true pose can score under the current light (about 1 on a flat image, less
 //! where highlights and shadows take pixels' hues away); the status thresholds are relative to
-//! it (see [`crate::status`]).
+//! it (see [`crate::status`]). The confirmation takes a second average of the same coverage
+//! that leans upwards ([`ColourModel::confirming_fitness`]): a frame below it moves it four
+//! times less than one above it. The census is taken at the held pose, and a held pose a few
+//! millimetres off (a manoeuvring block) covers less of its faces than the true pose does, so
+//! the plain average sinks with such frames until poses that far off would be confirmed; the
+//! held decision keeps the plain average, which follows the light as it changes.
 //!
 //! **Bounded work.** A census walks at most three faces per camera (the census of
 //! `Evaluator::census`); the tally is a few integer operations per point, the update a few
@@ -55,8 +60,8 @@ pub const LEARN_CAMERA_RATIO: f32 = 0.95;
 /// Fixed-point scale of the learnt offsets and spreads: 1/256 hue unit.
 const Q: i32 = 256;
 
-/// Fixed-point one of the averaged coverage (fine enough that a `1/32` step of a difference of
-/// a thousandth is not lost to the truncation).
+/// Fixed-point one of the averaged coverage (fine enough that a `1/128` step of a difference of
+/// two thousandths is not lost to the truncation).
 const COVERAGE_ONE: i32 = 1 << 16;
 
 /// Half-width of a learnt band in standard deviations of the face's hues, in 1/256: 1.65.
@@ -66,6 +71,10 @@ const SPREAD_BAND_Q8: i32 = 422;
 /// 30 frames/s, four times the colours' own average, so that a few frames of a wrong pose move
 /// the scale of the status little.
 const EXPECTED_FITNESS_FRAMES: u16 = 32;
+
+/// A frame whose coverage is below [`ColourModel::confirming_fitness`] moves it this many times
+/// less than one above it: it rises over about a second and falls over about four.
+const CONFIRMING_FALL_SLOWER: i32 = 4;
 
 /// Lower bound of [`ColourModel::expected_fitness`]: a light that leaves fewer than half of a
 /// face's census points its hue is not one the status can be trusted in.
@@ -156,6 +165,8 @@ pub struct ColourModel {
     faces: [FaceColour; FACES],
     /// Averaged fraction of census points within their face's band, in 1/[`COVERAGE_ONE`].
     coverage: i32,
+    /// The same, averaged leaning upwards ([`ColourModel::confirming_fitness`]).
+    coverage_high: i32,
     /// Frames the coverage was averaged over (saturating).
     coverage_frames: u16,
 }
@@ -165,7 +176,14 @@ impl ColourModel {
     /// units) with half-width `tolerance` (units, below 90).
     pub const fn new(prior: [u8; FACES], tolerance: u8) -> Self {
         let none = FaceColour { offset: 0, spread: 0, frames: 0 };
-        Self { prior, tolerance, faces: [none; FACES], coverage: COVERAGE_ONE, coverage_frames: 0 }
+        Self {
+            prior,
+            tolerance,
+            faces: [none; FACES],
+            coverage: COVERAGE_ONE,
+            coverage_high: COVERAGE_ONE,
+            coverage_frames: 0,
+        }
     }
 
     /// Forgets everything learnt (the configured hues again).
@@ -233,6 +251,10 @@ impl ColourModel {
             let weight = i32::from(self.coverage_frames.min(EXPECTED_FITNESS_FRAMES));
             let measured = (i64::from(COVERAGE_ONE) * i64::from(in_band) / i64::from(points)) as i32;
             self.coverage += (measured - self.coverage) / weight;
+            // The first sighting sets it too; later ones below it move it more slowly.
+            let fall = measured < self.coverage_high && self.coverage_frames > 1;
+            self.coverage_high +=
+                (measured - self.coverage_high) / if fall { CONFIRMING_FALL_SLOWER * weight } else { weight };
         }
         self.bands() != before
     }
@@ -258,6 +280,13 @@ impl ColourModel {
     /// anything is learnt).
     pub fn expected_fitness(&self) -> f32 {
         crate::math::clamp(self.coverage as f32 / COVERAGE_ONE as f32, MIN_EXPECTED_FITNESS, 1.0)
+    }
+
+    /// The scale of the confirmation ([`crate::status`]): the coverage of
+    /// [`ColourModel::expected_fitness`] averaged leaning upwards (see the module docs), at least
+    /// [`MIN_EXPECTED_FITNESS`] (1 before anything is learnt).
+    pub fn confirming_fitness(&self) -> f32 {
+        crate::math::clamp(self.coverage_high as f32 / COVERAGE_ONE as f32, MIN_EXPECTED_FITNESS, 1.0)
     }
 
     /// The learnt hue of face `k` in degrees (the configured one before it was seen).
@@ -299,6 +328,7 @@ impl Colours {
             tolerance: 0,
             faces: [FaceColour { offset: 0, spread: 0, frames: 0 }; FACES],
             coverage: 0,
+            coverage_high: 0,
             coverage_frames: 0,
         },
         lut: HueLut::EMPTY,

@@ -31,10 +31,15 @@
 //! ```
 //!
 //! 2. **Confirmed or not**, while held: the pose is reported [`Status::Tracking`] once the lower
-//!    of the two cameras' relative fitness `F_min` has been at or above `certain_fitness` for
-//!    `confirm_frames` in a row, and [`Status::Uncertain`] from the first frame below. Both
+//!    of the two cameras' fitness `F_min`, relative to the confirmation's own scale
+//!    ([`crate::colour::ColourModel::confirming_fitness`], which poses a little off lower only
+//!    slowly), has been at or above `certain_fitness` for `confirm_frames` in a row, and
+//!    [`Status::Uncertain`] from the first frame below. Both
 //!    cameras must fit on their own: a lock one camera sees well and the other does not (most
-//!    often a wrong depth) is not confirmed.
+//!    often a wrong depth) is not confirmed. Nor is a pose whose view leaves its orientation
+//!    open: the tracker counts a frame in which either camera sees fewer than
+//!    [`CONFIRM_FULL_FACES`](crate::limits::CONFIRM_FULL_FACES) faces of the pose at full weight
+//!    as one below the bar (a block seen face-on can tilt by 6–12° at almost no cost in score).
 //!
 //! `F` is the fraction of the model's inner points that see their face's hue, minus the
 //! contour points that see a face hue (eq. 34–35). Without the block in the images no pose

@@ -565,13 +565,16 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // the current light (`crate::colour`), so that its thresholds mean the same in every light.
         let expected = self.colours.model().expected_fitness();
         let worse = cameras[0].min(cameras[1]);
+        // The confirmation's scale leans towards the best the light has let a held pose cover.
+        let confirming = self.colours.model().confirming_fitness();
         // A pose is not confirmed while the seed from the colour blobs puts the block elsewhere
         // (see `agrees_with_seed`): the frame then counts as one without a find.
         let confirmable = !acquiring || self.agrees_with_seed(&best.psi);
-        let (relative, lower) = if confirmable { (best.fitness / expected, worse / expected) } else { (0.0, 0.0) };
-        // Nor is a pose reported tracking where the view leaves its orientation open: it is then
-        // held and uncertain (`pins_orientation`).
-        let lower = if self.pins_orientation(&best.psi) { lower } else { 0.0 };
+        let (relative, lower) = if confirmable { (best.fitness / expected, worse / confirming) } else { (0.0, 0.0) };
+        // Nor is a pose reported tracking where the view leaves its orientation open (fewer than
+        // `CONFIRM_FULL_FACES` faces whole in a camera): it is then held and uncertain.
+        let seen = self.evaluator().full_faces(&best.psi.rotation_unchecked(), &best.psi.translation());
+        let lower = if seen.iter().all(|&n| n >= CONFIRM_FULL_FACES) { lower } else { 0.0 };
         let status = self.monitor.update(relative, lower, &self.config.tuning.status);
         let holds = status.holds();
         if holds && acquiring {
@@ -626,13 +629,6 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let reach = self.model.half_size();
         let d = psi.translation() - seed.centre;
         d.dot(&d) <= reach.dot(&reach)
-    }
-
-    /// Whether both cameras see at least [`CONFIRM_FULL_FACES`] faces of `psi` at full weight:
-    /// the views in which the fitness pins the orientation down to the status's accuracy.
-    fn pins_orientation(&self, psi: &Psi) -> bool {
-        let full = self.evaluator().full_faces(&psi.rotation_unchecked(), &psi.translation());
-        full.iter().all(|&n| n >= CONFIRM_FULL_FACES)
     }
 
     /// Learns the face colours from the census of the frame's best pose (see

@@ -121,3 +121,32 @@ fn the_table_follows_the_status_and_the_model() {
     assert_eq!(colours.lut().mask(50), 1 << 1 | 1 << 4);
     assert_eq!(colours.lut().mask(50 + DEFAULT_HUE_TOLERANCE + 1), 1 << 4, "learnt green is narrow, face 4 is not");
 }
+
+#[test]
+fn the_confirming_scale_rises_like_the_expected_fitness_and_falls_four_times_slower() {
+    let mut model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
+    let all = [0u8, 1, 179, 0];
+    let three_of_four = [0u8, 1, 179, crate::limits::NO_HUE];
+    // The first sighting sets both scales.
+    model.learn(&tally_of(&model, 0, &three_of_four, 10));
+    assert_eq!(model.confirming_fitness(), model.expected_fitness());
+    assert!((model.confirming_fitness() - 0.75).abs() < 0.01);
+    // A frame above them moves both alike.
+    model.learn(&tally_of(&model, 0, &all, 10));
+    assert_eq!(model.confirming_fitness(), model.expected_fitness());
+    // Frames of full coverage, then frames of poses that cover less: the expected fitness follows
+    // them down, the confirming scale four times more slowly.
+    for _ in 0..60 {
+        model.learn(&tally_of(&model, 0, &all, 10));
+    }
+    for _ in 0..10 {
+        model.learn(&tally_of(&model, 0, &three_of_four, 10));
+    }
+    let (expected, confirming) = (model.expected_fitness(), model.confirming_fitness());
+    assert!((1.0 - confirming) * 3.0 < 1.0 - expected, "expected {expected}, confirming {confirming}");
+    // A light that stays darker is followed all the same.
+    for _ in 0..600 {
+        model.learn(&tally_of(&model, 0, &three_of_four, 10));
+    }
+    assert!((model.confirming_fitness() - 0.75).abs() < 0.01, "{}", model.confirming_fitness());
+}

@@ -446,10 +446,19 @@ def status_row(scene, runs):
 
 
 def acquire_status_row(scene, acq_dir):
-    """Rows of the status-evidence table from an acquisition report (the wrong share only)."""
-    cases = json.load(open(os.path.join(acq_dir, 'acquire.json'), encoding='utf-8'))
-    return [f"| {scene}, {c['case'].replace('_', ' ')} | {cases['trials']} trials | — | "
-            f"({100 * c['tracking_but_wrong']:.2f} %) | — |" for c in cases['cases']]
+    """Rows of the status-evidence table from an acquisition report, one per case: its trials'
+    frames reported `tracking` and the wrong ones among them, pooled (no longest run: the report
+    keeps counts per trial only)."""
+    report = json.load(open(os.path.join(acq_dir, 'acquire.json'), encoding='utf-8'))
+    rows = []
+    for case in report['cases']:
+        trials = [t for t in report['trials'] if t['case'] == case['case']]
+        tracking = sum(t['tracking_frames'] for t in trials)
+        wrong = sum(t['tracking_but_wrong'] for t in trials)
+        pct = 100.0 * wrong / tracking if tracking else 0.0
+        rows.append(f"| {scene}, {case['case'].replace('_', ' ')} | {len(trials)} trials | {tracking:,} | "
+                    f"{wrong} ({pct:.2f} %) | — |")
+    return rows
 
 
 def status_section(w, seeds, pr_tracked):

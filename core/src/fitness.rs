@@ -451,6 +451,12 @@ fn face_plan<const G: usize>(model: &SurfaceStrips<G>, cam: &Pinhole, r: &Matrix
     FacePlan { chosen, weight, visible_mask, front: core::array::from_fn(|k| front(k as u8)) }
 }
 
+/// The faces one camera sees at full weight (out of line: one copy of the face plan's code).
+#[inline(never)]
+fn full_faces_of<const G: usize>(model: &SurfaceStrips<G>, cam: &Pinhole, r: &Matrix3<f32>, t: &Vector3<f32>) -> u32 {
+    face_plan(model, cam, r, t).weight.iter().filter(|&&w| w >= FACE_WEIGHT_ONE).count() as u32
+}
+
 /// [`count_faces`] through the lens of `cam` (kept out of line so the plain kernel's code and
 /// its unrolling do not change with it).
 #[inline(never)]
@@ -749,12 +755,8 @@ impl<'m, const G: usize> Evaluator<'m, G> {
     /// How many faces of the pose `(r, t)` (in `Σ_CR`) each camera sees at full weight (see
     /// [`FULL_VISIBLE_COS`]), `[left, right]`: a few operations per face, no image access.
     pub fn full_faces(&self, r: &Matrix3<f32>, t: &Vector3<f32>) -> [u32; 2] {
-        let full = |plan: FacePlan| plan.weight.iter().filter(|&&w| w >= FACE_WEIGHT_ONE).count() as u32;
         let (r_left, t_left) = (self.left_r * r, self.left_r * t + self.left_t);
-        [
-            full(face_plan(self.model, &self.rig.left, &r_left, &t_left)),
-            full(face_plan(self.model, &self.rig.right, r, t)),
-        ]
+        [full_faces_of(self.model, &self.rig.left, &r_left, &t_left), full_faces_of(self.model, &self.rig.right, r, t)]
     }
 
     /// The colour census of a pose given as rotation `r` and translation `t` in `Σ_CR` in

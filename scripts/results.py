@@ -456,7 +456,8 @@ def acquire_status_row(scene, acq_dir):
         tracking = sum(t['tracking_frames'] for t in trials)
         wrong = sum(t['tracking_but_wrong'] for t in trials)
         pct = 100.0 * wrong / tracking if tracking else 0.0
-        rows.append(f"| {scene}, {case['case'].replace('_', ' ')} | {len(trials)} trials | {tracking:,} | "
+        label = {'static': 'static arm', 'motion_a': 'motion A'}.get(case['case'], case['case'])
+        rows.append(f"| {scene}, {label} | {len(trials)} trials | {tracking:,} | "
                     f"{wrong} ({pct:.2f} %) | — |")
     return rows
 

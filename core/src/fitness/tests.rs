@@ -9,12 +9,16 @@ use crate::model::{Block, ROW_DISTANCES_M};
 use crate::synth::test_scene::{H, W, rig, scene};
 use std::vec;
 
+/// The paper's block, its configured hue table and the test rig.
+fn paper_block() -> (SurfaceStrips<8>, HueLut, crate::camera::StereoRig) {
+    let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
+    let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
+    (model, lut, rig())
+}
+
 #[test]
 fn true_pose_scores_one_and_perturbations_score_less() {
-    let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
-    let hues = model.faces().map(|f| f.hue);
-    let lut = HueLut::new(&hues, DEFAULT_HUE_TOLERANCE);
-    let rig = rig();
+    let (model, lut, rig) = paper_block();
     let eval = Evaluator::new(&model, &lut, &rig);
     // A corner towards the camera, so three faces are visible: the model diagonal (1,1,1)
     // turned most of the way onto the camera's −z.
@@ -67,9 +71,7 @@ fn hue_to_rgb565(h: u8) -> [u8; 2] {
 #[test]
 fn rgb565_frames_score_as_their_hue_frames() {
     use crate::image::{Rgb565, Rgb565Image};
-    let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
-    let lut = HueLut::new(&model.faces().map(|f| f.hue), DEFAULT_HUE_TOLERANCE);
-    let rig = rig();
+    let (model, lut, rig) = paper_block();
     let eval = Evaluator::new(&model, &lut, &rig);
     let q = crate::quat::from_angle_axis(2.0, &Vector3::new(-1.0, 1.0, 0.1)).unwrap();
     let truth = Psi::from_parts(&Vector3::new(0.02, -0.01, 0.75), &q);
@@ -285,10 +287,7 @@ fn score_clamps_at_zero() {
 
 #[test]
 fn full_faces_counts_the_faces_each_camera_sees_whole() {
-    let model = SurfaceStrips::<8>::new(&Block::PAPER).unwrap();
-    let hues = model.faces().map(|f| f.hue);
-    let lut = HueLut::new(&hues, DEFAULT_HUE_TOLERANCE);
-    let rig = rig();
+    let (model, lut, rig) = paper_block();
     let eval = Evaluator::new(&model, &lut, &rig);
     let at =
         |q: &nalgebra::UnitQuaternion<f32>, t: Vector3<f32>| eval.full_faces(&crate::quat::to_rotation_matrix(q), &t);

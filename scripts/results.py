@@ -464,10 +464,10 @@ def acquire_status_row(scene, acq_dir):
 
 def status_section(w, seeds, pr_tracked):
     """The status-evidence table: how often `tracking` is wrong in every scene with ground truth."""
-    paper = sorted(glob.glob(os.path.join(w, 'paper', 'runs', '*', 'summary.json')))
+    paper = sorted(glob.glob(os.path.join(w, 'paper', 'runs', '*')))
     rows = ['| scene | runs | frames reported `tracking` | of them over 10 mm or 5° off | longest such run |',
             '|---|---|---|---|---|',
-            status_row('the paper\'s grid (`evorec paper`)', [json.load(open(f, encoding='utf-8')) for f in paper]),
+            status_row('the paper\'s grid (`evorec paper`)', summaries(paper)),
             status_row('belts along the optical axis', [s for name, _, speed in AXIAL_BELTS
                                                         for s in summaries(seed_dirs(f'{w}/seeds/{name}-{speed}', seeds))]),
             status_row(f'sideways belt (`{REVERSING_BELT}`)', summaries(seed_dirs(f'{w}/seeds/conveyor', seeds)))]
@@ -807,7 +807,8 @@ the desired one) from t = {SERVO_BELT_FROM_S:g} s:
 
 The frames reported `tracking` in every run above with ground truth, pooled per scene, and how
 many of them are more than 10 mm or 5° off the truth (modulo the colour symmetry; the runs'
-`summary.json`, `tracking_wrong_frames`); the acquisition reports state the share only:
+`summary.json`, `tracking_wrong_frames`); an acquisition row pools its trials' counts
+(`acquire.json`), which keep no longest run:
 
 {block('status-evidence')}
 """

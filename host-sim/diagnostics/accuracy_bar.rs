@@ -76,10 +76,11 @@ fn main() -> anyhow::Result<()> {
         world.advance_to(0.0);
         let frame = frames::rgb565_frame(&mut world, &mut l, &mut r, w, h)?;
         let truth = world.truth();
-        let expected = tracker.colours().expected_fitness();
+        // The scale the status confirms a pose against.
+        let scale = tracker.colours().confirming_fitness();
         let lower = |psi: &Psi| -> anyhow::Result<f32> {
             let f = tracker.fitness_of(psi, &frame).map_err(|e| anyhow::anyhow!("{e}"))?;
-            Ok(f.left.score().min(f.right.score()) / expected)
+            Ok(f.left.score().min(f.right.score()) / scale)
         };
         truth_f.push(lower(&truth)?);
         for (k, m) in MOVES.iter().enumerate() {

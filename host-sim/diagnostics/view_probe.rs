@@ -42,10 +42,11 @@ fn report(
     truth: &Psi,
     k: usize,
 ) -> anyhow::Result<()> {
-    let expected = tracker.colours().expected_fitness();
+    // The scale the status confirms a pose against.
+    let scale = tracker.colours().confirming_fitness();
     let lower = |p: &Psi| -> anyhow::Result<f32> {
         let f = tracker.fitness_of(p, frame).map_err(|e| anyhow::anyhow!("{e}"))?;
-        Ok(f.left.score().min(f.right.score()) / expected)
+        Ok(f.left.score().min(f.right.score()) / scale)
     };
     let (mm, deg) = pose_error(est, truth);
     // The best probe of the shifts and of the turns.

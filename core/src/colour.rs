@@ -9,7 +9,9 @@
 //!
 //! **Two hue tables.** While the tracker is not tracking (searching, lost), every face matches
 //! its configured hue within `tolerance + MAX_HUE_SHIFT` (the *search band*, ±36° with the
-//! defaults), so that a block whose colours are off by up to ±25° is still found. While
+//! defaults), so that a block whose colours are off by up to ±25° is still found, except the
+//! hues of the scene around the block that the acquisition's scan finds
+//! ([`crate::acquire::scene_hues`]): a band that wide can take in a background. While
 //! tracking, every face it has learnt matches its learnt band: a centre within `MAX_HUE_SHIFT`
 //! of the configured hue and a half-width from the face's measured spread, never narrower than
 //! `tolerance` and never wider than the search band. A face not learnt yet keeps the search
@@ -46,7 +48,7 @@
 //! per face, and rebuilding the tracking table ([`crate::hue::HueLut::fill_bands`]) a fixed
 //! number of word operations. All integer: host and board agree bit for bit.
 
-use crate::hue::{Band, HueLut};
+use crate::hue::{Band, HueLut, HueSet};
 use crate::limits::{COLOUR_FRAMES, COLOUR_MIN_SAMPLES, HUE_UNITS, MAX_HUE_SHIFT};
 use crate::model::FACES;
 
@@ -206,6 +208,11 @@ impl ColourModel {
         Band { centre: prior % HUE_UNITS, half: self.search_half_width() }
     }
 
+    /// The faces not learnt yet (bit `k` for face `k`), whose bands are search bands.
+    pub fn unlearnt_faces(&self) -> u8 {
+        self.faces.iter().enumerate().fold(0, |m, (k, f)| m | (u8::from(f.frames == 0) << k))
+    }
+
     /// The learnt band of every face (the search band for a face not learnt yet).
     pub fn bands(&self) -> [Band; FACES] {
         core::array::from_fn(|k| self.band(k))
@@ -317,6 +324,8 @@ pub struct Colours {
     model: ColourModel,
     lut: HueLut,
     tracking: bool,
+    /// Hues of the scene around the block, which no search band matches ([`Colours::set_scene`]).
+    scene: HueSet,
 }
 
 impl Colours {
@@ -333,6 +342,7 @@ impl Colours {
         },
         lut: HueLut::EMPTY,
         tracking: false,
+        scene: HueSet::EMPTY,
     };
 
     /// The model of `prior` (hue units per face) and `tolerance` with nothing learnt, and the
@@ -348,7 +358,21 @@ impl Colours {
     pub fn configure(&mut self, prior: [u8; FACES], tolerance: u8) {
         self.model = ColourModel::new(prior, tolerance);
         self.tracking = false;
+        self.scene = HueSet::EMPTY;
         self.rebuild();
+    }
+
+    /// Takes `scene` as the hues of the scene around the block (the acquisition's scan finds
+    /// them, [`crate::acquire::scene_hues`]): a search band matches none of them, so that a
+    /// background whose colour falls in a face's search band (a grey scene tinted by the white
+    /// balance, a coloured floor) is neither scanned nor scored as that face. A learnt band
+    /// keeps them: it was measured on the face itself. Rebuilds the table when they change, and
+    /// on the board every time (constant work).
+    pub fn set_scene(&mut self, scene: &HueSet) {
+        if *scene != self.scene || cfg!(target_arch = "arm") {
+            self.scene = *scene;
+            self.rebuild();
+        }
     }
 
     /// The table the fitness and the acquisition use.
@@ -386,8 +410,12 @@ impl Colours {
     }
 
     fn rebuild(&mut self) {
-        let bands = if self.tracking { self.model.bands() } else { self.model.search_bands() };
-        self.lut.fill_bands(&bands);
+        let (bands, searched) = if self.tracking {
+            (self.model.bands(), self.model.unlearnt_faces())
+        } else {
+            (self.model.search_bands(), u8::MAX)
+        };
+        self.lut.fill_bands_except(&bands, &self.scene, searched);
     }
 }
 

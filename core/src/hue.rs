@@ -93,6 +93,35 @@ pub fn hue_distance(a: u8, b: u8) -> u8 {
     d.min(HUE_UNITS.saturating_sub(d))
 }
 
+/// A set of hue units (`0..HUE_UNITS`; other bytes are never members).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct HueSet([u32; HUE_WORDS]);
+
+/// Words of a [`HueSet`].
+const HUE_WORDS: usize = (HUE_UNITS as usize).div_ceil(32);
+
+impl HueSet {
+    /// No hue.
+    pub const EMPTY: Self = Self([0; HUE_WORDS]);
+
+    /// Whether hue byte `h` is in the set.
+    pub fn contains(&self, h: u8) -> bool {
+        h < HUE_UNITS && self.0.get(usize::from(h / 32)).is_some_and(|w| (w >> (h % 32)) & 1 != 0)
+    }
+
+    /// Adds hue byte `h` (bytes `≥ HUE_UNITS` are ignored).
+    pub fn insert(&mut self, h: u8) {
+        if let Some(w) = self.0.get_mut(usize::from(h / 32)).filter(|_| h < HUE_UNITS) {
+            *w |= 1 << (h % 32);
+        }
+    }
+
+    /// Whether the set is empty.
+    pub fn is_empty(&self) -> bool {
+        self.0.iter().all(|&w| w == 0)
+    }
+}
+
 /// Number of face sets with a plane in [`HueLut`]: of each of the block's three pairs of
 /// opposite faces `(k, k + 3)` none, the first or the second face (`3³`), which covers every
 /// set of faces a camera can see (never both faces of a pair).
@@ -212,6 +241,12 @@ impl HueLut {
     /// more matches every hue): the same table as [`HueLut::fill`] where every band has the same
     /// half-width. Bounded work: the bands' entries, then the planes a word at a time.
     pub fn fill_bands(&mut self, bands: &[Band]) {
+        self.fill_bands_except(bands, &HueSet::EMPTY, 0);
+    }
+
+    /// [`HueLut::fill_bands`], with the hues of `except` matching none of the faces `faces`
+    /// (bit `k` for face `k`). The same bounded work.
+    pub fn fill_bands_except(&mut self, bands: &[Band], except: &HueSet, faces: u8) {
         self.table = [0; 256];
         let units = i32::from(HUE_UNITS);
         for (k, band) in bands.iter().take(8).enumerate() {
@@ -223,6 +258,11 @@ impl HueLut {
                 if let Some(entry) = self.table.get_mut(h.rem_euclid(units) as usize) {
                     *entry |= 1 << k;
                 }
+            }
+        }
+        for (h, entry) in (0..HUE_UNITS).zip(self.table.iter_mut()) {
+            if except.contains(h) {
+                *entry &= !faces;
             }
         }
         self.fill_sets();
@@ -271,6 +311,24 @@ impl HueLut {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_hue_set_holds_hue_units_only() {
+        let mut s = HueSet::EMPTY;
+        assert!(s.is_empty());
+        for h in [0, 31, 32, 179, 180, NO_HUE] {
+            s.insert(h);
+        }
+        assert!([0, 31, 32, 179].iter().all(|&h| s.contains(h)));
+        assert!([1, 33, 178, 180, NO_HUE].iter().all(|&h| !s.contains(h)));
+        // Bands without the set's hues for the faces asked: face 0's band loses 179 and 0, face
+        // 1's keeps 0.
+        let mut lut = HueLut::EMPTY;
+        lut.fill_bands_except(&[Band { centre: 0, half: 2 }, Band { centre: 2, half: 2 }], &s, 1);
+        assert_eq!((lut.mask(0), lut.mask(1), lut.mask(2), lut.mask(179)), (2, 3, 3, 0));
+        assert_eq!(lut.plane(0)[1], 1);
+        assert_eq!(lut.plane(0)[0], 0);
+    }
 
     #[test]
     fn rgb_to_hue_covers_the_circle() {

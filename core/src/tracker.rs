@@ -320,7 +320,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         t.rng = Xoshiro128PlusPlus::seed_from_u64(t.config.seed);
         t.generation = 0;
         t.monitor = StatusMonitor::new(Status::Searching);
-        t.acquisition.reset();
+        t.acquisition = Acquisition::new();
         t.target = TargetFilter::tuned(t.config.tuning.target, Optics::of(&t.config.rig, &t.config.block));
         t.edge = EdgeShift::NONE;
         // Checked by `check_config` (2 ≤ population ≤ P), so this cannot fail.
@@ -786,6 +786,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let cfg = &self.config.tuning.acquire;
         let half = self.model.half_size();
         let half = [half.x, half.y, half.z];
+        // The search table leaves out the scene's hues the last finished scan found.
+        self.colours.set_scene(self.acquisition.scene());
         self.acquisition.step(&frame.left, &frame.right, self.colours.lut(), &self.config.rig, &half, cfg);
         let Some(seed) = self.acquisition.seed().copied() else { return };
         let used = self.ga.len();

@@ -102,3 +102,33 @@ fn a_known_start_is_tracking_and_set_status_forces_a_status() {
     t.reset_uniform();
     assert_eq!(t.status(), Status::Searching);
 }
+
+#[test]
+fn a_background_in_a_faces_search_band_is_not_taken_for_the_block() {
+    // A grey scene tinted by the white balance: hues of 86°–94° everywhere the block is not,
+    // inside the search band of its green faces (120° ± 36°). Counted as green, it would put
+    // the green faces' blob in the middle of the view and the block far from where it is.
+    let rig = rig();
+    let truth = Psi::new([0.1, 0.05, 0.8], [0.2, 0.3, 0.0]);
+    let (mut l, mut r) = render(&rig, &truth);
+    for img in [&mut l, &mut r] {
+        for (i, px) in img.iter_mut().enumerate().filter(|(_, px)| **px == NO_HUE) {
+            *px = 43 + (i * 7 % 5) as u8;
+        }
+    }
+    for seed in [1, 2, 3] {
+        let mut t = tracker(seed);
+        let (mut first_tracking, mut worst_tracked, mut last) = (None, 0.0f32, None);
+        for i in 0..60 {
+            let e = t.step(&frame(&l, &r, W, H), &STILL, 0.033).unwrap();
+            if e.status == Status::Tracking {
+                first_tracking = first_tracking.or(Some(i));
+                worst_tracked = worst_tracked.max((e.psi.translation() - truth.translation()).norm());
+            }
+            last = Some(e);
+        }
+        assert!(first_tracking.is_some_and(|i| i <= 40), "seed {seed}: first tracking {first_tracking:?}");
+        assert!(worst_tracked < 0.01, "seed {seed}: tracking {worst_tracked} m off");
+        assert_eq!(last.map(|e| e.status), Some(Status::Tracking), "seed {seed}");
+    }
+}

@@ -19,10 +19,12 @@ mod firmware {
     use evorec_firmware::link_board::{self, StackUsage};
     use evorec_firmware::protocol::Setup;
     use evorec_firmware::{FirmwareTracker, rt, selftest, sys};
-    use static_cell::ConstStaticCell;
+    use static_cell::StaticCell;
 
-    /// The tracker (a static, built from the host's `CONFIG`).
-    static TRACKER: ConstStaticCell<Option<FirmwareTracker>> = ConstStaticCell::new(None);
+    /// The tracker (a static, built from the host's `CONFIG`). A `StaticCell`, set to `None` at
+    /// run time: a `ConstStaticCell::new(None)` would be an initialised static, so its whole
+    /// image (the size of a tracker: `None` is a niche value, not zeros) would sit in flash.
+    static TRACKER: StaticCell<Option<FirmwareTracker>> = StaticCell::new();
 
     /// Frames of the demo mode.
     const DEMO_FRAMES: u32 = 30;
@@ -36,7 +38,7 @@ mod firmware {
     #[entry]
     fn main() -> ! {
         rt::init_logger(log::LevelFilter::Info);
-        let (Some([left, right]), Some(slot)) = (rt::frame_buffers(), TRACKER.try_take()) else {
+        let (Some([left, right]), Some(slot)) = (rt::frame_buffers(), TRACKER.try_init_with(|| None)) else {
             log::error!("static buffers taken twice");
             rt::exit(false)
         };

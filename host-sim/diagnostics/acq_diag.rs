@@ -15,6 +15,8 @@ fn main() -> anyhow::Result<()> {
     let frames: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(60);
     let timing = args.get(4).map(String::as_str) == Some("timing");
     let mut s = scenario(seed, case, false);
+    // The tuning `evorec acquire` gives every trial: the core's defaults.
+    s.tracker.0 = evorec_core::tuning::Tuning::DEFAULT;
     // An optional fifth argument: a light file, as `evorec acquire --light` takes.
     if let Some(path) = args.get(5) {
         s.render = evorec_sim::sim::scenario::load_light(std::path::Path::new(path), s.frame_period_s)?;
@@ -24,11 +26,19 @@ fn main() -> anyhow::Result<()> {
     let cfg = *tracker.config();
     let half = tracker.model().half_size();
     let n = usize::from(s.camera.width) * usize::from(s.camera.height);
-    let (mut l, mut r) = (vec![0u8; n], vec![0u8; n]);
+    let (mut l, mut r) = (vec![0u8; 2 * n], vec![0u8; 2 * n]);
     for k in 0..frames {
         let t = k as f64 * s.frame_period_s;
         world.advance_to(t);
-        let frame = world.render().hue_frame(&mut l, &mut r)?;
+        // RGB565, as the simulated board delivers (and `evorec acquire` runs on).
+        let images = world.render();
+        evorec_sim::sim::render::rgb565_into(&images.left, &mut l);
+        evorec_sim::sim::render::rgb565_into(&images.right, &mut r);
+        let (cw, ch) = (s.camera.width, s.camera.height);
+        let frame = evorec_core::tracker::StereoFrame {
+            left: evorec_core::image::Rgb565Image::new_checked(&l[..], cw, ch)?,
+            right: evorec_core::image::Rgb565Image::new_checked(&r[..], cw, ch)?,
+        };
         let truth = world.truth();
         let (bl, br) = tracker.blobs_of(&frame).map_err(|e| anyhow::anyhow!("{e}"))?;
         let hh = [half.x, half.y, half.z];

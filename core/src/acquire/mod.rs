@@ -8,7 +8,17 @@
 //!
 //! 1. **Scan** ([`scan_part`]): every `stride`-th pixel of every `stride`-th row of each image
 //!    is looked up in the hue table; per block axis (the pair of opposite faces `k`, `k + 3`)
-//!    the number of hits and the sums of their pixel coordinates are kept.
+//!    the number of hits and the sums of their pixel coordinates are kept, and per hue unit
+//!    the sides of the grid's border it was seen on.
+//!
+//!    **The scene's hues** ([`scene_hues`]). A hue seen on three sides of an image's border
+//!    surrounds the view: the block, one convex solid, would have to span the whole image to
+//!    reach them. Such a hue (with its neighbours on the hue circle that the grid saw) is the
+//!    background's, however near a face's hue it is: a grey scene that the camera's white
+//!    balance tints green-yellow falls in the green faces' search band, and counted as green
+//!    it would put their blob in the middle of the view. The search table leaves the scene's
+//!    hues out ([`crate::colour::Colours::set_scene`]), for the scan and for the fitness alike;
+//!    a scan that finds them changed is repeated once before it is solved, with them left out.
 //! 2. **Triangulate** the centroid of each axis's hits seen in both images: the centroid of
 //!    the visible face of that axis, a point `P_a = C + h_a·n_a` of the block (centre `C`,
 //!    half size `h_a`, outward unit normal `n_a` of the face facing the cameras).
@@ -38,7 +48,7 @@
 //!
 //! | stage | work (at most) |
 //! |---|---|
-//! | scan | [`AcquireConfig::scan_chunk`] grid pixels of each image |
+//! | scan | [`AcquireConfig::scan_chunk`] grid pixels of each image; after the last chunk, the scene's hues (five passes over the 180 hue units) |
 //! | solve | two solves (all faces, two faces) and one residual evaluation of each |
 //! | refine, [`REFINE_ITERATIONS`] times | one Gauss–Newton iteration of each of the two solutions (8 residual evaluations and one 6×6 solve each) |
 //!
@@ -67,9 +77,9 @@ mod tests;
 use linalg::column;
 use nalgebra::Point2;
 
-use crate::hue::HueLut;
+use crate::hue::{HueLut, HueSet};
 use crate::image::{Image, PixelFormat};
-use crate::limits::{DEFAULT_SCAN_STRIDE, DEFAULT_SEED_IMMIGRANTS};
+use crate::limits::{DEFAULT_SCAN_STRIDE, DEFAULT_SEED_IMMIGRANTS, HUE_UNITS};
 
 pub use pipeline::{Acquisition, Stage};
 pub use refine::{Measured, REFINE_ITERATIONS, Refinement, best_seed, refine, refine_with_cost};
@@ -127,7 +137,7 @@ impl Default for AcquireConfig {
 }
 
 /// Hue hits of one image's scan, per block axis (faces `a` and `a + 3`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HueBlobs {
     /// Grid pixels whose hue matches a face of the axis.
     pub count: [u32; 3],
@@ -138,9 +148,36 @@ pub struct HueBlobs {
     /// Hits (of any axis) in the grid's outermost rows and columns: the block, or something of
     /// its colours, reaches the image border there.
     pub edge: u32,
+    /// Per hue unit, the sides of the grid's border it was seen on (bits [`SIDE_TOP`],
+    /// [`SIDE_BOTTOM`], [`SIDE_LEFT`], [`SIDE_RIGHT`]) and whether the grid saw it at all
+    /// ([`SEEN`]), whether it matches a face or not.
+    pub sides: [u8; HUE_UNITS as usize],
+}
+
+/// [`HueBlobs::sides`] bit of the grid's first row.
+pub const SIDE_TOP: u8 = 1;
+/// [`HueBlobs::sides`] bit of the grid's last row.
+pub const SIDE_BOTTOM: u8 = 2;
+/// [`HueBlobs::sides`] bit of the grid's first column.
+pub const SIDE_LEFT: u8 = 4;
+/// [`HueBlobs::sides`] bit of the grid's last column.
+pub const SIDE_RIGHT: u8 = 8;
+/// [`HueBlobs::sides`] bit of a hue seen anywhere on the grid.
+pub const SEEN: u8 = 16;
+/// The four side bits of [`HueBlobs::sides`].
+const SIDES: u8 = SIDE_TOP | SIDE_BOTTOM | SIDE_LEFT | SIDE_RIGHT;
+
+impl Default for HueBlobs {
+    fn default() -> Self {
+        Self::EMPTY
+    }
 }
 
 impl HueBlobs {
+    /// Nothing scanned.
+    pub const EMPTY: Self =
+        Self { count: [0; 3], sum_u: [0; 3], sum_v: [0; 3], edge: 0, sides: [0; HUE_UNITS as usize] };
+
     /// Grid hits of all axes.
     pub fn total(&self) -> u32 {
         self.count.iter().sum()
@@ -166,6 +203,14 @@ impl HueBlobs {
     #[inline(always)]
     fn axes(mask: u8) -> u8 {
         (mask | (mask >> 3)) & 0b111
+    }
+
+    /// Records hue byte `h` seen on the border sides `side` (no hue is not recorded).
+    #[inline(always)]
+    fn mark(&mut self, h: u8, side: u8) {
+        if let Some(s) = self.sides.get_mut(usize::from(h)) {
+            *s |= side;
+        }
     }
 
     /// Counts a grid pixel at `(u, v)` whose hue-table mask is `mask`.
@@ -228,21 +273,75 @@ pub fn scan_part<B: AsRef<[u8]>, F: PixelFormat>(
         let n = (row_end - i) as usize;
         let before = blobs.total();
         for (k, px) in row.iter().skip(o + first * s).step_by(s).take(n).enumerate() {
-            blobs.add(lut.mask(F::hue(*px)), o + (first + k) * s, v);
+            let h = F::hue(*px);
+            blobs.mark(h, SEEN);
+            blobs.add(lut.mask(h), o + (first + k) * s, v);
         }
         // The border: every hit of the first and last grid rows, and the first and last grid
-        // pixels of the other rows (read again: two pixels a row, none in the loop above).
-        if gy == 0 || gy + 1 == gh {
+        // pixels of the other rows (read again), and the hues seen on each side.
+        let side = (u8::from(gy == 0) * SIDE_TOP) | (u8::from(gy + 1 == gh) * SIDE_BOTTOM);
+        if side != 0 {
             blobs.edge += blobs.total() - before;
-        } else {
-            let hit = |gx: usize| row.get(o + gx * s).is_some_and(|px| HueBlobs::axes(lut.mask(F::hue(*px))) != 0);
-            let last = (gw as usize).saturating_sub(1);
-            blobs.edge += u32::from(first == 0 && hit(0)) + u32::from(first + n > last && hit(last));
+            for px in row.iter().skip(o + first * s).step_by(s).take(n) {
+                blobs.mark(F::hue(*px), side);
+            }
+        }
+        let last = (gw as usize).saturating_sub(1);
+        for (gx, end_side) in [(0, SIDE_LEFT), (last, SIDE_RIGHT)] {
+            if (first..first + n).contains(&gx)
+                && let Some(px) = row.get(o + gx * s)
+            {
+                let h = F::hue(*px);
+                blobs.mark(h, end_side);
+                blobs.edge += u32::from(side == 0 && HueBlobs::axes(lut.mask(h)) != 0);
+            }
         }
         i = row_end;
     }
     end
 }
+
+/// The hues of the scene around the block in a scan of both images (`left`, `right`): every
+/// hue seen on at least [`SCENE_SIDES`] sides of either image's grid border, and the hues next
+/// to them on the hue circle that the grid saw (the spread of the same surface's colour, across
+/// gaps of one hue unit: a tinted grey's hue moves in steps where a sensor's 5-bit channels
+/// differ by one count). The block is one convex solid: to reach three sides of an image it
+/// would have to span the whole image, so a colour seen there surrounds the view (a
+/// background, a floor, a grey scene tinted by the white balance). Bounded work: five passes
+/// over the hue units.
+pub fn scene_hues(left: &HueBlobs, right: &HueBlobs) -> HueSet {
+    let mut scene = HueSet::EMPTY;
+    let units = usize::from(HUE_UNITS);
+    let marks = |h: usize| {
+        let h = h % units;
+        (left.sides.get(h).copied().unwrap_or(0), right.sides.get(h).copied().unwrap_or(0))
+    };
+    for (h, unit) in (0..HUE_UNITS).zip(0..units) {
+        let (l, r) = marks(unit);
+        if (l & SIDES).count_ones().max((r & SIDES).count_ones()) >= SCENE_SIDES {
+            scene.insert(h);
+        }
+    }
+    if scene.is_empty() {
+        return scene;
+    }
+    // Grown along the circle both ways; two laps each way reach across the wrap.
+    let seen = |h: usize| marks(h).0 | marks(h).1 != 0;
+    for step in [1, units - 1] {
+        let mut h = 0usize;
+        for _ in 0..2 * units {
+            let next = (h + step) % units;
+            if scene.contains(h as u8) && (seen(next) || seen(next + step)) {
+                scene.insert(next as u8);
+            }
+            h = next;
+        }
+    }
+    scene
+}
+
+/// Sides of an image's grid border a hue must be seen on to be the scene's ([`scene_hues`]).
+pub const SCENE_SIDES: u32 = 3;
 
 /// Scans the whole grid of `image` (see [`scan_part`]): `⌈(W − o)/s⌉·⌈(H − o)/s⌉` pixels;
 /// a stride of 0 reads nothing.

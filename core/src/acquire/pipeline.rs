@@ -3,9 +3,11 @@
 use nalgebra::Vector3;
 
 use super::refine::Measured;
-use super::{AcquireConfig, HueBlobs, REFINE_ITERATIONS, Refinement, Seed, grid_size, scan_part, seed_pose_from};
+use super::{
+    AcquireConfig, HueBlobs, REFINE_ITERATIONS, Refinement, Seed, grid_size, scan_part, scene_hues, seed_pose_from,
+};
 use crate::camera::StereoRig;
-use crate::hue::HueLut;
+use crate::hue::{HueLut, HueSet};
 use crate::image::{Image, PixelFormat};
 use crate::pose::Psi;
 use crate::quat;
@@ -33,6 +35,10 @@ pub struct Acquisition {
     /// feedforward shift since then (`^{CR now} T_{CR scan}` to first order).
     motion: Psi,
     seed: Option<Seed>,
+    /// The scene's hues found by the latest finished scan ([`super::scene_hues`]).
+    scene: HueSet,
+    /// Whether the scan under way repeats one whose scene's hues differed from those in use.
+    repeat: bool,
 }
 
 impl Default for Acquisition {
@@ -46,17 +52,29 @@ impl Acquisition {
     pub const fn new() -> Self {
         Self {
             stage: Stage::Scan(0),
-            left: HueBlobs { count: [0; 3], sum_u: [0; 3], sum_v: [0; 3], edge: 0 },
-            right: HueBlobs { count: [0; 3], sum_u: [0; 3], sum_v: [0; 3], edge: 0 },
+            left: HueBlobs::EMPTY,
+            right: HueBlobs::EMPTY,
             candidates: [None, None],
             motion: Psi::IDENTITY,
             seed: None,
+            scene: HueSet::EMPTY,
+            repeat: false,
         }
     }
 
     /// Back to the start: the next stage scans from the first pixel, and the seed is dropped.
+    /// The scene's hues are kept: they belong to the scene, not to the block.
     pub fn reset(&mut self) {
+        let scene = self.scene;
         *self = Self::new();
+        self.scene = scene;
+    }
+
+    /// The hues of the scene around the block found by the latest finished scan (none before
+    /// the first): the search table leaves them out, so that neither the scan nor the fitness
+    /// counts them as the block's.
+    pub fn scene(&self) -> &HueSet {
+        &self.scene
     }
 
     /// The next stage.
@@ -117,8 +135,24 @@ impl Acquisition {
         let next = scan_part(left, lut, stride, start, chunk, &mut self.left);
         scan_part(right, lut, stride, start, chunk, &mut self.right);
         let (gw, gh) = grid_size(right.width(), right.height(), stride);
-        self.stage = if next >= gw * gh { Stage::Solve } else { Stage::Scan(next) };
+        self.stage = if next >= gw * gh { self.scanned() } else { Stage::Scan(next) };
         self.motion = Psi::IDENTITY;
+    }
+
+    /// The stage after a finished scan: the solve, unless the scene's hues differ from those the
+    /// scan counted with; then they are taken and the scan repeated (once in a row: a scene
+    /// whose border hues change from scan to scan is solved with the latest).
+    fn scanned(&mut self) -> Stage {
+        let scene = scene_hues(&self.left, &self.right);
+        let changed = scene != self.scene;
+        self.scene = scene;
+        if changed && !self.repeat {
+            self.repeat = true;
+            self.restart()
+        } else {
+            self.repeat = false;
+            Stage::Solve
+        }
     }
 
     /// The [`Stage::Solve`] stage: the solutions from all seen faces and from the two with

@@ -207,3 +207,113 @@ fn pipeline_gives_the_one_go_seed_after_its_stages() {
     acq.reset();
     assert_eq!((acq.stage(), acq.seed()), (Stage::Scan(0), None));
 }
+
+/// A `w × h` image of hue `background` with the hue-`block` rectangle `u0..u1 × v0..v1`.
+fn backdrop(w: u16, h: u16, background: impl Fn(usize, usize) -> u8, block: (u8, [usize; 4])) -> vec::Vec<u8> {
+    let (hue, [u0, u1, v0, v1]) = block;
+    let w = usize::from(w);
+    (0..w * usize::from(h))
+        .map(|i| {
+            let (u, v) = (i % w, i / w);
+            if (u0..u1).contains(&u) && (v0..v1).contains(&v) { hue } else { background(u, v) }
+        })
+        .collect()
+}
+
+#[test]
+fn the_scan_records_the_hues_seen_on_each_side_of_the_border() {
+    // Grid columns at u = 4, 12, …, 36, rows at v = 4, 12, 20, 28: a green column at u = 4 and
+    // a red row at v = 28 (meeting at the bottom-left corner, which is red), blue inside.
+    let px = backdrop(
+        40,
+        30,
+        |u, v| {
+            if v >= 26 {
+                0
+            } else if u < 6 {
+                60
+            } else {
+                NO_HUE
+            }
+        },
+        (120, [10, 30, 10, 22]),
+    );
+    let b = scan(&HueImage::new_checked(&px[..], 40, 30).unwrap(), &lut(), 8);
+    assert_eq!(b.sides[60], SIDE_LEFT | SIDE_TOP | SEEN);
+    assert_eq!(b.sides[0], SIDE_BOTTOM | SIDE_LEFT | SIDE_RIGHT | SEEN);
+    assert_eq!(b.sides[120], SEEN);
+    assert_eq!(b.sides.iter().filter(|&&s| s != 0).count(), 3);
+}
+
+#[test]
+fn a_hue_around_the_view_is_the_scenes_and_the_blocks_hues_are_not() {
+    let (w, h) = (W, H);
+    let scan_of = |px: &[u8]| scan(&HueImage::new_checked(px, w, h).unwrap(), &lut(), 8);
+    // A grey scene tinted green-yellow by the white balance: hues 86°–94° with noise, one
+    // pixel of 96° on one side only and one of 100° inside (its spread's tail, across an empty
+    // unit); the block's green face at 120° in the middle, its red face cut by the left border.
+    let tint = |u: usize, v: usize| match (u, v) {
+        (636, 124) => 48,
+        (300, 300) => 50,
+        _ => 43 + ((u * 7 + v * 13) % 5) as u8,
+    };
+    let mut px = backdrop(w, h, tint, (60, [100, 200, 60, 180]));
+    for v in 80..160 {
+        for u in 0..40 {
+            px[v * usize::from(w) + u] = 0;
+        }
+    }
+    let b = scan_of(&px);
+    let scene = scene_hues(&b, &b);
+    for unit in 43..=50 {
+        assert!(scene.contains(unit), "unit {unit}");
+    }
+    for unit in [0, 42, 51, 60, 120] {
+        assert!(!scene.contains(unit), "unit {unit}");
+    }
+    // One image seeing the scene's hue on three sides is enough; two sides are not (a block
+    // cut by a corner).
+    let corner = backdrop(w, h, |_, _| NO_HUE, (60, [0, 100, 0, 80]));
+    let c = scan_of(&corner);
+    assert_eq!(c.sides[60], SIDE_TOP | SIDE_LEFT | SEEN);
+    assert!(scene_hues(&c, &c).is_empty());
+    assert!(scene_hues(&b, &c).contains(45) && scene_hues(&c, &b).contains(45));
+    // Across the wrap of the hue circle: 358° around the view, 0° and 2° on its border.
+    let red = backdrop(w, h, |u, _| [179, 0, 1][u % 3], (120, [100, 200, 60, 180]));
+    let r = scan_of(&red);
+    let s = scene_hues(&r, &r);
+    assert!(s.contains(179) && s.contains(0) && s.contains(1) && !s.contains(2) && !s.contains(178));
+}
+
+#[test]
+fn a_scan_that_finds_new_scene_hues_is_repeated_once_before_it_is_solved() {
+    let rig = rig();
+    let half = Block::PAPER.size_m.map(|s| 0.5 * s);
+    let cfg = AcquireConfig::DEFAULT;
+    let scans = (80u32 * 60).div_ceil(cfg.scan_chunk);
+    let flat = vec![NO_HUE; usize::from(W) * usize::from(H)];
+    let tinted = vec![45u8; usize::from(W) * usize::from(H)];
+    let mut acq = Acquisition::new();
+    let run = |acq: &mut Acquisition, px: &vec::Vec<u8>| {
+        let img = HueImage::new_checked(&px[..], W, H).unwrap();
+        for _ in 0..scans {
+            acq.step(&img, &img, &lut(), &rig, &half, &cfg);
+        }
+        acq.stage()
+    };
+    // Nothing around the view: solved at once.
+    assert_eq!(run(&mut acq, &flat), Stage::Solve);
+    assert!(acq.scene().is_empty());
+    // The solve: nothing seen, so back to the scan.
+    let none = HueImage::new_checked(&flat[..], W, H).unwrap();
+    acq.step(&none, &none, &lut(), &rig, &half, &cfg);
+    assert_eq!(acq.stage(), Stage::Scan(0));
+    // A tinted view: the scan is repeated with its hues taken, then solved.
+    assert_eq!(run(&mut acq, &tinted), Stage::Scan(0));
+    assert!(acq.scene().contains(45) && !acq.scene().contains(44));
+    assert_eq!(run(&mut acq, &tinted), Stage::Solve);
+    // The scene's hues outlive a reset (they belong to the scene, not to the block).
+    acq.reset();
+    assert!(acq.scene().contains(45));
+    assert_eq!(run(&mut acq, &tinted), Stage::Solve);
+}

@@ -150,3 +150,23 @@ fn the_confirming_scale_rises_like_the_expected_fitness_and_falls_four_times_slo
     }
     assert!((model.confirming_fitness() - 0.75).abs() < 0.01, "{}", model.confirming_fitness());
 }
+
+#[test]
+fn the_scenes_hues_leave_the_search_bands_and_not_the_learnt_ones() {
+    let mut colours = Colours::new(PRIOR, DEFAULT_HUE_TOLERANCE);
+    // A tinted background at 86°–96° (43–48 units), inside green's search band (42–78 units).
+    let mut scene = HueSet::EMPTY;
+    (43..=48).for_each(|h| scene.insert(h));
+    assert_eq!(colours.lut().mask(45), 1 << 1 | 1 << 4);
+    colours.set_scene(&scene);
+    assert_eq!(colours.lut().mask(45), 0);
+    assert_eq!(colours.lut().mask(42), 1 << 1 | 1 << 4, "the band's other hues still match");
+    assert_eq!(colours.lut().any(1 << 1)[45], 0, "and so do the face planes");
+    // Green learnt at 92° (46 units): its learnt band keeps the hue; face 4, not learnt, does not.
+    colours.select(true);
+    colours.learn(&tally_of(colours.model(), 1, &[46], 20));
+    assert_eq!(colours.lut().mask(46), 1 << 1);
+    // A new configuration forgets the scene.
+    colours.configure(PRIOR, DEFAULT_HUE_TOLERANCE);
+    assert_eq!(colours.lut().mask(45), 1 << 1 | 1 << 4);
+}

@@ -20,6 +20,9 @@ Runs, into WORK (default target/results), each step named as it runs:
   acquire  evorec acquire --trials N --out WORK/acquire  acquisition statistics (N = 100)
   acquire-light  evorec acquire --trials N --light scenarios/light/shading_wb.toml --out WORK/acquire-light
                                                           the same under a camera-like light
+  acquire-wb  evorec acquire --trials N --light scenarios/light/white_balance.toml --out WORK/acquire-wb
+                                                          the same under a white-balance error
+                                                          that tints the grey background
   timing   evorec timing --out WORK/timing               M4 instructions per generation
   seeds    over GA seeds 1..N (--seeds, default 20), two runs at a time, each run's output in
            DIR.log beside its DIR:
@@ -126,6 +129,7 @@ MANOEUVRE_BELTS = [('stop-start', 'scenarios/belt_stop_start.toml'), ('reverse',
 SEEDS_BAG = 'pr-iiwa-sway'
 # The camera-like light of the second acquisition statistics.
 ACQUIRE_LIGHT = 'scenarios/light/shading_wb.toml'
+ACQUIRE_WB = 'scenarios/light/white_balance.toml'
 # The closed loop against a reversing belt: its seeds, and the time from which its servo error counts.
 SERVO_BELT = 'scenarios/servo_belt_reverse.toml'
 SERVO_BELT_SEEDS = 10
@@ -476,6 +480,7 @@ def status_section(w, seeds, pr_tracked):
         rows.append(status_row(f'`{SEEDS_BAG}` (camera-like bag)', summaries(seed_dirs(f'{w}/seeds/{SEEDS_BAG}', seeds))))
     rows += acquire_status_row('acquisition', f'{w}/acquire')
     rows += acquire_status_row(f'acquisition under `{ACQUIRE_LIGHT}`', f'{w}/acquire-light')
+    rows += acquire_status_row(f'acquisition under `{ACQUIRE_WB}`', f'{w}/acquire-wb')
     return '\n'.join(rows)
 
 
@@ -670,6 +675,9 @@ def main():
     run_step('acquire-light', [evorec, '-q', 'acquire', '--trials', str(a.trials), '--light',
                                os.path.join(ROOT, ACQUIRE_LIGHT), '--out', f'{w}/acquire-light'],
              f'{w}/acquire-light', a.reuse)
+    run_step('acquire-wb', [evorec, '-q', 'acquire', '--trials', str(a.trials), '--light',
+                            os.path.join(ROOT, ACQUIRE_WB), '--out', f'{w}/acquire-wb'],
+             f'{w}/acquire-wb', a.reuse)
     run_step('timing', [evorec, '-q', 'timing', '--out', f'{w}/timing'], f'{w}/timing', a.reuse)
     seed_runs = []
     for name, path, speed in AXIAL_BELTS:
@@ -738,6 +746,11 @@ from the first frame within 10 mm and 5° of the truth). `NAME-bag` is a ROS 2 b
 The same under a camera-like light, `evorec acquire --trials {a.trials} --light {ACQUIRE_LIGHT} --out DIR`:
 
 {acquire_section(f'{w}/acquire-light')}
+
+Under a white-balance error alone that tints the grey background to about 90° (inside the green
+faces' search band; the search leaves such a scene's hues out), `evorec acquire --trials {a.trials} --light {ACQUIRE_WB} --out DIR`:
+
+{acquire_section(f'{w}/acquire-wb')}
 
 ## Board timing (Cortex-M4, QEMU instruction counts)
 

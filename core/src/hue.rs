@@ -60,6 +60,7 @@ pub const fn rgb_to_hue(r: u8, g: u8, b: u8) -> u8 {
 }
 
 const _: () = assert!(MIN_SATURATION > 0, "rgb_to_hue relies on the saturation test to reject grey");
+const _: () = assert!(HUE_UNITS % 4 == 0, "HueLut::fill_bands_except clears four entries a word");
 
 /// `⌈2³² / (2·d)⌉` for `d = 1..=255` (0 for `d = 0`, never used): for every numerator
 /// `n < 2¹⁶`, `(n · HALF_RECIPROCALS[d]) >> 32 = ⌊n / (2·d)⌋`. The reciprocal is too large by
@@ -260,10 +261,13 @@ impl HueLut {
                 }
             }
         }
-        for (h, entry) in (0..HUE_UNITS).zip(self.table.iter_mut()) {
-            if except.contains(h) {
-                *entry &= !faces;
-            }
+        // Four entries a word: byte `i` of `clear` is `faces` where hue `h + i` is in `except`
+        // (the four bits spread to the bytes' low bits by one multiplication).
+        for (j, entries) in self.table.chunks_exact_mut(4).take(usize::from(HUE_UNITS) / 4).enumerate() {
+            let bits = except.0.get(j / 8).map_or(0, |w| (w >> (4 * (j % 8))) & 0xF);
+            let clear = ((bits * 0x0020_4081) & 0x0101_0101) * u32::from(faces);
+            let kept = u32::from_le_bytes([entries[0], entries[1], entries[2], entries[3]]) & !clear;
+            entries.copy_from_slice(&kept.to_le_bytes());
         }
         self.fill_sets();
     }

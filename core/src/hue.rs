@@ -60,7 +60,7 @@ pub const fn rgb_to_hue(r: u8, g: u8, b: u8) -> u8 {
 }
 
 const _: () = assert!(MIN_SATURATION > 0, "rgb_to_hue relies on the saturation test to reject grey");
-const _: () = assert!(HUE_UNITS % 4 == 0, "HueLut::fill_bands_except clears four entries a word");
+const _: () = assert!(HUE_UNITS.is_multiple_of(4), "HueLut::fill_bands_except clears four entries a word");
 
 /// `⌈2³² / (2·d)⌉` for `d = 1..=255` (0 for `d = 0`, never used): for every numerator
 /// `n < 2¹⁶`, `(n · HALF_RECIPROCALS[d]) >> 32 = ⌊n / (2·d)⌋`. The reciprocal is too large by

@@ -367,7 +367,8 @@ impl Colours {
     /// background whose colour falls in a face's search band (a grey scene tinted by the white
     /// balance, a coloured floor) is neither scanned nor scored as that face. A learnt band
     /// keeps them: it was measured on the face itself. Rebuilds the table when they change, and
-    /// on the board every time (constant work).
+    /// on the board every time (the tracker calls it on the acquisition's solve stage only, so
+    /// that stage's work is constant).
     pub fn set_scene(&mut self, scene: &HueSet) {
         if *scene != self.scene || cfg!(target_arch = "arm") {
             self.scene = *scene;

@@ -786,9 +786,13 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         let cfg = &self.config.tuning.acquire;
         let half = self.model.half_size();
         let half = [half.x, half.y, half.z];
-        // The search table leaves out the scene's hues the last finished scan found.
-        self.colours.set_scene(self.acquisition.scene());
+        let solving = self.acquisition.stage() == acquire::Stage::Solve;
         self.acquisition.step(&frame.left, &frame.right, self.colours.lut(), &self.config.rig, &half, cfg);
+        // The search table leaves out the scene's hues the solve stage took from its scan (a
+        // stage of little work, so the table's rebuild is paid there).
+        if solving {
+            self.colours.set_scene(self.acquisition.scene());
+        }
         let Some(seed) = self.acquisition.seed().copied() else { return };
         let used = self.ga.len();
         let end = used - cfg.idle_individuals.min(used - 1);

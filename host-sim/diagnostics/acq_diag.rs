@@ -2,7 +2,8 @@
 //! `cargo run --release -p evorec-sim --example acq_diag -- SEED [a] [FRAMES] [timing|-] [LIGHT.toml]`:
 //! SEED the trial, `a` for the motion-A case, LIGHT a `[render]` file as `evorec acquire --light` takes.
 //! With `BANDS=1` in the environment, every frame also prints the learnt hue bands, the expected
-//! fitness, and the true pose's and the estimate's fitness counts through the table after the step.
+//! fitness, and the true pose's and the estimate's fitness counts through the table after the step;
+//! with `AXES=1`, the estimate's error per axis and the learnt silhouette shift.
 use evorec_core::acquire;
 use evorec_sim::experiments::acquire::{Case, pose_error, scenario};
 use evorec_sim::experiments::experiment::{SimTracker, tracker_config};
@@ -76,6 +77,15 @@ fn main() -> anyhow::Result<()> {
         let dt = if k == 0 { 0.0 } else { s.frame_period_s as f32 };
         let est = tracker.step(&frame, &joints, dt).map_err(|e| anyhow::anyhow!("{e}"))?;
         let (mm, deg) = pose_error(&est.psi, &truth);
+        if std::env::var_os("AXES").is_some() {
+            let d: Vec<String> = (0..3).map(|i| format!("{:+.1}", 1e3 * (est.psi.0[i] - truth.0[i]))).collect();
+            println!(
+                "    error x y z (mm) {} at z {:.3} m; edge shift {:+.3} px",
+                d.join(" "),
+                truth.0[2],
+                tracker.edge_shift_px()
+            );
+        }
         if std::env::var_os("BANDS").is_some() {
             let m = tracker.colours();
             let ft = tracker.fitness_of(&truth, &frame).map_err(|e| anyhow::anyhow!("{e}"))?;

@@ -18,7 +18,8 @@
 //!    balance tints green-yellow falls in the green faces' search band, and counted as green
 //!    it would put their blob in the middle of the view. The search table leaves the scene's
 //!    hues out ([`crate::colour::Colours::set_scene`]), for the scan and for the fitness alike;
-//!    a scan that finds them changed is repeated once before it is solved, with them left out.
+//!    the solve stage takes them from the finished scan, and a scan that finds them changed is
+//!    repeated once, with them left out, before it is solved.
 //! 2. **Triangulate** the centroid of each axis's hits seen in both images: the centroid of
 //!    the visible face of that axis, a point `P_a = C + h_a·n_a` of the block (centre `C`,
 //!    half size `h_a`, outward unit normal `n_a` of the face facing the cameras).
@@ -48,8 +49,8 @@
 //!
 //! | stage | work (at most) |
 //! |---|---|
-//! | scan | [`AcquireConfig::scan_chunk`] grid pixels of each image; after the last chunk, the scene's hues (five passes over the 180 hue units) |
-//! | solve | two solves (all faces, two faces) and one residual evaluation of each |
+//! | scan | [`AcquireConfig::scan_chunk`] grid pixels of each image |
+//! | solve | the scene's hues (five passes over the 180 hue units) and the tracker's rebuild of its search table; two solves (all faces, two faces) and one residual evaluation of each |
 //! | refine, [`REFINE_ITERATIONS`] times | one Gauss–Newton iteration of each of the two solutions (8 residual evaluations and one 6×6 solve each) |
 //!
 //! A complete seed takes `⌈grid pixels / scan_chunk⌉ + 1 + REFINE_ITERATIONS` generations

@@ -135,30 +135,30 @@ impl Acquisition {
         let next = scan_part(left, lut, stride, start, chunk, &mut self.left);
         scan_part(right, lut, stride, start, chunk, &mut self.right);
         let (gw, gh) = grid_size(right.width(), right.height(), stride);
-        self.stage = if next >= gw * gh { self.scanned() } else { Stage::Scan(next) };
+        self.stage = if next >= gw * gh { Stage::Solve } else { Stage::Scan(next) };
         self.motion = Psi::IDENTITY;
     }
 
-    /// The stage after a finished scan: the solve, unless the scene's hues differ from those the
-    /// scan counted with; then they are taken and the scan repeated (once in a row: a scene
-    /// whose border hues change from scan to scan is solved with the latest).
-    fn scanned(&mut self) -> Stage {
+    /// Takes the scene's hues of the finished scan; returns whether the scan must be repeated
+    /// before it is solved: they differ from those it counted with (once in a row: a scene whose
+    /// border hues change from scan to scan is solved with the latest).
+    fn take_scene(&mut self) -> bool {
         let scene = scene_hues(&self.left, &self.right);
         let changed = scene != self.scene;
         self.scene = scene;
-        if changed && !self.repeat {
-            self.repeat = true;
-            self.restart()
-        } else {
-            self.repeat = false;
-            Stage::Solve
-        }
+        self.repeat = changed && !self.repeat;
+        self.repeat
     }
 
-    /// The [`Stage::Solve`] stage: the solutions from all seen faces and from the two with
-    /// most hits, each started as a refinement in its place.
+    /// The [`Stage::Solve`] stage: the scene's hues of the finished scan, and unless they
+    /// changed (the scan is then repeated), the solutions from all seen faces and from the two
+    /// with most hits, each started as a refinement in its place.
     #[inline(never)]
     fn solve(&mut self, rig: &StereoRig, half: &[f32; 3], config: &AcquireConfig) {
+        if self.take_scene() {
+            self.stage = self.restart();
+            return;
+        }
         let m = measured(rig, half, &self.left, &self.right, config);
         for (candidate, faces) in self.candidates.iter_mut().zip([3, 2]) {
             *candidate = seed_pose_from(rig, half, m.left, m.right, config.min_face_hits, faces)

@@ -291,29 +291,35 @@ fn a_scan_that_finds_new_scene_hues_is_repeated_once_before_it_is_solved() {
     let half = Block::PAPER.size_m.map(|s| 0.5 * s);
     let cfg = AcquireConfig::DEFAULT;
     let scans = (80u32 * 60).div_ceil(cfg.scan_chunk);
-    let flat = vec![NO_HUE; usize::from(W) * usize::from(H)];
-    let tinted = vec![45u8; usize::from(W) * usize::from(H)];
+    let none = vec![NO_HUE; usize::from(W) * usize::from(H)];
+    let flat = (none.clone(), none);
+    // The block on a background of hue 45 (no face's in this table).
+    let mut tinted = scene(&Psi::new([0.02, -0.01, 0.7], [0.2, 0.3, 0.1]));
+    for px in tinted.0.iter_mut().chain(tinted.1.iter_mut()).filter(|px| **px == NO_HUE) {
+        *px = 45;
+    }
     let mut acq = Acquisition::new();
-    let run = |acq: &mut Acquisition, px: &vec::Vec<u8>| {
-        let img = HueImage::new_checked(&px[..], W, H).unwrap();
+    // The scan's stages, then the solve stage; returns the stage after it.
+    let cycle = |acq: &mut Acquisition, (l, r): &(vec::Vec<u8>, vec::Vec<u8>)| {
+        let (l, r) = (HueImage::new_checked(&l[..], W, H).unwrap(), HueImage::new_checked(&r[..], W, H).unwrap());
         for _ in 0..scans {
-            acq.step(&img, &img, &lut(), &rig, &half, &cfg);
+            acq.step(&l, &r, &lut(), &rig, &half, &cfg);
         }
+        assert_eq!(acq.stage(), Stage::Solve);
+        acq.step(&l, &r, &lut(), &rig, &half, &cfg);
         acq.stage()
     };
-    // Nothing around the view: solved at once.
-    assert_eq!(run(&mut acq, &flat), Stage::Solve);
+    // Nothing around the view, nothing seen: back to the scan.
+    assert_eq!(cycle(&mut acq, &flat), Stage::Scan(0));
     assert!(acq.scene().is_empty());
-    // The solve: nothing seen, so back to the scan.
-    let none = HueImage::new_checked(&flat[..], W, H).unwrap();
-    acq.step(&none, &none, &lut(), &rig, &half, &cfg);
-    assert_eq!(acq.stage(), Stage::Scan(0));
-    // A tinted view: the scan is repeated with its hues taken, then solved.
-    assert_eq!(run(&mut acq, &tinted), Stage::Scan(0));
+    // Hue 45 around the view: taken, and the scan repeated instead of solved.
+    assert_eq!(cycle(&mut acq, &tinted), Stage::Scan(0));
     assert!(acq.scene().contains(45) && !acq.scene().contains(44));
-    assert_eq!(run(&mut acq, &tinted), Stage::Solve);
+    assert!(acq.seed().is_none());
+    // The same scene again: solved.
+    assert_eq!(cycle(&mut acq, &tinted), Stage::Refine(0));
     // The scene's hues outlive a reset (they belong to the scene, not to the block).
     acq.reset();
     assert!(acq.scene().contains(45));
-    assert_eq!(run(&mut acq, &tinted), Stage::Solve);
+    assert_eq!(cycle(&mut acq, &tinted), Stage::Refine(0));
 }

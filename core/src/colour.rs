@@ -369,11 +369,50 @@ impl Colours {
     /// keeps them: it was measured on the face itself. Rebuilds the table when they change, and
     /// on the board every time (the tracker calls it on the acquisition's solve stage only, so
     /// that stage's work is constant).
+    /// When a search band that matched none of the scene's hues starts losing some, a warning
+    /// says so: a background of a face's own colour hides that face from the search.
     pub fn set_scene(&mut self, scene: &HueSet) {
-        if *scene != self.scene || cfg!(target_arch = "arm") {
+        let changed = *scene != self.scene;
+        let before = if changed { self.scene_in_search_bands() } else { [0; FACES] };
+        if changed || cfg!(target_arch = "arm") {
             self.scene = *scene;
             self.rebuild();
         }
+        if changed {
+            self.report_scene(&before);
+        }
+    }
+
+    /// Warns of every search band that loses hues to the scene now and lost none `before`.
+    #[inline(never)]
+    fn report_scene(&self, before: &[u8; FACES]) {
+        let bands = self.model.search_bands();
+        for (k, ((lost, was), band)) in self.scene_in_search_bands().iter().zip(before).zip(bands).enumerate() {
+            // Faces of the same configured hue share their band: it is reported once.
+            if *lost > 0 && *was == 0 && !bands.iter().take(k).any(|b| *b == band) {
+                log::warn!(
+                    "the scene around the block shows {}° of the search band {}° ± {}° (a face's configured hue): the search leaves those hues out",
+                    2 * u32::from(*lost),
+                    2 * u32::from(band.centre),
+                    2 * u32::from(band.half),
+                );
+            }
+        }
+    }
+
+    /// Per face, how many hue units of its search band are the scene's (left out of the search).
+    #[inline(never)]
+    pub fn scene_in_search_bands(&self) -> [u8; FACES] {
+        let mut lost = [0u8; FACES];
+        let (units, half) = (u16::from(HUE_UNITS), u16::from(self.model.search_half_width()));
+        for (n, band) in lost.iter_mut().zip(self.model.search_bands()) {
+            // The band's hues from `centre − half` on, kept positive before the wrap.
+            for d in 0..=2 * half {
+                let h = (u16::from(band.centre) + units + d - half) % units;
+                *n += u8::from(self.scene.contains(h as u8));
+            }
+        }
+        lost
     }
 
     /// The table the fitness and the acquisition use.

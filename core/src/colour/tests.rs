@@ -159,6 +159,7 @@ fn the_scenes_hues_leave_the_search_bands_and_not_the_learnt_ones() {
     (43..=48).for_each(|h| scene.insert(h));
     assert_eq!(colours.lut().mask(45), 1 << 1 | 1 << 4);
     colours.set_scene(&scene);
+    assert_eq!(colours.scene_in_search_bands(), [0, 6, 0, 0, 6, 0]);
     assert_eq!(colours.lut().mask(45), 0);
     assert_eq!(colours.lut().mask(42), 1 << 1 | 1 << 4, "the band's other hues still match");
     assert_eq!(colours.lut().any(1 << 1)[45], 0, "and so do the face planes");

@@ -130,6 +130,8 @@ SEEDS_BAG = 'pr-iiwa-sway'
 # The camera-like light of the second acquisition statistics.
 ACQUIRE_LIGHT = 'scenarios/light/shading_wb.toml'
 ACQUIRE_WB = 'scenarios/light/white_balance.toml'
+# The acquisitions under a light: (step and WORK directory, light file).
+ACQUIRE_LIGHTS = [('acquire-light', ACQUIRE_LIGHT), ('acquire-wb', ACQUIRE_WB)]
 # The closed loop against a reversing belt: its seeds, and the time from which its servo error counts.
 SERVO_BELT = 'scenarios/servo_belt_reverse.toml'
 SERVO_BELT_SEEDS = 10
@@ -479,8 +481,8 @@ def status_section(w, seeds, pr_tracked):
     if pr_tracked:
         rows.append(status_row(f'`{SEEDS_BAG}` (camera-like bag)', summaries(seed_dirs(f'{w}/seeds/{SEEDS_BAG}', seeds))))
     rows += acquire_status_row('acquisition', f'{w}/acquire')
-    rows += acquire_status_row(f'acquisition under `{ACQUIRE_LIGHT}`', f'{w}/acquire-light')
-    rows += acquire_status_row(f'acquisition under `{ACQUIRE_WB}`', f'{w}/acquire-wb')
+    for step, light in ACQUIRE_LIGHTS:
+        rows += acquire_status_row(f'acquisition under `{light}`', f'{w}/{step}')
     return '\n'.join(rows)
 
 
@@ -672,12 +674,10 @@ def main():
                  f'{w}/track/{name}-bag', a.reuse)
     run_step('acquire', [evorec, '-q', 'acquire', '--trials', str(a.trials), '--out', f'{w}/acquire'],
              f'{w}/acquire', a.reuse)
-    run_step('acquire-light', [evorec, '-q', 'acquire', '--trials', str(a.trials), '--light',
-                               os.path.join(ROOT, ACQUIRE_LIGHT), '--out', f'{w}/acquire-light'],
-             f'{w}/acquire-light', a.reuse)
-    run_step('acquire-wb', [evorec, '-q', 'acquire', '--trials', str(a.trials), '--light',
-                            os.path.join(ROOT, ACQUIRE_WB), '--out', f'{w}/acquire-wb'],
-             f'{w}/acquire-wb', a.reuse)
+    for step, light in ACQUIRE_LIGHTS:
+        run_step(step, [evorec, '-q', 'acquire', '--trials', str(a.trials), '--light',
+                        os.path.join(ROOT, light), '--out', f'{w}/{step}'],
+                 f'{w}/{step}', a.reuse)
     run_step('timing', [evorec, '-q', 'timing', '--out', f'{w}/timing'], f'{w}/timing', a.reuse)
     seed_runs = []
     for name, path, speed in AXIAL_BELTS:

@@ -48,7 +48,7 @@
 //! per face, and rebuilding the tracking table ([`crate::hue::HueLut::fill_bands`]) a fixed
 //! number of word operations. All integer: host and board agree bit for bit.
 
-use crate::hue::{Band, HueLut, HueSet};
+use crate::hue::{Band, HueLut, HueSet, hue_distance};
 use crate::limits::{COLOUR_FRAMES, COLOUR_MIN_SAMPLES, HUE_UNITS, MAX_HUE_SHIFT};
 use crate::model::FACES;
 
@@ -369,6 +369,7 @@ impl Colours {
     /// keeps them: it was measured on the face itself. Rebuilds the table when they change, and
     /// on the board every time (the tracker calls it on the acquisition's solve stage only, so
     /// that stage's work is constant).
+    ///
     /// When a search band that matched none of the scene's hues starts losing some, a warning
     /// says so: a background of a face's own colour hides that face from the search.
     pub fn set_scene(&mut self, scene: &HueSet) {
@@ -404,12 +405,9 @@ impl Colours {
     #[inline(never)]
     pub fn scene_in_search_bands(&self) -> [u8; FACES] {
         let mut lost = [0u8; FACES];
-        let (units, half) = (u16::from(HUE_UNITS), u16::from(self.model.search_half_width()));
         for (n, band) in lost.iter_mut().zip(self.model.search_bands()) {
-            // The band's hues from `centre − half` on, kept positive before the wrap.
-            for d in 0..=2 * half {
-                let h = (u16::from(band.centre) + units + d - half) % units;
-                *n += u8::from(self.scene.contains(h as u8));
+            for h in (0..HUE_UNITS).filter(|&h| self.scene.contains(h)) {
+                *n += u8::from(hue_distance(h, band.centre) <= band.half);
             }
         }
         lost

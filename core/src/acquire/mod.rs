@@ -273,19 +273,17 @@ pub fn scan_part<B: AsRef<[u8]>, F: PixelFormat>(
         let first = (i - gy * gw) as usize;
         let n = (row_end - i) as usize;
         let before = blobs.total();
+        // Every hue the row shows is seen; in the first and last grid rows, on that side too.
+        let side = (u8::from(gy == 0) * SIDE_TOP) | (u8::from(gy + 1 == gh) * SIDE_BOTTOM);
         for (k, px) in row.iter().skip(o + first * s).step_by(s).take(n).enumerate() {
             let h = F::hue(*px);
-            blobs.mark(h, SEEN);
+            blobs.mark(h, SEEN | side);
             blobs.add(lut.mask(h), o + (first + k) * s, v);
         }
         // The border: every hit of the first and last grid rows, and the first and last grid
-        // pixels of the other rows (read again), and the hues seen on each side.
-        let side = (u8::from(gy == 0) * SIDE_TOP) | (u8::from(gy + 1 == gh) * SIDE_BOTTOM);
+        // pixels of the other rows (read again), with the sides their hues were seen on.
         if side != 0 {
             blobs.edge += blobs.total() - before;
-            for px in row.iter().skip(o + first * s).step_by(s).take(n) {
-                blobs.mark(F::hue(*px), side);
-            }
         }
         let last = (gw as usize).saturating_sub(1);
         for (gx, end_side) in [(0, SIDE_LEFT), (last, SIDE_RIGHT)] {

@@ -8,7 +8,9 @@
 //! change (the mean absolute grey-level difference on a sparse grid of pixels) on the reader
 //! thread; [`PairingCheck`] correlates the two series over the last [`WINDOW`] frames at every
 //! offset up to [`MAX_OFFSET`] frames and reports an offset when the series agree well there
-//! and leave several times more unexplained in step. A scene without motion gives no verdict (nothing to compare),
+//! and leave several times more unexplained in step. A recording that ends before its first
+//! window is full gets one verdict on all its frames at its end ([`PairingCheck::finish`]), from
+//! [`MIN_FRAMES`] on. A scene without motion gives no verdict (nothing to compare),
 //! and neither does a motion too smooth to tell an offset of a frame or two from no offset.
 
 use std::collections::VecDeque;
@@ -23,6 +25,10 @@ pub const WINDOW: usize = 120;
 pub const EVERY: usize = 30;
 /// The largest offset looked for, in frames (either way).
 pub const MAX_OFFSET: usize = 30;
+/// The fewest frames a recording shorter than [`WINDOW`] needs for a verdict at its end (2 s at
+/// 30 frames/s). Such a verdict looks for offsets up to a quarter of the frames, so that every
+/// correlation it compares spans at least three quarters of them.
+pub const MIN_FRAMES: usize = 60;
 /// The least offset reported. An offset of one frame is found only where the motion changes
 /// from frame to frame (a block turning by jerks, a start or a stop): the two series of a smooth
 /// motion agree almost as well in step as one frame apart, and [`MIN_RESIDUAL_RATIO`] then gives
@@ -78,15 +84,18 @@ pub struct OutOfStep {
     pub in_step: f64,
     /// The window's first and last frame (positions in the recording).
     pub frames: (usize, usize),
+    /// The largest offset looked for: an offset found there may be larger still.
+    pub reach: i32,
 }
 
 impl std::fmt::Display for OutOfStep {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let (later, n) = if self.offset > 0 { ("later", self.offset) } else { ("earlier", -self.offset) };
         let frames = if n == 1 { "frame" } else { "frames" };
+        let or_more = if n >= self.reach { " or more" } else { "" };
         write!(
             f,
-            "the stereo pairs are out of step: the right images show the motion of the left ones {n} {frames} {later} \
+            "the stereo pairs are out of step: the right images show the motion of the left ones {n}{or_more} {frames} {later} \
              (frames {}–{}: the image motion of the two cameras correlates {:.2} at that offset, {:.2} in step); \
              pair each left image with the right one taken at the same time (check the recorder's synchroniser or \
              the images' stamps), or pass --no-pairing-check to track anyway",
@@ -118,9 +127,26 @@ impl PairingCheck {
         if self.pushed < WINDOW || !(self.pushed - WINDOW).is_multiple_of(EVERY) {
             return None;
         }
+        self.verdict(i, MAX_OFFSET)
+    }
+
+    /// At the end of a recording (`last` its last frame pushed): the verdict on all its frames
+    /// if it ended before the first window was full and has at least [`MIN_FRAMES`], with
+    /// offsets up to a quarter of them; `None` otherwise (a longer recording was checked on
+    /// its windows).
+    pub fn finish(&mut self, last: usize) -> Option<OutOfStep> {
+        let n = self.pushed;
+        if !(MIN_FRAMES..WINDOW).contains(&n) {
+            return None;
+        }
+        self.verdict(last, (n / 4).min(MAX_OFFSET))
+    }
+
+    /// The verdict on the series held (ending at frame `last`), offsets up to `max_offset`.
+    fn verdict(&mut self, last: usize, max_offset: usize) -> Option<OutOfStep> {
         let (l, r) = (self.left.make_contiguous(), self.right.make_contiguous());
-        let first = i + 1 - WINDOW;
-        let best = OutOfStep { frames: (first, i), ..best_offset(l, r)? };
+        let first = (last + 1).saturating_sub(l.len());
+        let best = OutOfStep { frames: (first, last), ..best_offset(l, r, max_offset)? };
         log::debug!(
             "stereo pairing, frames {}–{}: best offset {} frames (correlation {:.3}), in step {:.3}",
             best.frames.0,
@@ -142,14 +168,15 @@ impl OutOfStep {
     }
 }
 
-/// The offset at which two series of equal length correlate best (`frames` left at 0); `None`
-/// where either is constant.
-fn best_offset(left: &[f32], right: &[f32]) -> Option<OutOfStep> {
+/// The offset within `±max_offset` at which two series of equal length correlate best
+/// (`frames` left at 0); `None` where either is constant.
+fn best_offset(left: &[f32], right: &[f32], max_offset: usize) -> Option<OutOfStep> {
     let in_step = correlation(left, right, 0)?;
-    let (offset, best) = (-(MAX_OFFSET as i32)..=MAX_OFFSET as i32)
+    let reach = i32::try_from(max_offset).unwrap_or(i32::MAX);
+    let (offset, best) = (-reach..=reach)
         .filter_map(|k| correlation(left, right, k).map(|c| (k, c)))
         .max_by(|a, b| a.1.total_cmp(&b.1))?;
-    Some(OutOfStep { offset, correlation: best, in_step, frames: (0, 0) })
+    Some(OutOfStep { offset, correlation: best, in_step, frames: (0, 0), reach })
 }
 
 /// Pearson's correlation of `left[t]` with `right[t + offset]` over their overlap (the first
@@ -211,6 +238,42 @@ mod tests {
         let v = verdict(right, left).expect("out of step the other way");
         assert_eq!(v.offset, -15, "{v}");
         assert!(v.to_string().contains("15 frames earlier"), "{v}");
+    }
+
+    /// The verdict of a recording of `left.len()` frames: on its windows, else at its end.
+    fn verdict_with_end(left: &[f32], right: &[f32]) -> Option<OutOfStep> {
+        let mut check = PairingCheck::default();
+        let on_windows = left.iter().zip(right).enumerate().filter_map(|(i, (l, r))| check.push(i, *l, *r)).next();
+        on_windows.or_else(|| check.finish(left.len().checked_sub(1)?))
+    }
+
+    #[test]
+    fn a_recording_shorter_than_the_window_is_judged_at_its_end() {
+        let m = motion(200);
+        for n in [MIN_FRAMES, 90, WINDOW - 1] {
+            let (left, right) = (&m[15..15 + n], &m[..n]);
+            assert_eq!(verdict(left, right), None, "{n} frames: no window is full");
+            let v = verdict_with_end(left, right).unwrap_or_else(|| panic!("{n} frames: out of step at the end"));
+            assert_eq!((v.offset, v.frames), (15, (0, n - 1)), "{n} frames: {v}");
+            assert_eq!(verdict_with_end(&m[..n], &m[..n]), None, "{n} frames in step");
+        }
+        let n = MIN_FRAMES - 1;
+        assert_eq!(verdict_with_end(&m[15..15 + n], &m[..n]), None, "too short to judge");
+        // Offsets up to a quarter of the frames are looked for: a larger one is named as that many or more.
+        let n = 80;
+        let v = verdict_with_end(&m[25..25 + n], &m[..n]).expect("25 frames of 80 out of step");
+        assert_eq!(v.offset, 20, "{v}");
+        assert!(v.to_string().contains("20 or more frames later"), "{v}");
+    }
+
+    #[test]
+    fn a_recording_checked_on_its_windows_gets_no_second_verdict_at_its_end() {
+        let m = motion(400);
+        let mut check = PairingCheck::default();
+        let (left, right) = (&m[15..], &m[..m.len() - 15]);
+        let found = left.iter().zip(right).enumerate().filter_map(|(i, (l, r))| check.push(i, *l, *r)).count();
+        assert!(found > 0, "out of step on its windows");
+        assert_eq!(check.finish(left.len() - 1), None);
     }
 
     /// A motion that changes from frame to frame (a block turned by jerks), with a little

@@ -29,7 +29,7 @@ use nalgebra::Vector3;
 
 use crate::fitness::{Evaluator, clamp_edge_shift};
 use crate::image::{Image, PixelFormat};
-use crate::limits::{EDGE_PROBE_DISPARITY_PX, EDGE_PROBE_EVERY, EDGE_SHIFT_STEP_PX, MIN_DEPTH_M};
+use crate::limits::{EDGE_PROBE_DISPARITY_PX, EDGE_PROBE_EVERY, EDGE_SHIFT_START_PX, EDGE_SHIFT_STEP_PX, MIN_DEPTH_M};
 #[cfg(doc)]
 use crate::limits::{EDGE_PROBE_IDLE, EDGE_SHIFT_RANGE_PX, SILHOUETTE_INNER_PX, SILHOUETTE_OUTER_PX, TRACKING_IDLE};
 use crate::pose::Psi;
@@ -54,8 +54,9 @@ pub struct EdgeShift {
 }
 
 impl EdgeShift {
-    /// No shift; the next tracked frame is due for the test.
-    pub const NONE: Self = Self { px: 0.0, frame: 0 };
+    /// The shift before any test: [`EDGE_SHIFT_START_PX`]; the next tracked frame is due for
+    /// the test.
+    pub const NONE: Self = Self { px: EDGE_SHIFT_START_PX, frame: 0 };
 
     /// The shift, pixel widths outwards (within [`EDGE_SHIFT_RANGE_PX`]).
     pub fn px(&self) -> f32 {

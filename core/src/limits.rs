@@ -159,6 +159,14 @@ pub const DEFAULT_SEED_IMMIGRANTS: usize = 8;
 /// and the rows centred on the true edge for `a* = ¼` (the fixed rows) move by `¼ − a*`.
 pub const EDGE_SHIFT_RANGE_PX: [f32; 2] = [-0.75, 0.25];
 
+/// Where the learnt shift starts ([`crate::edge::EdgeShift::NONE`]): the middle of
+/// [`EDGE_SHIFT_RANGE_PX`], the shift of a camera that reads a pixel as the face once the face
+/// covers half of it (`a* = ½`). A flat, saturated face on a grey background reads as the face
+/// from about a quarter (`a*` = ¼, shift 0); a pale, shaded or tone-mapped face needs more of the
+/// pixel (up to ¾), since a mixed pixel's saturation reaches the hue table's floor later. Starting
+/// in the middle halves the way to either end, and the depth it biases, before the tests have run.
+pub const EDGE_SHIFT_START_PX: f32 = 0.5 * (EDGE_SHIFT_RANGE_PX[0] + EDGE_SHIFT_RANGE_PX[1]);
+
 /// How far one disparity test moves the learnt shift ([`crate::edge`]), in pixel widths: half a
 /// pixel in 50 tests, which at one test every [`EDGE_PROBE_EVERY`] tracked frames is 200 frames,
 /// about 7 s at 30 frames per second. Small, because every test steps one way or the other and

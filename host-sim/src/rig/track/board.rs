@@ -261,8 +261,7 @@ impl<const DOF: usize, F: SensorPixels> CameraController<DOF> for SequenceBoard<
     fn next_frame(&mut self, left: &mut [u8], right: &mut [u8]) -> Result<FrameInfo, SeqBoardError> {
         if self.next >= self.end {
             // A recording too short for the pairing check's window is judged as a whole here.
-            let last = self.next.checked_sub(1);
-            if let Some(v) = last.and_then(|last| self.pairing.as_mut().and_then(|c| c.finish(last))) {
+            if let Some(v) = self.pairing.as_mut().and_then(PairingCheck::finish) {
                 return Err(SeqBoardError::OutOfStep(v));
             }
             return Err(SeqBoardError::EndOfStream);

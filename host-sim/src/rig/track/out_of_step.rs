@@ -111,6 +111,8 @@ pub struct PairingCheck {
     right: VecDeque<f32>,
     /// Frames pushed so far.
     pushed: usize,
+    /// The position in the recording of the last frame pushed.
+    last: usize,
 }
 
 impl PairingCheck {
@@ -123,28 +125,29 @@ impl PairingCheck {
             }
             series.push_back(v);
         }
-        self.pushed += 1;
+        (self.pushed, self.last) = (self.pushed + 1, i);
         if self.pushed < WINDOW || !(self.pushed - WINDOW).is_multiple_of(EVERY) {
             return None;
         }
-        self.verdict(i, MAX_OFFSET)
+        self.verdict(MAX_OFFSET)
     }
 
-    /// At the end of a recording (`last` its last frame pushed): the verdict on all its frames
-    /// if it ended before the first window was full and has at least [`MIN_FRAMES`], with
-    /// offsets up to a quarter of them; `None` otherwise (a longer recording was checked on
-    /// its windows).
-    pub fn finish(&mut self, last: usize) -> Option<OutOfStep> {
+    /// At the end of a recording: the verdict on all its frames if it ended before the first
+    /// window was full and has at least [`MIN_FRAMES`], with offsets up to a quarter of them;
+    /// `None` otherwise (a longer recording was checked on its windows).
+    pub fn finish(&mut self) -> Option<OutOfStep> {
         let n = self.pushed;
         if !(MIN_FRAMES..WINDOW).contains(&n) {
             return None;
         }
-        self.verdict(last, (n / 4).min(MAX_OFFSET))
+        self.verdict((n / 4).min(MAX_OFFSET))
     }
 
-    /// The verdict on the series held (ending at frame `last`), offsets up to `max_offset`.
-    fn verdict(&mut self, last: usize, max_offset: usize) -> Option<OutOfStep> {
+    /// The verdict on the series held (ending at the last frame pushed), offsets up to
+    /// `max_offset`.
+    fn verdict(&mut self, max_offset: usize) -> Option<OutOfStep> {
         let (l, r) = (self.left.make_contiguous(), self.right.make_contiguous());
+        let last = self.last;
         let first = (last + 1).saturating_sub(l.len());
         let best = OutOfStep { frames: (first, last), ..best_offset(l, r, max_offset)? };
         log::debug!(
@@ -244,7 +247,7 @@ mod tests {
     fn verdict_with_end(left: &[f32], right: &[f32]) -> Option<OutOfStep> {
         let mut check = PairingCheck::default();
         let on_windows = left.iter().zip(right).enumerate().filter_map(|(i, (l, r))| check.push(i, *l, *r)).next();
-        on_windows.or_else(|| check.finish(left.len().checked_sub(1)?))
+        on_windows.or_else(|| check.finish())
     }
 
     #[test]
@@ -273,7 +276,7 @@ mod tests {
         let (left, right) = (&m[15..], &m[..m.len() - 15]);
         let found = left.iter().zip(right).enumerate().filter_map(|(i, (l, r))| check.push(i, *l, *r)).count();
         assert!(found > 0, "out of step on its windows");
-        assert_eq!(check.finish(left.len() - 1), None);
+        assert_eq!(check.finish(), None);
     }
 
     /// A motion that changes from frame to frame (a block turned by jerks), with a little

@@ -734,15 +734,12 @@ def main():
         scenario = belt_scenario(w, name, path, speed)
         seed_runs += [([evorec, '-q', 'run', scenario, '--seed', str(n), '--out', d], d)
                       for n, d in enumerate(seed_dirs(f'{w}/seeds/{name}-{speed}', a.seeds), 1)]
-    seed_runs += [([evorec, '-q', 'run', os.path.join(ROOT, REVERSING_BELT), '--seed', str(n), '--out', d], d)
-                  for n, d in enumerate(seed_dirs(f'{w}/seeds/conveyor', a.seeds), 1)]
-    for name, path in MANOEUVRE_BELTS:
-        seed_runs += [([evorec, '-q', 'run', os.path.join(ROOT, path), '--seed', str(n), '--out', d], d)
-                      for n, d in enumerate(seed_dirs(f'{w}/seeds/{name}', a.seeds), 1)]
+    # Each manoeuvring belt with the default generations per frame and with MORE_GENERATIONS.
     more = generations_config(w)
     for name, path in manoeuvring_belts():
-        seed_runs += [([evorec, '-q', 'run', os.path.join(ROOT, path), '--seed', str(n), '--config', more, '--out', d], d)
-                      for n, d in enumerate(seed_dirs(f'{w}/seeds/{name}-g{MORE_GENERATIONS}', a.seeds), 1)]
+        for suffix, config in (('', []), (f'-g{MORE_GENERATIONS}', ['--config', more])):
+            seed_runs += [([evorec, '-q', 'run', os.path.join(ROOT, path), '--seed', str(n), *config, '--out', d], d)
+                          for n, d in enumerate(seed_dirs(f'{w}/seeds/{name}{suffix}', a.seeds), 1)]
     bag_seq = f'{w}/bags/{SEEDS_BAG}'
     pr_tracked = any(name == SEEDS_BAG for name, *_ in bags_with_truth(a.bags))
     if pr_tracked:

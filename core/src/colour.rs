@@ -36,7 +36,10 @@
 //! points that match their face's learnt band, averaged over the frames it was learnt from. It
 //! is what the true pose can score under the current light (about 1 on a flat image, less
 //! where highlights and shadows take pixels' hues away); the status thresholds are relative to
-//! it (see [`crate::status`]). The confirmation takes a second average of the same coverage
+//! it (see [`crate::status`]). A census point that shows another face's colour (a hue in
+//! another face's band and not in its own) is left out of that fraction ([`Tally::showing`]):
+//! no light within the bands gives the face that colour, so the held pose is off the face, and
+//! a lock on a wrong pose must not teach the scale that its misses are the light's. The confirmation takes a second average of the same coverage
 //! that leans upwards ([`ColourModel::confirming_fitness`]): a frame below it moves it four
 //! times less than one above it. The census is taken at the held pose, and a held pose a few
 //! millimetres off (a manoeuvring block) covers less of its faces than the true pose does, so
@@ -137,6 +140,17 @@ impl Tally {
             m.square_sum += d.unsigned_abs() * d.unsigned_abs() * n;
         }
         m
+    }
+}
+
+impl Tally {
+    /// Census points of face `k` whose hue is in `set`.
+    pub fn showing(&self, k: usize, set: &HueSet) -> u32 {
+        let Some(counts) = self.hues.get(k) else { return 0 };
+        (0..HUE_UNITS)
+            .filter(|&h| set.contains(h))
+            .map(|h| counts.get(usize::from(h)).map_or(0, |&n| u32::from(n)))
+            .sum()
     }
 }
 
@@ -247,10 +261,14 @@ impl ColourModel {
                 *seen = true;
             }
         }
-        // The share of the census points within their face's band, as now learnt.
+        // The share of the census points within their face's band, as now learnt, of the points
+        // that could show the face: a point with another face's colour shows that face (the
+        // pose is off, or the faces are mixed up), not this face under another light.
         let (mut points, mut in_band) = (0u32, 0u32);
-        for (k, band) in self.bands().iter().enumerate().filter(|(k, _)| learnt.get(*k) == Some(&true)) {
-            points += tally.points(k);
+        let bands = self.bands();
+        for (k, band) in bands.iter().enumerate().filter(|(k, _)| learnt.get(*k) == Some(&true)) {
+            let others = self.other_faces_hues(k, &bands);
+            points += tally.points(k).saturating_sub(tally.showing(k, &others));
             in_band += tally.within(k, band.centre, band.half).count;
         }
         if points > 0 {
@@ -280,6 +298,22 @@ impl ColourModel {
         let limit = Q * i32::from(MAX_HUE_SHIFT);
         face.offset = (face.offset + (measured - face.offset) / weight).clamp(-limit, limit);
         face.spread += (spread - face.spread) / weight;
+    }
+
+    /// The hues of the bands of the faces whose configured hue is not face `k`'s, outside face
+    /// `k`'s own band: another face's colour, which no light within the bands gives face `k`.
+    fn other_faces_hues(&self, k: usize, bands: &[Band; FACES]) -> HueSet {
+        let mut set = HueSet::EMPTY;
+        let (Some(own), Some(prior)) = (bands.get(k), self.prior.get(k)) else { return set };
+        for (b, _) in bands.iter().zip(self.prior.iter()).filter(|(_, p)| *p != prior) {
+            for d in -i32::from(b.half)..=i32::from(b.half) {
+                let h = (i32::from(b.centre) + d).rem_euclid(i32::from(HUE_UNITS)) as u8;
+                if hue_distance(h, own.centre) > own.half {
+                    set.insert(h);
+                }
+            }
+        }
+        set
     }
 
     /// What the true pose is expected to score under the current light: the averaged fraction

@@ -17,7 +17,8 @@
 //! each camera, four single-camera evaluations ([`disparity_pull`]). If the images prefer the
 //! nearer disparity, the pose is too far for its disparity: its silhouette is too small, so the
 //! rows move inwards by [`EDGE_SHIFT_STEP_PX`]; if they prefer the farther one, outwards; a tie
-//! leaves them. The shift only learns from a held pose seen alike by both cameras, as the
+//! leaves them. The steps start fine, grow while the tests agree and shrink when they turn
+//! ([`EdgeShift`]). The shift only learns from a held pose seen alike by both cameras, as the
 //! colour model does ([`crate::colour`]), and stays within [`EDGE_SHIFT_RANGE_PX`].
 //!
 //! **Bounded work.** The test runs on one tracked frame in [`EDGE_PROBE_EVERY`], whether or
@@ -29,7 +30,10 @@ use nalgebra::Vector3;
 
 use crate::fitness::{Evaluator, clamp_edge_shift};
 use crate::image::{Image, PixelFormat};
-use crate::limits::{EDGE_PROBE_DISPARITY_PX, EDGE_PROBE_EVERY, EDGE_SHIFT_START_PX, EDGE_SHIFT_STEP_PX, MIN_DEPTH_M};
+use crate::limits::{
+    EDGE_PROBE_DISPARITY_PX, EDGE_PROBE_EVERY, EDGE_SHIFT_MAX_STEP_PX, EDGE_SHIFT_START_PX, EDGE_SHIFT_STEP_PX,
+    MIN_DEPTH_M,
+};
 #[cfg(doc)]
 use crate::limits::{EDGE_PROBE_IDLE, EDGE_SHIFT_RANGE_PX, SILHOUETTE_INNER_PX, SILHOUETTE_OUTER_PX, TRACKING_IDLE};
 use crate::pose::Psi;
@@ -45,18 +49,29 @@ pub enum Pull {
     Neither,
 }
 
-/// The learnt shift of the nearest silhouette rows, and which tracked frame the disparity
-/// test runs on.
+/// The learnt shift of the nearest silhouette rows, which tracked frame the disparity test
+/// runs on, and the size of the next step.
+///
+/// The step starts at [`EDGE_SHIFT_STEP_PX`], doubles while the tests agree (up to
+/// [`EDGE_SHIFT_MAX_STEP_PX`]) and halves when they turn; once a turn brings it back to
+/// [`EDGE_SHIFT_STEP_PX`] the shift has bracketed its balance and keeps that step for good.
+/// So the walk from the start to a camera's balance takes a few tests instead of tens, and
+/// about the balance the shift wanders by the fine step alone.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EdgeShift {
     px: f32,
     frame: u8,
+    step_px: f32,
+    /// The direction of the last step (`0.0` before the first).
+    last: f32,
+    settled: bool,
 }
 
 impl EdgeShift {
-    /// The shift before any test: [`EDGE_SHIFT_START_PX`]; the next tracked frame is due for
-    /// the test.
-    pub const NONE: Self = Self { px: EDGE_SHIFT_START_PX, frame: 0 };
+    /// The shift before any test: [`EDGE_SHIFT_START_PX`], the fine step; the next tracked
+    /// frame is due for the test.
+    pub const NONE: Self =
+        Self { px: EDGE_SHIFT_START_PX, frame: 0, step_px: EDGE_SHIFT_STEP_PX, last: 0.0, settled: false };
 
     /// The shift, pixel widths outwards (within [`EDGE_SHIFT_RANGE_PX`]).
     pub fn px(&self) -> f32 {
@@ -74,14 +89,25 @@ impl EdgeShift {
         self.frame = (self.frame + 1) % EDGE_PROBE_EVERY;
     }
 
-    /// One step of [`EDGE_SHIFT_STEP_PX`] the way `pull` says.
+    /// Whether a turn of the tests has brought the step back to [`EDGE_SHIFT_STEP_PX`] for good.
+    pub fn settled(&self) -> bool {
+        self.settled
+    }
+
+    /// One step the way `pull` says, its size as the type's docs describe.
     pub fn learn(&mut self, pull: Pull) {
-        let step = match pull {
-            Pull::Inwards => -EDGE_SHIFT_STEP_PX,
-            Pull::Outwards => EDGE_SHIFT_STEP_PX,
+        let way = match pull {
+            Pull::Inwards => -1.0,
+            Pull::Outwards => 1.0,
             Pull::Neither => return,
         };
-        self.px = clamp_edge_shift(self.px + step);
+        if !self.settled && self.last != 0.0 {
+            let factor = if way == self.last { 2.0 } else { 0.5 };
+            self.step_px = crate::math::clamp(factor * self.step_px, EDGE_SHIFT_STEP_PX, EDGE_SHIFT_MAX_STEP_PX);
+            self.settled = way != self.last && self.step_px <= EDGE_SHIFT_STEP_PX;
+        }
+        self.last = way;
+        self.px = clamp_edge_shift(self.px + way * self.step_px);
     }
 }
 

@@ -167,11 +167,17 @@ pub const EDGE_SHIFT_RANGE_PX: [f32; 2] = [-0.75, 0.25];
 /// in the middle halves the way to either end, and the depth it biases, before the tests have run.
 pub const EDGE_SHIFT_START_PX: f32 = 0.5 * (EDGE_SHIFT_RANGE_PX[0] + EDGE_SHIFT_RANGE_PX[1]);
 
-/// How far one disparity test moves the learnt shift ([`crate::edge`]), in pixel widths: half a
-/// pixel in 50 tests, which at one test every [`EDGE_PROBE_EVERY`] tracked frames is 200 frames,
-/// about 7 s at 30 frames per second. Small, because every test steps one way or the other and
-/// the shift wanders about its balance by a few steps.
+/// The fine step of the learnt shift ([`crate::edge::EdgeShift`]), in pixel widths: its first
+/// step, and every step once it has bracketed its balance. Half a pixel in 50 tests, which at
+/// one test every [`EDGE_PROBE_EVERY`] tracked frames is 200 frames, about 7 s at 30 frames per
+/// second. Small, because every test steps one way or the other and the shift wanders about its
+/// balance by a few steps.
 pub const EDGE_SHIFT_STEP_PX: f32 = 0.0025 * EDGE_PROBE_EVERY as f32;
+
+/// The largest step of the learnt shift, in pixel widths: a sixteenth of a pixel. Doubling from
+/// [`EDGE_SHIFT_STEP_PX`] while the tests agree, the shift crosses the half pixel from its start
+/// to either end of [`EDGE_SHIFT_RANGE_PX`] in 10 tests (40 tracked frames).
+pub const EDGE_SHIFT_MAX_STEP_PX: f32 = 0.0625;
 
 /// The disparity test runs on one tracked frame in this many ([`crate::edge`]).
 pub const EDGE_PROBE_EVERY: u8 = 4;
@@ -196,4 +202,5 @@ pub const TRACKING_IDLE: usize = 1;
 
 const _: () = assert!(EDGE_SHIFT_RANGE_PX[0] > -SILHOUETTE_OUTER_PX && EDGE_SHIFT_RANGE_PX[1] < SILHOUETTE_INNER_PX);
 const _: () = assert!(EDGE_SHIFT_RANGE_PX[0] < 0.0 && EDGE_SHIFT_RANGE_PX[1] > 0.0 && EDGE_SHIFT_STEP_PX > 0.0);
+const _: () = assert!(EDGE_SHIFT_MAX_STEP_PX >= EDGE_SHIFT_STEP_PX);
 const _: () = assert!(EDGE_PROBE_EVERY > 0 && EDGE_PROBE_IDLE >= TRACKING_IDLE);

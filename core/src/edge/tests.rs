@@ -4,7 +4,7 @@
 use super::*;
 use crate::hue::HueLut;
 use crate::image::HueImage;
-use crate::limits::{DEFAULT_HUE_TOLERANCE, EDGE_SHIFT_RANGE_PX};
+use crate::limits::{DEFAULT_HUE_TOLERANCE, EDGE_SHIFT_MAX_STEP_PX, EDGE_SHIFT_RANGE_PX};
 use crate::model::{Block, SurfaceStrips};
 use crate::synth::test_scene::{H, W, rig, scene};
 
@@ -30,11 +30,12 @@ fn each_pull_steps_once_and_the_shift_stays_in_range() {
     let mut shift = EdgeShift::NONE;
     assert_eq!(shift.px(), -0.25, "the middle of the range");
     shift.learn(Pull::Inwards);
-    assert_eq!(shift.px(), -0.25 - EDGE_SHIFT_STEP_PX);
+    assert_eq!(shift.px(), -0.25 - EDGE_SHIFT_STEP_PX, "the first step is the fine one");
     shift.learn(Pull::Neither);
     assert_eq!(shift.px(), -0.25 - EDGE_SHIFT_STEP_PX, "a tie does not step");
     shift.learn(Pull::Outwards);
     assert!((shift.px() + 0.25).abs() < 1e-6, "back where it started: {}", shift.px());
+    assert!(shift.settled(), "a turn at the fine step brackets the balance");
     for _ in 0..1000 {
         shift.learn(Pull::Outwards);
     }
@@ -46,6 +47,36 @@ fn each_pull_steps_once_and_the_shift_stays_in_range() {
     assert_eq!(clamp_edge_shift(f32::NAN), 0.0);
     assert_eq!(clamp_edge_shift(-5.0), EDGE_SHIFT_RANGE_PX[0]);
     assert_eq!(clamp_edge_shift(0.1), 0.1);
+}
+
+#[test]
+fn the_step_grows_while_the_tests_agree_and_stays_fine_once_they_have_turned_back_to_it() {
+    let steps = |pulls: &[Pull]| -> std::vec::Vec<f32> {
+        let mut shift = EdgeShift::NONE;
+        pulls
+            .iter()
+            .map(|&p| {
+                let before = shift.px();
+                shift.learn(p);
+                ((shift.px() - before) / EDGE_SHIFT_STEP_PX * 100.0).round() / 100.0
+            })
+            .collect()
+    };
+    let (i, o) = (Pull::Inwards, Pull::Outwards);
+    // Doubling up to the largest step (6.25 fine steps), halving at each turn, fine for good
+    // once a turn has brought it back to the fine step.
+    assert_eq!(steps(&[i, i, i, i, i]), [-1.0, -2.0, -4.0, -6.25, -6.25]);
+    assert_eq!(steps(&[i, i, i, o, o, i, o, o, o]), [-1.0, -2.0, -4.0, 2.0, 4.0, -2.0, 1.0, 1.0, 1.0]);
+    // A tie neither steps nor counts as a turn.
+    assert_eq!(steps(&[o, Pull::Neither, o]), [1.0, 0.0, 2.0]);
+    // From the start to the outer end of the range (half a pixel) in ten tests.
+    let mut shift = EdgeShift::NONE;
+    let tests = (1..=20).find(|_| {
+        shift.learn(Pull::Outwards);
+        shift.px() >= EDGE_SHIFT_RANGE_PX[1]
+    });
+    assert_eq!(tests, Some(10));
+    assert_eq!(EDGE_SHIFT_MAX_STEP_PX / EDGE_SHIFT_STEP_PX, 6.25);
 }
 
 #[test]

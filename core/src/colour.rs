@@ -37,7 +37,7 @@
 //! is what the true pose can score under the current light (about 1 on a flat image, less
 //! where highlights and shadows take pixels' hues away); the status thresholds are relative to
 //! it (see [`crate::status`]). A census point that shows another face's colour (a hue in
-//! another face's band and not in its own) is left out of that fraction ([`Tally::showing`]):
+//! another configured colour's search window) is left out of that fraction:
 //! no light within the bands gives the face that colour, so the held pose is off the face, and
 //! a lock on a wrong pose must not teach the scale that its misses are the light's. The confirmation takes a second average of the same coverage
 //! that leans upwards ([`ColourModel::confirming_fitness`]): a frame below it moves it four
@@ -140,17 +140,6 @@ impl Tally {
             m.square_sum += d.unsigned_abs() * d.unsigned_abs() * n;
         }
         m
-    }
-}
-
-impl Tally {
-    /// Census points of face `k` whose hue is in `set`.
-    pub fn showing(&self, k: usize, set: &HueSet) -> u32 {
-        let Some(counts) = self.hues.get(k) else { return 0 };
-        (0..HUE_UNITS)
-            .filter(|&h| set.contains(h))
-            .map(|h| counts.get(usize::from(h)).map_or(0, |&n| u32::from(n)))
-            .sum()
     }
 }
 
@@ -267,8 +256,7 @@ impl ColourModel {
         let (mut points, mut in_band) = (0u32, 0u32);
         let bands = self.bands();
         for (k, band) in bands.iter().enumerate().filter(|(k, _)| learnt.get(*k) == Some(&true)) {
-            let others = self.other_faces_hues(k, &bands);
-            points += tally.points(k).saturating_sub(tally.showing(k, &others));
+            points += tally.points(k).saturating_sub(self.other_colours(k, tally));
             in_band += tally.within(k, band.centre, band.half).count;
         }
         if points > 0 {
@@ -300,20 +288,20 @@ impl ColourModel {
         face.spread += (spread - face.spread) / weight;
     }
 
-    /// The hues of the bands of the faces whose configured hue is not face `k`'s, outside face
-    /// `k`'s own band: another face's colour, which no light within the bands gives face `k`.
-    fn other_faces_hues(&self, k: usize, bands: &[Band; FACES]) -> HueSet {
-        let mut set = HueSet::EMPTY;
-        let (Some(own), Some(prior)) = (bands.get(k), self.prior.get(k)) else { return set };
-        for (b, _) in bands.iter().zip(self.prior.iter()).filter(|(_, p)| *p != prior) {
-            for d in -i32::from(b.half)..=i32::from(b.half) {
-                let h = (i32::from(b.centre) + d).rem_euclid(i32::from(HUE_UNITS)) as u8;
-                if hue_distance(h, own.centre) > own.half {
-                    set.insert(h);
-                }
+    /// Census points of face `k` that show another face's colour: a hue within the search
+    /// window of another configured hue whose window does not overlap face `k`'s (no light the
+    /// search allows gives face `k` that colour). Each other hue counted once.
+    fn other_colours(&self, k: usize, tally: &Tally) -> u32 {
+        let Some(&own) = self.prior.get(k) else { return 0 };
+        let window = self.search_half_width();
+        let mut count = 0;
+        for (j, &hue) in self.prior.iter().enumerate() {
+            let first = !self.prior.iter().take(j).any(|&p| p == hue);
+            if first && hue_distance(hue, own) > 2 * window {
+                count += tally.within(k, hue, window).count;
             }
         }
-        set
+        count
     }
 
     /// What the true pose is expected to score under the current light: the averaged fraction

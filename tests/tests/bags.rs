@@ -48,8 +48,13 @@ fn import(path: &Path, rig: &Rig, out: &Path) -> bag::BagSequence {
 }
 
 fn track_dir(seq_dir: &Path, out: &Path) -> track::output::Evaluation {
+    track_dir_seeded(seq_dir, out, track::TrackOptions::default().seed)
+}
+
+fn track_dir_seeded(seq_dir: &Path, out: &Path, seed: u64) -> track::output::Evaluation {
     let seq = Sequence::load(seq_dir).unwrap_or_else(|e| panic!("{e}"));
-    let output = track::run(&seq, &track::TrackOptions::default()).unwrap_or_else(|e| panic!("{e:#}"));
+    let options = track::TrackOptions { seed, ..track::TrackOptions::default() };
+    let output = track::run(&seq, &options).unwrap_or_else(|e| panic!("{e:#}"));
     let ev = track::output::evaluate(&seq, &output);
     track::output::write_all(&seq, &output, &ev, out).unwrap_or_else(|e| panic!("{e:#}"));
     ev
@@ -77,15 +82,28 @@ fn import_then_track_equals_tracking_the_bag() {
     for i in [0, 30, 61] {
         assert_eq!(imported.decode(i).ok(), seq.decode(i).ok(), "frame {i}");
     }
-    // As accurate as tracking the sequence itself (the ground truth copied over).
+    // As accurate as tracking the sequence itself (the ground truth copied over), in the median
+    // of GA seeds 1–5: on 62 frames of 160x120 images one seed's RMS depth spreads over 1.3–3.5 mm
+    // (measured over seeds 1–20), and the GA's draws follow the joint velocities fed forward
+    // (derived here, true there), so single runs differ by about a millimetre.
     std::fs::copy(seq.dir.join("groundtruth.tum"), dir.join("imported/groundtruth.tum")).expect("copy");
-    let from_bag = track_dir(&dir.join("imported"), &dir.join("eval-bag")).summary;
-    let from_seq = track_dir(&seq.dir, &dir.join("eval-seq")).summary;
-    let (a, s) = (from_bag.all.expect("truth"), from_seq.all.expect("truth"));
-    for (x, y) in [(a.rms_x_mm, s.rms_x_mm), (a.rms_y_mm, s.rms_y_mm), (a.rms_z_mm, s.rms_z_mm)] {
-        // 160x120 images: the GA's draws follow the joint velocities fed forward (derived here,
-        // true there), so the runs differ by noise of about a millimetre in depth.
-        assert!(x < 3.0 && (x - y).abs() < 1.0, "RMS {x} mm from the bag, {y} mm from the sequence");
+    let median_rms = |src: &Path, tag: &str| -> [f64; 3] {
+        let mut runs: Vec<[f64; 3]> = (1..=5)
+            .map(|seed| {
+                let ev = track_dir_seeded(src, &dir.join(format!("eval-{tag}-{seed}")), seed);
+                let a = ev.summary.all.expect("truth");
+                [a.rms_x_mm, a.rms_y_mm, a.rms_z_mm]
+            })
+            .collect();
+        std::array::from_fn(|axis| {
+            runs.sort_by(|p, q| p[axis].total_cmp(&q[axis]));
+            runs[2][axis]
+        })
+    };
+    let (from_bag, from_seq) = (median_rms(&dir.join("imported"), "bag"), median_rms(&seq.dir, "seq"));
+    println!("median RMS from the bag {from_bag:?}, from the sequence {from_seq:?}");
+    for (x, y) in from_bag.into_iter().zip(from_seq) {
+        assert!(x < 3.0 && (x - y).abs() < 1.0, "median RMS {x} mm from the bag, {y} mm from the sequence");
     }
     check_estimate_mcap(&dir.join("track-bag/estimate.mcap"), &String::from_utf8_lossy(&tum));
     let _ = std::fs::remove_dir_all(&dir);

@@ -16,8 +16,8 @@
 //! (the block nearer, as the disparity sees it) and as much together (farther), each half in
 //! each camera, four single-camera evaluations ([`disparity_pull`]). If the images prefer the
 //! nearer disparity, the pose is too far for its disparity: its silhouette is too small, so the
-//! rows move inwards by [`EDGE_SHIFT_STEP_PX`]; if they prefer the farther one, outwards; a tie
-//! leaves them. The steps start fine, grow while the tests agree and shrink when they turn
+//! rows step inwards; if they prefer the farther one, outwards; a tie leaves them. The steps
+//! start at [`EDGE_SHIFT_STEP_PX`], grow while the tests agree and shrink when they turn
 //! ([`EdgeShift`]). The shift only learns from a held pose seen alike by both cameras, as the
 //! colour model does ([`crate::colour`]), and stays within [`EDGE_SHIFT_RANGE_PX`].
 //!

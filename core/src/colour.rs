@@ -37,14 +37,15 @@
 //! is what the true pose can score under the current light (about 1 on a flat image, less
 //! where highlights and shadows take pixels' hues away); the status thresholds are relative to
 //! it (see [`crate::status`]). A census point that shows another face's colour (a hue in
-//! another configured colour's search window) is left out of that fraction:
-//! no light within the bands gives the face that colour, so the held pose is off the face, and
-//! a lock on a wrong pose must not teach the scale that its misses are the light's. The confirmation takes a second average of the same coverage
-//! that leans upwards ([`ColourModel::confirming_fitness`]): a frame below it moves it four
-//! times less than one above it. The census is taken at the held pose, and a held pose a few
-//! millimetres off (a manoeuvring block) covers less of its faces than the true pose does, so
-//! the plain average sinks with such frames until poses that far off would be confirmed; the
-//! held decision keeps the plain average, which follows the light as it changes.
+//! another configured colour's search window) is left out of that fraction: no light the
+//! search allows gives the face that colour, so the held pose is off the face, and a lock on
+//! a wrong pose must not teach the scale that its misses are the light's. The confirmation
+//! takes a second average of the same coverage that leans upwards
+//! ([`ColourModel::confirming_fitness`]): a frame below it moves it four times less than one
+//! above it. The census is taken at the held pose, and a held pose a few millimetres off (a
+//! manoeuvring block) covers less of its faces than the true pose does, so the plain average
+//! sinks with such frames until poses that far off would be confirmed; the held decision keeps
+//! the plain average, which follows the light as it changes.
 //!
 //! **Bounded work.** A census walks at most three faces per camera (the census of
 //! `Evaluator::census`); the tally is a few integer operations per point, the update a few

@@ -36,12 +36,16 @@
 //! points that match their face's learnt band, averaged over the frames it was learnt from. It
 //! is what the true pose can score under the current light (about 1 on a flat image, less
 //! where highlights and shadows take pixels' hues away); the status thresholds are relative to
-//! it (see [`crate::status`]). The confirmation takes a second average of the same coverage
-//! that leans upwards ([`ColourModel::confirming_fitness`]): a frame below it moves it four
-//! times less than one above it. The census is taken at the held pose, and a held pose a few
-//! millimetres off (a manoeuvring block) covers less of its faces than the true pose does, so
-//! the plain average sinks with such frames until poses that far off would be confirmed; the
-//! held decision keeps the plain average, which follows the light as it changes.
+//! it (see [`crate::status`]). A census point that shows another face's colour (a hue in
+//! another configured colour's search window) is left out of that fraction: no light the
+//! search allows gives the face that colour, so the held pose is off the face, and a lock on
+//! a wrong pose must not teach the scale that its misses are the light's. The confirmation
+//! takes a second average of the same coverage that leans upwards
+//! ([`ColourModel::confirming_fitness`]): a frame below it moves it four times less than one
+//! above it. The census is taken at the held pose, and a held pose a few millimetres off (a
+//! manoeuvring block) covers less of its faces than the true pose does, so the plain average
+//! sinks with such frames until poses that far off would be confirmed; the held decision keeps
+//! the plain average, which follows the light as it changes.
 //!
 //! **Bounded work.** A census walks at most three faces per camera (the census of
 //! `Evaluator::census`); the tally is a few integer operations per point, the update a few
@@ -247,10 +251,13 @@ impl ColourModel {
                 *seen = true;
             }
         }
-        // The share of the census points within their face's band, as now learnt.
+        // The share of the census points within their face's band, as now learnt, of the points
+        // that could show the face: a point with another face's colour shows that face (the
+        // pose is off, or the faces are mixed up), not this face under another light.
         let (mut points, mut in_band) = (0u32, 0u32);
-        for (k, band) in self.bands().iter().enumerate().filter(|(k, _)| learnt.get(*k) == Some(&true)) {
-            points += tally.points(k);
+        let bands = self.bands();
+        for (k, band) in bands.iter().enumerate().filter(|(k, _)| learnt.get(*k) == Some(&true)) {
+            points += tally.points(k).saturating_sub(self.other_colours(k, tally));
             in_band += tally.within(k, band.centre, band.half).count;
         }
         if points > 0 {
@@ -280,6 +287,22 @@ impl ColourModel {
         let limit = Q * i32::from(MAX_HUE_SHIFT);
         face.offset = (face.offset + (measured - face.offset) / weight).clamp(-limit, limit);
         face.spread += (spread - face.spread) / weight;
+    }
+
+    /// Census points of face `k` that show another face's colour: a hue within the search
+    /// window of another configured hue whose window does not overlap face `k`'s (no light the
+    /// search allows gives face `k` that colour). Each other hue counted once.
+    fn other_colours(&self, k: usize, tally: &Tally) -> u32 {
+        let Some(&own) = self.prior.get(k) else { return 0 };
+        let window = self.search_half_width();
+        let mut count = 0;
+        for (j, &hue) in self.prior.iter().enumerate() {
+            let first = !self.prior.iter().take(j).any(|&p| p == hue);
+            if first && hue_distance(hue, own) > 2 * window {
+                count += tally.within(k, hue, window).count;
+            }
+        }
+        count
     }
 
     /// What the true pose is expected to score under the current light: the averaged fraction

@@ -123,6 +123,28 @@ fn the_table_follows_the_status_and_the_model() {
 }
 
 #[test]
+fn a_census_point_that_shows_another_colour_does_not_lower_the_expected_fitness() {
+    let window = DEFAULT_HUE_TOLERANCE + MAX_HUE_SHIFT;
+    let learnt = |odd: u8| {
+        let mut model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
+        for _ in 0..50 {
+            model.learn(&tally_of(&model, 0, &[0, 1, 179, odd], 10));
+        }
+        model.expected_fitness()
+    };
+    // Green, the next face's colour, on the red face's census (the pose is off the face): not a
+    // light loss; nor blue from the far side of the hue circle.
+    assert_eq!(learnt(60), 1.0);
+    assert_eq!(learnt(120 + window), 1.0);
+    // No hue at all (a highlight, a shadow), or a colour no face has (a reflection): what the
+    // true pose loses under this light.
+    for odd in [crate::limits::NO_HUE, window + 1] {
+        let f = learnt(odd);
+        assert!((f - 0.75).abs() < 0.01, "hue {odd}: {f}");
+    }
+}
+
+#[test]
 fn the_confirming_scale_rises_like_the_expected_fitness_and_falls_four_times_slower() {
     let mut model = ColourModel::new(PRIOR, DEFAULT_HUE_TOLERANCE);
     let all = [0u8, 1, 179, 0];

@@ -221,8 +221,7 @@ impl Tuning {
     /// `max_dt_s` 0.5 s, two generations per frame (the most whose worst case with flash wait
     /// states fits a 33 ms frame on the Cortex-M4, `docs/results.md`), [`GaParams::DEFAULT`],
     /// [`AcquireConfig::DEFAULT`], [`StatusConfig::DEFAULT`], [`TargetFilterParams::DEFAULT`].
-    /// Every command and the firmware start from it; the paper's experiment names its method
-    /// per cell.
+    /// Every command starts from it; the paper's experiment names its method per cell.
     pub const DEFAULT: Tuning = Tuning {
         feedforward: Feedforward::OnWithTarget,
         hue_tolerance: DEFAULT_HUE_TOLERANCE,

@@ -33,12 +33,12 @@ def table_id(table):
     return h
 
 
-# Tuning::DEFAULT in the table's order: method ("ff", index 1), hue tolerance, max dt,
+# Tuning::DEFAULT in the table's order: method ("ff+target", index 2), hue tolerance, max dt,
 # generations per frame, the GA
 # (population, three probabilities, immigrants, tournament, the level CDF, the settled CDF and
 # fitness, the mutation scales), the acquisition, the status, the target motion model.
 DEFAULT_TUNING = (
-    [1, 5, 0.5, 2, 40, 0.2, 0.9, 0.35, 1, 3, 0.25, 0.6, 0.15, 0.5, 0.95]
+    [2, 5, 0.5, 2, 40, 0.2, 0.9, 0.35, 1, 3, 0.25, 0.6, 0.15, 0.5, 0.95]
     + [0.02, 0.02, 0.02, 0.04, 0.04, 0.04, 0.004, 0.004, 0.004, 0.008, 0.008, 0.008]
     + [0.001, 0.001, 0.001, 0.004, 0.004, 0.004]
     + [8, 1200, 8, 6, 6, 0.003, 0.010, 0.025, 0.03, 0.10, 0.25]

@@ -216,12 +216,14 @@ pub struct Tuning {
 }
 
 impl Tuning {
-    /// Every default: motion feedforward (`ff`), [`DEFAULT_HUE_TOLERANCE`], `max_dt_s` 0.5 s,
-    /// two generations per frame (the most whose worst case with flash wait states fits a 33 ms
-    /// frame on the Cortex-M4, `docs/results.md`), [`GaParams::DEFAULT`], [`AcquireConfig::DEFAULT`], [`StatusConfig::DEFAULT`],
-    /// [`TargetFilterParams::DEFAULT`].
+    /// Every default: the arm's and the block's motion fed forward (`ff+target`: a block that
+    /// stands still is held as with `ff`, a moving one is followed), [`DEFAULT_HUE_TOLERANCE`],
+    /// `max_dt_s` 0.5 s, two generations per frame (the most whose worst case with flash wait
+    /// states fits a 33 ms frame on the Cortex-M4, `docs/results.md`), [`GaParams::DEFAULT`],
+    /// [`AcquireConfig::DEFAULT`], [`StatusConfig::DEFAULT`], [`TargetFilterParams::DEFAULT`].
+    /// Every command starts from it; the paper's experiment names its method per cell.
     pub const DEFAULT: Tuning = Tuning {
-        feedforward: Feedforward::On,
+        feedforward: Feedforward::OnWithTarget,
         hue_tolerance: DEFAULT_HUE_TOLERANCE,
         max_dt_s: 0.5,
         generations_per_frame: 2,

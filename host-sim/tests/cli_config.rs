@@ -11,10 +11,11 @@ fn path_str(p: &Path) -> &str {
     p.to_str().unwrap_or_else(|| panic!("non-UTF-8 path {}", p.display()))
 }
 
-/// A short motion A run with motion feedforward (the default method) at 160x120.
+/// A short motion A run at 160x120 with every tuning default (`ff+target`).
 fn scenario() -> String {
     let mut s = evorec_sim::sim::scenario::fixture::sway_160x120(0.5);
     s.seed = 2;
+    s.tracker.0 = evorec_core::tuning::Tuning::DEFAULT;
     s.to_toml_string().unwrap_or_else(|e| panic!("{e}"))
 }
 

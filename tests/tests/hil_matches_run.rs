@@ -77,26 +77,26 @@ fn hil_runs_a_tuned_target_filter_as_the_host() {
     let _ = std::fs::remove_dir_all(&work);
 }
 
-/// The configuration file of `evorec config` (every default) given to `evorec hil` with
-/// `--config` runs the firmware exactly as without it, and a changed `ga.mutation_prob` in it
-/// reaches the firmware (its estimates differ).
+/// The configuration file `evorec config SCENARIO` prints (the scenario's tuning, every other
+/// field at its default) given to `evorec hil` with `--config` runs the firmware exactly as
+/// without it, and a changed `ga.mutation_prob` in it reaches the firmware (its estimates
+/// differ).
 #[test]
 fn hil_runs_a_configuration_file() {
     if evorec_tests::hil_skipped("hil_matches_run") {
         return;
     }
-    use evorec_core::tuning::Tuning;
     use evorec_sim::sim::scenario::TrackerTable;
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
     let mut s = Scenario::load(path).expect("valid scenario");
     s.duration_s = 2.0;
-    let defaults = TrackerTable(Tuning::DEFAULT).to_toml();
+    let defaults = TrackerTable(*s.tuning()).to_toml();
     let with_file = |text: &str| {
         let mut c = s;
         c.tracker = TrackerTable::from_toml_str(text, *s.tuning()).expect("valid configuration");
         c
     };
-    assert_eq!(with_file(&defaults), s, "the scenario's tuning is the defaults");
+    assert_eq!(with_file(&defaults), s, "the printed table reads back to the scenario's tuning");
     let changed = with_file(&defaults.replace("ga.mutation_prob = 0.9", "ga.mutation_prob = 0.5"));
     let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));
     let work = std::env::temp_dir().join(format!("evorec-hil-config-file-{}", std::process::id()));

@@ -28,8 +28,8 @@ pub struct TrackArgs {
     #[arg(long, conflicts_with = "method")]
     no_ff: bool,
     /// `ga` (plain 1-step GA), `ff` (+ the arm's motion fed forward) or `ff+target` (+ the
-    /// target's own motion, estimated from past estimates, fed forward too; the default unless
-    /// `--config` says otherwise: a recorded target may move).
+    /// target's own motion, estimated from past estimates, fed forward too; the default, as
+    /// everywhere: a recorded target may move).
     #[arg(long, value_parser = method_values())]
     method: Option<Feedforward>,
     /// Seed of the GA.
@@ -62,8 +62,7 @@ pub struct TrackArgs {
     /// taken at another time).
     #[arg(long)]
     no_pairing_check: bool,
-    /// Over the defaults (`ff+target`); `--method`, `--no-ff` and `--population` replace its
-    /// keys.
+    /// Over the defaults; `--method`, `--no-ff` and `--population` replace its keys.
     #[command(flatten)]
     config: ConfigArg,
 }
@@ -123,8 +122,8 @@ impl TrackArgs {
         Ok(track::TrackOptions { tuning: base_tuning(config)?, seed, progress, ..track::TrackOptions::default() })
     }
 
-    /// The tuning: `ff+target` over the defaults, then the `--config` file, then `--method`
-    /// (or `--no-ff`) and `--population`.
+    /// The tuning: the defaults, then the `--config` file, then `--method` (or `--no-ff`) and
+    /// `--population`.
     fn tuning(&self) -> Result<Tuning> {
         let mut t = base_tuning(self.config.path())?;
         if let Some(m) = if self.no_ff { Some(Feedforward::Off) } else { self.method } {
@@ -140,10 +139,9 @@ impl TrackArgs {
     }
 }
 
-/// `ff+target` over the defaults, then the `config` file's keys.
+/// The defaults, then the `config` file's keys.
 fn base_tuning(config: Option<&Path>) -> Result<Tuning> {
-    let base = Tuning { feedforward: Feedforward::OnWithTarget, ..Tuning::DEFAULT };
-    Ok(with_config_file(base, config)?)
+    Ok(with_config_file(Tuning::DEFAULT, config)?)
 }
 
 fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<()> {

@@ -20,7 +20,7 @@ fn with(extra: &str) -> String {
 #[test]
 fn minimal_file_gets_defaults() {
     let s = Scenario::from_toml_str(BASE).unwrap_or_else(|e| unreachable!("{e}"));
-    assert_eq!(s, Scenario::new(1, 10.0, Feedforward::On));
+    assert_eq!(s, Scenario::new(1, 10.0, Feedforward::OnWithTarget));
     assert_eq!(s.camera.width, 640);
     assert_eq!(s.target.face_hues_deg, [0.0, 120.0, 240.0, 0.0, 120.0, 240.0]);
     assert_eq!(s.robot.motion, MotionKind::Static);

@@ -90,18 +90,18 @@ fn hil_runs_a_configuration_file() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/hil_motion_a_ff.toml");
     let mut s = Scenario::load(path).expect("valid scenario");
     s.duration_s = 2.0;
-    let defaults = TrackerTable(*s.tuning()).to_toml();
+    let printed = TrackerTable(*s.tuning()).to_toml();
     let with_file = |text: &str| {
         let mut c = s;
         c.tracker = TrackerTable::from_toml_str(text, *s.tuning()).expect("valid configuration");
         c
     };
-    assert_eq!(with_file(&defaults), s, "the printed table reads back to the scenario's tuning");
-    let changed = with_file(&defaults.replace("ga.mutation_prob = 0.9", "ga.mutation_prob = 0.5"));
+    assert_eq!(with_file(&printed), s, "the printed table reads back to the scenario's tuning");
+    let changed = with_file(&printed.replace("ga.mutation_prob = 0.9", "ga.mutation_prob = 0.5"));
     let firmware = build_firmware(BoardProfile::M4).unwrap_or_else(|e| panic!("{e}"));
     let work = std::env::temp_dir().join(format!("evorec-hil-config-file-{}", std::process::id()));
     let plain = hil::run(&s, &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
-    let same = hil::run(&with_file(&defaults), &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
+    let same = hil::run(&with_file(&printed), &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
     let other = hil::run(&changed, &firmware, &work, || {}).unwrap_or_else(|e| panic!("{e:#}"));
     let estimates =
         |o: &experiment::RunOutput| o.rows.iter().map(|r| r.estimate.0.map(f32::to_bits)).collect::<Vec<_>>();

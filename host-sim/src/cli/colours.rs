@@ -36,7 +36,7 @@ pub struct ColoursArgs {
 
 impl ColoursArgs {
     pub fn run(self, progress: bool) -> Result<()> {
-        let mut opts = TrackArgs::default_options(self.config.path(), self.seed, progress)?;
+        let mut opts = TrackArgs::default_options(&self.config, self.seed, progress)?;
         opts.frames = Some(self.frame.saturating_add(self.frames).saturating_add(1));
         let (block, output) = match &self.rig {
             Some(rig) => {

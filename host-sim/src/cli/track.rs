@@ -9,7 +9,7 @@ use clap::ValueEnum;
 use evorec_core::tuning::{Feedforward, Tuning};
 use evorec_sim::recording::sequence::Sequence;
 use evorec_sim::rig::{bag, track};
-use evorec_sim::sim::scenario::{HOST_POPULATION_CAPACITY, with_config_file};
+use evorec_sim::sim::scenario::HOST_POPULATION_CAPACITY;
 
 use super::{ConfigArg, OutArgs};
 
@@ -118,14 +118,19 @@ impl TrackArgs {
 
     /// The options of a run with every default but the tuning's `config` file and the seed
     /// (`evorec colours`).
-    pub fn default_options(config: Option<&Path>, seed: u64, progress: bool) -> Result<track::TrackOptions> {
-        Ok(track::TrackOptions { tuning: base_tuning(config)?, seed, progress, ..track::TrackOptions::default() })
+    pub fn default_options(config: &ConfigArg, seed: u64, progress: bool) -> Result<track::TrackOptions> {
+        Ok(track::TrackOptions {
+            tuning: config.over(Tuning::DEFAULT)?,
+            seed,
+            progress,
+            ..track::TrackOptions::default()
+        })
     }
 
     /// The tuning: the defaults, then the `--config` file, then `--method` (or `--no-ff`) and
     /// `--population`.
     fn tuning(&self) -> Result<Tuning> {
-        let mut t = base_tuning(self.config.path())?;
+        let mut t = self.config.over(Tuning::DEFAULT)?;
         if let Some(m) = if self.no_ff { Some(Feedforward::Off) } else { self.method } {
             t.feedforward = m;
         }
@@ -137,11 +142,6 @@ impl TrackArgs {
         }
         Ok(t)
     }
-}
-
-/// The defaults, then the `config` file's keys.
-fn base_tuning(config: Option<&Path>) -> Result<Tuning> {
-    Ok(with_config_file(Tuning::DEFAULT, config)?)
 }
 
 fn track_sequence(dir: &Path, out: &Path, opts: &track::TrackOptions) -> Result<()> {

@@ -12,27 +12,23 @@ use evorec_core::board::{CameraController, Error as _, ErrorKind};
 use evorec_core::image::{Image, Rgb565};
 use evorec_core::pose::Psi;
 use evorec_sim::experiments::acquire::{Case, pose_error, scenario};
-use evorec_sim::experiments::experiment::{Population, scenario_tracker};
+use evorec_sim::experiments::experiment::{Population, SimTracker, isometry_of, scenario_tracker};
+use evorec_sim::experiments::truth::{aligned_truth, colour_symmetries};
 use evorec_sim::sim::board::{SimBoard, World, image_bytes};
-use nalgebra::{Quaternion, UnitQuaternion};
+use nalgebra::UnitQuaternion;
 
 /// The lower camera's fitness at each of eleven poses from `from` to `to` (orientation slerped
-/// to `to`'s colour-symmetric twin nearest `from`).
+/// to the twin of `to` under the block's colour symmetries, `symmetries`, nearest `from`).
 fn path(
-    tracker: &evorec_sim::experiments::experiment::SimTracker,
+    tracker: &SimTracker,
     from: &Psi,
     to: &Psi,
+    symmetries: &[(&'static str, UnitQuaternion<f64>)],
     frame: &StereoFrame<'_, Rgb565>,
 ) -> String {
     let q0 = from.quaternion_unchecked();
-    let halves = [
-        Quaternion::new(1.0f32, 0.0, 0.0, 0.0),
-        Quaternion::new(0.0, 1.0, 0.0, 0.0),
-        Quaternion::new(0.0, 0.0, 1.0, 0.0),
-        Quaternion::new(0.0, 0.0, 0.0, 1.0),
-    ];
-    let twins = halves.iter().map(|h| to.quaternion_unchecked() * UnitQuaternion::new_unchecked(*h));
-    let q1 = twins.min_by(|a, b| a.angle_to(&q0).total_cmp(&b.angle_to(&q0))).unwrap_or(q0);
+    let (twin, _) = aligned_truth(&isometry_of(from), &isometry_of(to), symmetries);
+    let q1: UnitQuaternion<f32> = twin.rotation.cast();
     (0..=10)
         .map(|i| {
             let s = i as f32 / 10.0;
@@ -58,6 +54,7 @@ fn main() -> anyhow::Result<()> {
     }
     let mut board = SimBoard::new(World::new(&s)?)?;
     let mut tracker = scenario_tracker::<8>(&s, Population::Uniform)?;
+    let symmetries = colour_symmetries(&s.target.face_hues_deg.map(|h| h as f32));
     let n = image_bytes(&s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);
     let mut last: Option<u64> = None;
@@ -97,7 +94,7 @@ fn main() -> anyhow::Result<()> {
             1e3 * (e.psi.0[2] - truth.0[2])
         );
         if k % every == 0 {
-            println!("    estimate to truth, lower camera: {}", path(&tracker, &e.psi, &truth, &frame));
+            println!("    estimate to truth, lower camera: {}", path(&tracker, &e.psi, &truth, &symmetries, &frame));
         }
     }
     Ok(())

@@ -4,9 +4,11 @@
 //! estimate's error. Every `EVERY` frames (default 20) it also prints the lower camera's fitness
 //! along the straight path from the estimate to the true pose (eleven poses: position linear,
 //! orientation slerped to the truth's nearest colour-symmetric twin), which shows whether a wrong
-//! estimate sits in a separate peak or on a ridge that rises towards the truth.
+//! estimate sits in a separate peak or on a ridge that rises towards the truth; the same path
+//! moving only the orientation and only the position shows whether one part alone climbs.
 //!
-//! `cargo run --release -p evorec-sim --example ridge_trace -- SEED static|a [LIGHT.toml] [EVERY]`
+//! `cargo run --release -p evorec-sim --example ridge_trace -- SEED static|a [LIGHT.toml|-] [EVERY]`
+//! (`-`: the flat default light, to give EVERY without a light file)
 use evorec_core::StereoFrame;
 use evorec_core::board::{CameraController, Error as _, ErrorKind};
 use evorec_core::image::{Image, Rgb565};
@@ -17,12 +19,21 @@ use evorec_sim::experiments::truth::{aligned_truth, colour_symmetries};
 use evorec_sim::sim::board::{SimBoard, World, image_bytes};
 use nalgebra::UnitQuaternion;
 
+/// Which parts of the pose a path moves.
+#[derive(Clone, Copy)]
+enum Moves {
+    Both,
+    Turn,
+    Position,
+}
+
 /// The lower camera's fitness at each of eleven poses from `from` to `to` (orientation slerped
-/// to the twin of `to` under the block's colour symmetries, `symmetries`, nearest `from`).
+/// to the twin of `to` under the block's colour symmetries, `symmetries`, nearest `from`),
+/// moving what `moves` says and keeping the rest of `from`.
 fn path(
     tracker: &SimTracker,
-    from: &Psi,
-    to: &Psi,
+    (from, to): (&Psi, &Psi),
+    moves: Moves,
     symmetries: &[(&'static str, UnitQuaternion<f64>)],
     frame: &StereoFrame<'_, Rgb565>,
 ) -> String {
@@ -32,8 +43,13 @@ fn path(
     (0..=10)
         .map(|i| {
             let s = i as f32 / 10.0;
-            let t = from.translation() * (1.0 - s) + to.translation() * s;
-            let p = Psi::from_parts(&t, &q0.try_slerp(&q1, s, 1e-6).unwrap_or(q0));
+            let (st, sq) = match moves {
+                Moves::Both => (s, s),
+                Moves::Turn => (0.0, s),
+                Moves::Position => (s, 0.0),
+            };
+            let t = from.translation() * (1.0 - st) + to.translation() * st;
+            let p = Psi::from_parts(&t, &q0.try_slerp(&q1, sq, 1e-6).unwrap_or(q0));
             tracker.fitness_of(&p, frame).map_or(f32::NAN, |f| f.left.score().min(f.right.score()))
         })
         .map(|f| format!("{f:.3}"))
@@ -43,13 +59,13 @@ fn path(
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: ridge_trace SEED static|a [LIGHT.toml] [EVERY]";
+    let usage = "usage: ridge_trace SEED static|a [LIGHT.toml|-] [EVERY]";
     let seed: u64 = args.get(1).and_then(|s| s.parse().ok()).ok_or_else(|| anyhow::anyhow!(usage))?;
     let case = if args.get(2).map(String::as_str) == Some("a") { Case::MotionA } else { Case::Static };
     let every: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(20).max(1);
     let mut s = scenario(seed, case, false);
     s.tracker.0 = evorec_core::tuning::Tuning::DEFAULT;
-    if let Some(light) = args.get(3) {
+    if let Some(light) = args.get(3).filter(|l| l.as_str() != "-") {
         s.render = evorec_sim::sim::scenario::load_light(std::path::Path::new(light), s.frame_period_s)?;
     }
     let mut board = SimBoard::new(World::new(&s)?)?;
@@ -94,7 +110,10 @@ fn main() -> anyhow::Result<()> {
             1e3 * (e.psi.0[2] - truth.0[2])
         );
         if k % every == 0 {
-            println!("    estimate to truth, lower camera: {}", path(&tracker, &e.psi, &truth, &symmetries, &frame));
+            for (what, moves) in [("estimate to truth", Moves::Both), ("turn only", Moves::Turn), ("position only", Moves::Position)] {
+                let f = path(&tracker, (&e.psi, &truth), moves, &symmetries, &frame);
+                println!("    {what:17}, lower camera: {f}");
+            }
         }
     }
     Ok(())

@@ -5,7 +5,8 @@
 //! along the straight path from the estimate to the true pose (eleven poses: position linear,
 //! orientation slerped to the truth's nearest colour-symmetric twin), which shows whether a wrong
 //! estimate sits in a separate peak or on a ridge that rises towards the truth; the same path
-//! moving only the orientation and only the position shows whether one part alone climbs.
+//! moving only the orientation and only the position shows whether one part alone climbs, and
+//! both poses are printed as ψ (right camera frame) for a closer look at the geometry.
 //!
 //! `cargo run --release -p evorec-sim --example ridge_trace -- SEED static|a [LIGHT.toml|-] [EVERY]`
 //! (`-`: the flat default light, to give EVERY without a light file)
@@ -110,7 +111,10 @@ fn main() -> anyhow::Result<()> {
             1e3 * (e.psi.0[2] - truth.0[2])
         );
         if k % every == 0 {
-            for (what, moves) in [("estimate to truth", Moves::Both), ("turn only", Moves::Turn), ("position only", Moves::Position)] {
+            println!("    psi estimate {:?} truth {:?}", e.psi.0, truth.0);
+            for (what, moves) in
+                [("estimate to truth", Moves::Both), ("turn only", Moves::Turn), ("position only", Moves::Position)]
+            {
                 let f = path(&tracker, (&e.psi, &truth), moves, &symmetries, &frame);
                 println!("    {what:17}, lower camera: {f}");
             }

@@ -28,19 +28,17 @@ enum Moves {
     Position,
 }
 
-/// The lower camera's fitness at each of eleven poses from `from` to `to` (orientation slerped
-/// to the twin of `to` under the block's colour symmetries, `symmetries`, nearest `from`),
-/// moving what `moves` says and keeping the rest of `from`.
+/// The lower camera's fitness at each of eleven poses from `from` to the position of `to` and
+/// the orientation `q1` (the twin of `to`'s nearest `from` under the block's colour
+/// symmetries), moving what `moves` says and keeping the rest of `from`.
 fn path(
     tracker: &SimTracker,
-    (from, to): (&Psi, &Psi),
+    (from, to, q1): (&Psi, &Psi, &UnitQuaternion<f32>),
     moves: Moves,
-    symmetries: &[(&'static str, UnitQuaternion<f64>)],
     frame: &StereoFrame<'_, Rgb565>,
 ) -> String {
     let q0 = from.quaternion_unchecked();
-    let (twin, _) = aligned_truth(&isometry_of(from), &isometry_of(to), symmetries);
-    let q1: UnitQuaternion<f32> = twin.rotation.cast();
+    let (t0, t1) = (from.translation(), to.translation());
     (0..=10)
         .map(|i| {
             let s = i as f32 / 10.0;
@@ -49,8 +47,8 @@ fn path(
                 Moves::Turn => (0.0, s),
                 Moves::Position => (s, 0.0),
             };
-            let t = from.translation() * (1.0 - st) + to.translation() * st;
-            let p = Psi::from_parts(&t, &q0.try_slerp(&q1, sq, 1e-6).unwrap_or(q0));
+            let t = t0 * (1.0 - st) + t1 * st;
+            let p = Psi::from_parts(&t, &q0.try_slerp(q1, sq, 1e-6).unwrap_or(q0));
             tracker.fitness_of(&p, frame).map_or(f32::NAN, |f| f.left.score().min(f.right.score()))
         })
         .map(|f| format!("{f:.3}"))
@@ -112,10 +110,12 @@ fn main() -> anyhow::Result<()> {
         );
         if k % every == 0 {
             println!("    psi estimate {:?} truth {:?}", e.psi.0, truth.0);
+            let (twin, _) = aligned_truth(&isometry_of(&e.psi), &isometry_of(&truth), &symmetries);
+            let q1: UnitQuaternion<f32> = twin.rotation.cast();
             for (what, moves) in
                 [("estimate to truth", Moves::Both), ("turn only", Moves::Turn), ("position only", Moves::Position)]
             {
-                let f = path(&tracker, (&e.psi, &truth), moves, &symmetries, &frame);
+                let f = path(&tracker, (&e.psi, &truth, &q1), moves, &frame);
                 println!("    {what:17}, lower camera: {f}");
             }
         }

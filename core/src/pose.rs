@@ -52,6 +52,30 @@ impl Psi {
         p
     }
 
+    /// The pose turned by the rotation `turn` (axis and angle in the reference frame) about
+    /// the mean depth of the surface of a box of half edge lengths `half` that a camera at the
+    /// origin sees: a point on the viewing ray through the position, `h_x·h_y·h_z / Σ_k c_k·h_i·h_j`
+    /// in front of it (`c_k` the cosine between the ray and the box's axis `k`, `h_i`, `h_j` the
+    /// other two half edges), which is each visible face's depth `h_k` weighted by the area it
+    /// shows (half the volume over the silhouette's area). The position moves so that this
+    /// point stays put: a face seen face-on keeps its place in the image as the box turns. The
+    /// pose itself when the position is at the origin or not finite.
+    pub fn turned_about_surface(&self, turn: &UnitQuaternion<f32>, half: &[f32; 3]) -> Psi {
+        let t = self.translation();
+        let range = t.norm();
+        if !(range > 1e-6 && range.is_finite()) {
+            return *self;
+        }
+        let ray = t / range;
+        let u = self.rotation_unchecked().transpose() * ray;
+        let [hx, hy, hz] = *half;
+        let seen = u.x.abs() * hy * hz + u.y.abs() * hx * hz + u.z.abs() * hx * hy;
+        let lever = if seen > 0.0 { hx * hy * hz / seen } else { 0.0 };
+        let pivot = t - ray * lever;
+        let moved = pivot + quat::to_rotation_matrix(turn) * (ray * lever);
+        Psi::from_parts(&moved, &quat::compose(turn, &self.quaternion_unchecked()))
+    }
+
     /// Quaternion vector part `ε`.
     pub fn eps(&self) -> Vector3<f32> {
         let [.., a, b, c] = self.0;
@@ -173,6 +197,49 @@ mod tests {
         assert_eq!(p.0[0], 0.0);
         assert!((p.0[3] - 0.6).abs() < 1e-6 && (p.0[4] - 0.8).abs() < 1e-6);
         assert!(p.validate().is_ok());
+    }
+
+    /// Where the pose `psi` puts the block's point `p` (block frame).
+    fn place(psi: &Psi, p: Vector3<f32>) -> Vector3<f32> {
+        psi.rotation_unchecked() * p + psi.translation()
+    }
+
+    #[test]
+    fn a_turn_about_the_surface_keeps_a_face_seen_face_on_in_place() {
+        let half = [0.05, 0.075, 0.1];
+        let psi = Psi::new([0.0, 0.0, 1.0], [0.0; 3]);
+        let turn = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.2);
+        let turned = psi.turned_about_surface(&turn, &half);
+        // Face-on along the block's z axis: the face nearest the camera, 0.1 m in front.
+        let near = Vector3::new(0.0, 0.0, -0.1);
+        assert!((place(&turned, near) - place(&psi, near)).norm() < 1e-6);
+        let q = turned.quaternion_unchecked();
+        assert!(q.angle_to(&turn) < 1e-5, "the orientation is the turn composed on the left");
+        // Turned about its centre instead, that face would have moved 0.1·sin(0.2) ≈ 20 mm.
+        assert!((place(&Psi::from_parts(&psi.translation(), &q), near) - place(&psi, near)).norm() > 0.019);
+    }
+
+    #[test]
+    fn the_turns_pivot_is_the_seen_surfaces_mean_depth() {
+        let half = [0.05, 0.075, 0.1];
+        // Seen at 45° between the block's x and z faces: both show the same area per unit of
+        // their own (4·h_y·h_z and 4·h_x·h_y) at cosine 1/√2.
+        let q = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), core::f32::consts::FRAC_PI_4);
+        let psi = Psi::from_parts(&Vector3::new(0.0, 0.0, 0.8), &q);
+        let turn = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 0.1);
+        let turned = psi.turned_about_surface(&turn, &half);
+        let c = core::f32::consts::FRAC_1_SQRT_2;
+        let (a_x, a_z) = (4.0 * 0.075 * 0.1 * c, 4.0 * 0.05 * 0.075 * c);
+        let depth = (a_x * 0.05 * c + a_z * 0.1 * c) / (a_x + a_z);
+        let pivot = Vector3::new(0.0, 0.0, 0.8 - depth);
+        let expected = pivot + quat::to_rotation_matrix(&turn) * (psi.translation() - pivot);
+        assert!((turned.translation() - expected).norm() < 1e-6, "{:?} {expected:?}", turned.translation());
+        // No box, or a pose at the camera: the turn about the centre, and the pose itself.
+        assert!((psi.turned_about_surface(&turn, &[0.0; 3]).translation() - psi.translation()).norm() < 1e-7);
+        assert_eq!(
+            Psi::new([0.0; 3], [0.1, 0.0, 0.0]).turned_about_surface(&turn, &half),
+            Psi::new([0.0; 3], [0.1, 0.0, 0.0])
+        );
     }
 
     proptest! {

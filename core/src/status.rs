@@ -186,17 +186,26 @@ pub struct StatusMonitor {
     sure: u16,
     /// Frames since the status became `Lost`.
     lost_for: u16,
+    /// Frames in a row held (`Tracking` or `Uncertain`) with the lower camera below
+    /// `certain_fitness`.
+    unsure: u16,
 }
 
 impl StatusMonitor {
     /// A monitor in `status` with cleared counters.
     pub fn new(status: Status) -> Self {
-        Self { status, good: 0, bad: 0, doubt: 0, sure: 0, lost_for: 0 }
+        Self { status, good: 0, bad: 0, doubt: 0, sure: 0, lost_for: 0, unsure: 0 }
     }
 
     /// The current status.
     pub fn status(&self) -> Status {
         self.status
+    }
+
+    /// Frames in a row (status decisions, the last included) in which the block was held but its
+    /// lower camera below `certain_fitness`: how long a held pose has gone unconfirmed.
+    pub fn unsure_frames(&self) -> u16 {
+        self.unsure
     }
 
     /// Feeds the elite's relative fitness of one frame (its last generation): `fitness` the
@@ -226,6 +235,7 @@ impl StatusMonitor {
             }
             Status::Searching => Status::Searching,
         };
+        self.unsure = if self.status.holds() && !certain { self.unsure.saturating_add(1) } else { 0 };
         self.status
     }
 }

@@ -5,7 +5,7 @@
 //! invalid frame, joint sample or time step returns a [`StepError`] and leaves the population,
 //! the random generator and the generation counter exactly as they were.
 
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Vector3};
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
@@ -24,7 +24,8 @@ use crate::limits::{
 };
 use crate::model::{Block, FACES, ModelError, SurfaceStrips};
 use crate::pose::{PoseError, Psi};
-use crate::status::{Status, StatusMonitor};
+use crate::quat;
+use crate::status::{DOUBT_FRAMES, Status, StatusMonitor};
 use crate::target_motion::{Optics, PredictError, Prediction, TargetFilter, TargetVelocity};
 use crate::tuning::{POPULATION_ERROR, Tuning};
 
@@ -46,6 +47,20 @@ pub const DEPTH_PROBES: usize = 2 * DEPTH_PROBE_DISPARITY_PX.len();
 /// from a quarter of a pixel, below which the fitness's whole-pixel samples cannot tell two
 /// depths apart, to two pixels, beyond which the coarse mutation takes over.
 pub const DEPTH_PROBE_DISPARITY_PX: [f32; 4] = [0.25, 0.5, 1.0, 2.0];
+
+/// Turn probes per generation in [`Feedforward::OnWithTarget`] while the block is held but
+/// `uncertain`: the children bred before the depth probes are replaced by the best pose
+/// tilted, about its visible surface ([`Psi::turned_about_surface`]), so that each of the two
+/// faces nearest edge-on turns towards and away from the camera, by `k` times the coarse
+/// mutation's largest turn, `k` in [`TURN_PROBE_MULTIPLES`].
+pub const TURN_PROBES: usize = 4 * TURN_PROBE_MULTIPLES.len();
+
+/// The turn probes' sizes in coarse mutation turns (the largest of
+/// `ga.mutation_scale.coarse.turn_*`, a quaternion vector part): beyond the largest turn one
+/// coarse mutation makes. A face seen edge-on by the estimate but at a grazing angle in the
+/// image (or the reverse) enters the fitness only after a tilt of several degrees, which no
+/// smaller turn rewards.
+pub const TURN_PROBE_MULTIPLES: [f32; 2] = [2.0, 4.0];
 
 pub use crate::tuning::Feedforward;
 
@@ -748,6 +763,9 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.ga.breed(&best, &self.config.tuning.ga, &self.config.search, &mut self.rng);
         if feedforward == Feedforward::OnWithTarget && !acquiring {
             self.probe_depth(&best.psi);
+            if self.monitor.unsure_frames() >= DOUBT_FRAMES {
+                self.probe_turns(&best.psi);
+            }
         }
         if acquiring {
             self.acquire_step(frame);
@@ -775,6 +793,44 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             for (s, sign) in [1.0f32, -1.0].iter().enumerate() {
                 let probe = best.scaled_along_ray(1.0 + sign * k * unit / z);
                 self.ga.set_individual(first + 2 * j + s, probe, &self.config.search);
+            }
+        }
+    }
+
+    /// Replaces the [`TURN_PROBES`] bred children before the depth probes by the best pose
+    /// tilted so that each of its two faces nearest edge-on turns towards and away from the
+    /// camera (about the axis across the viewing ray and the face's normal), by `k` coarse
+    /// mutation turns, `k` in [`TURN_PROBE_MULTIPLES`], about its visible surface: a lock that
+    /// misses a face seen at a grazing angle climbs back only by a larger turn than the
+    /// mutations make.
+    fn probe_turns(&mut self, best: &Psi) {
+        let coarse = self.config.tuning.ga.mutation_scale.first().copied().unwrap_or([0.0; 6]);
+        let step = coarse[3..].iter().fold(0.0f32, |m, &v| m.max(v));
+        let half = self.config.block.size_m.map(|s| 0.5 * s);
+        let end = self.ga.first_immigrant(&self.config.tuning.ga).saturating_sub(DEPTH_PROBES);
+        let Some(first) = end.checked_sub(TURN_PROBES).filter(|&f| f >= 1) else { return };
+        let t = best.translation();
+        let range = t.norm();
+        if !(range > MIN_DEPTH_M && range.is_finite()) {
+            return;
+        }
+        let ray = t / range;
+        let r = best.rotation_unchecked();
+        // The box axes ordered by how nearly edge-on their faces are (|cos| to the ray).
+        let cos = (r.transpose() * ray).map(f32::abs);
+        let mut axes = [0usize, 1, 2];
+        axes.sort_unstable_by(|&a, &b| cos[a].total_cmp(&cos[b]));
+        let mut slot = first;
+        for &k in &axes[..2] {
+            let across = ray.cross(&r.column(k));
+            let n = across.norm();
+            let axis = if n > 1e-3 { across / n } else { Vector3::x() };
+            for multiple in TURN_PROBE_MULTIPLES {
+                for sign in [1.0f32, -1.0] {
+                    let turn = quat::normalized(1.0, axis * (sign * multiple * step));
+                    self.ga.set_individual(slot, best.turned_about_surface(&turn, &half), &self.config.search);
+                    slot += 1;
+                }
             }
         }
     }

@@ -197,6 +197,15 @@ impl StatusMonitor {
         Self { status, good: 0, bad: 0, doubt: 0, sure: 0, lost_for: 0, unsure: 0 }
     }
 
+    /// A monitor forced into `status` (tests, and the board's worst-case measurement): counters
+    /// cleared, and a forced `Uncertain` taken as a hold unconfirmed for [`DOUBT_FRAMES`] frames
+    /// already ([`StatusMonitor::unsure_frames`]), so that such a generation does all the work
+    /// of an unconfirmed hold.
+    pub fn forced(status: Status) -> Self {
+        let unsure = if status == Status::Uncertain { DOUBT_FRAMES } else { 0 };
+        Self { unsure, ..Self::new(status) }
+    }
+
     /// The current status.
     pub fn status(&self) -> Status {
         self.status

@@ -401,11 +401,12 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.monitor.status()
     }
 
-    /// Puts the tracker in `status` with cleared status counters, leaving the population as it
-    /// is. Meant for tests and for measuring the worst-case work of each status on a board
-    /// (`evorec timing`); the tracker decides its status itself otherwise.
+    /// Puts the tracker in `status` with cleared status counters ([`StatusMonitor::forced`]: a
+    /// forced `Uncertain` counts as unconfirmed long enough for the turn probes), leaving the
+    /// population as it is. Meant for tests and for measuring the worst-case work of each
+    /// status on a board (`evorec timing`); the tracker decides its status itself otherwise.
     pub fn set_status(&mut self, status: Status) {
-        self.monitor = StatusMonitor::new(status);
+        self.monitor = StatusMonitor::forced(status);
     }
 
     /// The learnt shift of the nearest silhouette rows, pixel widths outwards ([`crate::edge`]).

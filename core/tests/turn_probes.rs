@@ -84,9 +84,9 @@ fn the_probes_tilt_a_pose_that_stays_unconfirmed() {
 
 /// A lock tilted so that a face the cameras see at a grazing angle (cosine 0.2, about 11°) is
 /// (nearly) edge-on, below the fitness's visibility cosine: every turn a coarse mutation makes towards the truth leaves that face out of the
-/// fitness, so only a larger turn climbs. Measured, seeds 1–8, orientation error after 60 frames:
-/// 0.3–0.7° in 6 and 4.3 and 5.9° in 2 with the probes; without them 0.4 and 0.5° in 2, 4.3–10.7°
-/// in 6.
+/// fitness, so only a larger turn climbs. The tracker starts as a hold already unconfirmed for
+/// `DOUBT_FRAMES` frames (`Tracker::set_status`). Measured, seeds 1–8, orientation error after
+/// 60 frames: 0.3–0.7° in all 8 with the probes; without them 0.4 and 0.5° in 2, 4.3–10.7° in 6.
 #[test]
 fn a_lock_that_misses_a_grazing_face_climbs_back() {
     let truth = seen_along(Vector3::new(0.8, -0.55, -0.2));
@@ -111,5 +111,5 @@ fn a_lock_that_misses_a_grazing_face_climbs_back() {
         (1..=8).map(|seed| angle(&step(&mut tracker(seed, &tilt), &truth, 60), &truth).to_degrees()).collect();
     eprintln!("orientation error after 60 frames, seeds 1–8: {errors:?} °");
     let right = errors.iter().filter(|&&e| e < 2.0).count();
-    assert!(right >= 5, "{right} of 8 within 2°: {errors:?}");
+    assert!(right >= 7, "{right} of 8 within 2°: {errors:?}");
 }

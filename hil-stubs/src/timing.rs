@@ -190,13 +190,15 @@ impl CaseKind {
         }
     }
 
-    /// The status the tracker is forced into before each generation of this kind (the status
-    /// decides the work of a generation): searching and lost for those kinds, tracking for
-    /// every other kind, so that the tracking work is measured on every kind of image.
-    pub fn forced_status(self) -> Status {
+    /// The status the tracker is forced into before generation `k` of this kind (the status
+    /// decides the work of a generation): searching and lost for those kinds; for every other
+    /// kind tracking and uncertain in turn (a forced `Uncertain` runs the turn probes of a hold
+    /// that has gone unconfirmed), so that the work of both is measured on every kind of image.
+    pub fn forced_status(self, k: u32) -> Status {
         match self {
             Self::Searching => Status::Searching,
             Self::Lost => Status::Lost,
+            _ if k % 2 == 1 => Status::Uncertain,
             _ => Status::Tracking,
         }
     }

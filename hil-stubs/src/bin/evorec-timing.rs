@@ -16,7 +16,7 @@
 //! is made on the board before its generation, so the measured window holds only
 //! `Tracker::step_probed`. Before each generation the tracker is
 //! put in the status of its frame kind (`CaseKind::forced_status`: searching or lost for those
-//! kinds, tracking for all others), which decides the generation's work. Before each generation the free stack
+//! kinds, tracking and uncertain in turn for all others), which decides the generation's work. Before each generation the free stack
 //! is painted again, and its high-water mark after the generation is printed too.
 //!
 //! The rig is `timing::rig_for` the profile's frame size (f = 200 px at 160×120, scaled with
@@ -178,7 +178,7 @@ mod firmware {
             };
             let frame = StereoFrame { left: l, right: r };
             let dt_s = if k == 0 { 0.0 } else { FRAME_PERIOD_US as f32 * 1e-6 };
-            tracker.set_status(kind.forced_status());
+            tracker.set_status(kind.forced_status(k));
             let status = tracker.status();
             // The target velocity this generation shifts the individuals by (the tracker's own
             // computation of it, read outside the measured window).

@@ -475,7 +475,8 @@ fn by_kind_and_status(s: &mut String, full: &RunStats) {
         s,
         "\n## By tracker status (whole call, instructions)\n\nThe status decides the work of a generation: \
          while searching or lost, the acquisition runs one bounded stage and `AcquireConfig::idle_individuals` \
-         individuals are not evaluated. The budget is set by tracking when the other rows' max is lower.\n\n\
+         individuals are not evaluated; an uncertain generation (forced as a hold unconfirmed for `DOUBT_FRAMES`) \
+         adds the turn probes in `ff+target`. The budget is set by tracking when the other rows' max is lower.\n\n\
          | status | n | min | max |\n|---|---:|---:|---:|"
     );
     for (st, n, r) in &full.by_status {

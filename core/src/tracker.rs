@@ -284,6 +284,9 @@ pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = POPULATION_CAPA
     acquisition: Acquisition,
     target: TargetFilter,
     edge: EdgeShift,
+    /// Whether the block moved by itself less than a fine mutation step over this frame's time
+    /// step, by the target model (see [`Tracker::probe_turns`]).
+    still: bool,
 }
 
 impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
@@ -308,6 +311,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             acquisition: Acquisition::new(),
             target: TargetFilter::tuned(config.tuning.target, Optics::of(&config.rig, &config.block)),
             edge: EdgeShift::NONE,
+            still: true,
         })
     }
 
@@ -360,6 +364,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             acquisition: Acquisition::new(),
             target: TargetFilter::with_defaults(),
             edge: EdgeShift::NONE,
+            still: true,
         })
     }
 
@@ -552,6 +557,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // hue table: the learnt one while the block is held, the search one otherwise.
         let acquiring = !self.monitor.status().holds();
         self.colours.select(!acquiring);
+        self.still = self.moves_less_than_a_fine_step(dt_s);
         // A tracked frame in every few tests where the silhouettes are (`crate::edge`).
         let edge_test = !acquiring && self.edge.is_due();
         probe.mark(Phase::Feedforward);
@@ -764,7 +770,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.ga.breed(&best, &self.config.tuning.ga, &self.config.search, &mut self.rng);
         if feedforward == Feedforward::OnWithTarget && !acquiring {
             self.probe_depth(&best.psi);
-            if self.monitor.unsure_frames() >= DOUBT_FRAMES {
+            if self.monitor.unsure_frames() >= DOUBT_FRAMES && self.still {
                 self.probe_turns(&best.psi);
             }
         }
@@ -796,6 +802,19 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
                 self.ga.set_individual(first + 2 * j + s, probe, &self.config.search);
             }
         }
+    }
+
+    /// Whether the target model has the block moving by itself, over `dt_s`, by less than the
+    /// fine mutation's step: its centre by less than the fine lateral step and its orientation
+    /// by less than the fine turn. A hold that stays unconfirmed while the block moves is most
+    /// often the search lagging the block, which every bred child is needed to follow; one that
+    /// stays unconfirmed while the block stands still is a local optimum.
+    fn moves_less_than_a_fine_step(&self, dt_s: f32) -> bool {
+        let fine = self.config.tuning.ga.mutation_scale.last().copied().unwrap_or([0.0; 6]);
+        let v = self.target.feedforward_velocity();
+        let step = v.v.norm() * dt_s;
+        let turn = 0.5 * v.w.norm() * dt_s;
+        step <= fine[0].min(fine[1]) && turn <= fine[3..].iter().fold(f32::INFINITY, |m, &x| m.min(x))
     }
 
     /// Replaces the [`TURN_PROBES`] bred children before the depth probes by the best pose

@@ -186,7 +186,7 @@ pub struct StatusMonitor {
     sure: u16,
     /// Frames since the status became `Lost`.
     lost_for: u16,
-    /// Frames in a row held (`Tracking` or `Uncertain`) with the lower camera below
+    /// Frames in a row held (`Tracking` or `Uncertain`) with the lower camera's fitness below
     /// `certain_fitness`.
     unsure: u16,
 }
@@ -212,7 +212,9 @@ impl StatusMonitor {
     }
 
     /// Frames in a row (status decisions, the last included) in which the block was held but its
-    /// lower camera below `certain_fitness`: how long a held pose has gone unconfirmed.
+    /// lower camera's fitness below `certain_fitness`: how long a held pose has gone unconfirmed
+    /// by the fitness (a view that leaves the orientation open does not count,
+    /// [`StatusMonitor::update_view`]).
     pub fn unsure_frames(&self) -> u16 {
         self.unsure
     }
@@ -220,10 +222,19 @@ impl StatusMonitor {
     /// Feeds the elite's relative fitness of one frame (its last generation): `fitness` the
     /// mean of the two cameras', `lower` the lower camera's. Returns the new status.
     pub fn update(&mut self, fitness: f32, lower: f32, config: &StatusConfig) -> Status {
+        self.update_view(fitness, lower, true, config)
+    }
+
+    /// [`StatusMonitor::update`] for a view that may leave the pose's orientation open
+    /// (`settles` false: too few faces whole in a camera): such a frame is not certain, however
+    /// high `lower`, but counts as unconfirmed for [`StatusMonitor::unsure_frames`] only if
+    /// `lower` is below `certain_fitness` (the fitness, not the view, leaves it unconfirmed).
+    pub fn update_view(&mut self, fitness: f32, lower: f32, settles: bool, config: &StatusConfig) -> Status {
         // NaN counts as bad (it is neither ≥ nor < a threshold otherwise).
         let good = fitness >= config.acquire_fitness;
         let bad = !(fitness >= config.lose_fitness);
-        let certain = lower >= config.certain_fitness;
+        let fits = lower >= config.certain_fitness;
+        let certain = fits && settles;
         self.good = if good { self.good.saturating_add(1) } else { 0 };
         self.bad = if bad { self.bad.saturating_add(1) } else { 0 };
         self.doubt = if good { 0 } else { self.doubt.saturating_add(1) };
@@ -244,7 +255,7 @@ impl StatusMonitor {
             }
             Status::Searching => Status::Searching,
         };
-        self.unsure = if self.status.holds() && !certain { self.unsure.saturating_add(1) } else { 0 };
+        self.unsure = if self.status.holds() && !fits { self.unsure.saturating_add(1) } else { 0 };
         self.status
     }
 }
@@ -335,6 +346,26 @@ mod tests {
         assert_eq!(alike(&mut m, 0.95, &c), Status::Lost);
         assert_eq!(alike(&mut m, 0.95, &c), Status::Lost);
         assert_eq!(alike(&mut m, 0.95, &c), Status::Tracking);
+    }
+
+    #[test]
+    fn a_view_that_leaves_the_orientation_open_is_held_but_not_counted_unsure() {
+        let c = StatusConfig::DEFAULT;
+        let mut m = StatusMonitor::new(Status::Searching);
+        for _ in 0..c.confirm_frames + 5 {
+            assert_ne!(m.update_view(0.95, 0.95, false, &c), Status::Tracking);
+        }
+        assert_eq!(m.status(), Status::Uncertain);
+        assert_eq!(m.unsure_frames(), 0);
+        // The fitness below the bar: unconfirmed by the fitness, counted.
+        m.update_view(0.8, 0.8, false, &c);
+        m.update_view(0.8, 0.8, true, &c);
+        assert_eq!(m.unsure_frames(), 2);
+        // A certain frame in a view that settles it clears the count and confirms in time.
+        for _ in 0..c.confirm_frames {
+            m.update_view(0.95, 0.95, true, &c);
+        }
+        assert_eq!((m.status(), m.unsure_frames()), (Status::Tracking, 0));
     }
 
     #[test]

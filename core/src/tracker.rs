@@ -596,8 +596,8 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // Nor is a pose reported tracking where the view leaves its orientation open (fewer than
         // `CONFIRM_FULL_FACES` faces whole in a camera): it is then held and uncertain.
         let seen = self.evaluator().full_faces(&best.psi.rotation_unchecked(), &best.psi.translation());
-        let lower = if seen.iter().all(|&n| n >= CONFIRM_FULL_FACES) { lower } else { 0.0 };
-        let status = self.monitor.update(relative, lower, &self.config.tuning.status);
+        let settles = seen.iter().all(|&n| n >= CONFIRM_FULL_FACES);
+        let status = self.monitor.update_view(relative, lower, settles, &self.config.tuning.status);
         let holds = status.holds();
         if holds && acquiring {
             self.acquisition.reset();

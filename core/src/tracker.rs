@@ -839,7 +839,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // The box axes ordered by how nearly edge-on their faces are (|cos| to the ray).
         let cos = (r.transpose() * ray).map(f32::abs);
         let mut axes = [0usize, 1, 2];
-        axes.sort_unstable_by(|&a, &b| cos[a].total_cmp(&cos[b]));
+        axes.sort_unstable_by(|&a, &b| cos.get(a).unwrap_or(&0.0).total_cmp(cos.get(b).unwrap_or(&0.0)));
         let mut slot = first;
         for &k in &axes[..2] {
             let across = ray.cross(&r.column(k));

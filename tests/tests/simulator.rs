@@ -152,13 +152,14 @@ fn scenario_errors_name_the_field() {
 
 #[test]
 fn a_manoeuvring_block_is_reported_tracking_only_where_the_pose_is_right() {
-    // The sideways reversing belt (`scenarios/conveyor_ff_target.toml`), GA seed 3, 15 s: the
-    // block is held throughout, on poses more than 10 mm or 5° off on a dozen frames or more (15
-    // measured). Those are `uncertain`, not `tracking` (docs/method.md, "A status that states its
+    // The sideways reversing belt (`scenarios/conveyor_ff_target.toml`), GA seed 6, 15 s: the
+    // block is held throughout, on poses more than 10 mm or 5° off on a dozen frames or more (33
+    // measured; the first of seeds 1–12 whose first 15 s hold wrong poses without losing the
+    // block). Those are `uncertain`, not `tracking` (docs/method.md, "A status that states its
     // accuracy").
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/conveyor_ff_target.toml");
     let mut s = Scenario::load(&path).unwrap();
-    (s.seed, s.duration_s) = (3, 15.0);
+    (s.seed, s.duration_s) = (6, 15.0);
     let out = experiment::run(&s, || {}).unwrap_or_else(|e| panic!("run failed: {e:#}"));
     let wrong = |r: &sim::TraceRow| {
         let (mm, deg) = evorec_sim::experiments::acquire::pose_error(&r.estimate, &r.truth);

@@ -8,8 +8,10 @@
 //! moving only the orientation and only the position shows whether one part alone climbs, and
 //! both poses are printed as ψ (right camera frame) for a closer look at the geometry.
 //!
-//! `cargo run --release -p evorec-sim --example ridge_trace -- SEED static|a [LIGHT.toml|-] [EVERY]`
-//! (`-`: the flat default light, to give EVERY without a light file)
+//! `cargo run --release -p evorec-sim --example ridge_trace -- SEED CASE [LIGHT.toml|-] [EVERY]`
+//! with CASE `static` or `a` (the trial's acquisition run, from an unknown pose) or `static+occluded`
+//! or `a+occluded` (its recovery run: from the known start pose, through the 1 s occlusion);
+//! `-`: the flat default light, to give EVERY without a light file.
 use evorec_core::StereoFrame;
 use evorec_core::board::{CameraController, Error as _, ErrorKind};
 use evorec_core::image::{Image, Rgb565};
@@ -58,17 +60,25 @@ fn path(
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: ridge_trace SEED static|a [LIGHT.toml|-] [EVERY]";
+    let usage = "usage: ridge_trace SEED static|a[+occluded] [LIGHT.toml|-] [EVERY]";
     let seed: u64 = args.get(1).and_then(|s| s.parse().ok()).ok_or_else(|| anyhow::anyhow!(usage))?;
-    let case = if args.get(2).map(String::as_str) == Some("a") { Case::MotionA } else { Case::Static };
+    let (case, recovery) = match args.get(2).map(String::as_str) {
+        Some("static") => (Case::Static, false),
+        Some("a") => (Case::MotionA, false),
+        Some("static+occluded") => (Case::Static, true),
+        Some("a+occluded") => (Case::MotionA, true),
+        _ => anyhow::bail!(usage),
+    };
     let every: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(20).max(1);
-    let mut s = scenario(seed, case, false);
+    let mut s = scenario(seed, case, recovery);
     s.tracker.0 = evorec_core::tuning::Tuning::DEFAULT;
     if let Some(light) = args.get(3).filter(|l| l.as_str() != "-") {
         s.render = evorec_sim::sim::scenario::load_light(std::path::Path::new(light), s.frame_period_s)?;
     }
     let mut board = SimBoard::new(World::new(&s)?)?;
-    let mut tracker = scenario_tracker::<8>(&s, Population::Uniform)?;
+    // The recovery run starts from the known pose, as `evorec acquire` runs it.
+    let population = if recovery { Population::Around(board.start_pose()) } else { Population::Uniform };
+    let mut tracker = scenario_tracker::<8>(&s, population)?;
     let symmetries = colour_symmetries(&s.target.face_hues_deg.map(|h| h as f32));
     let n = image_bytes(&s);
     let (mut left, mut right) = (vec![0u8; n], vec![0u8; n]);

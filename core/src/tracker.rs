@@ -284,9 +284,6 @@ pub struct Tracker<const DOF: usize = PA10_DOF, const P: usize = POPULATION_CAPA
     acquisition: Acquisition,
     target: TargetFilter,
     edge: EdgeShift,
-    /// Whether the block moved by itself less than a fine mutation step over this frame's time
-    /// step, by the target model (see [`Tracker::probe_turns`]).
-    still: bool,
 }
 
 impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
@@ -311,7 +308,6 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             acquisition: Acquisition::new(),
             target: TargetFilter::tuned(config.tuning.target, Optics::of(&config.rig, &config.block)),
             edge: EdgeShift::NONE,
-            still: true,
         })
     }
 
@@ -364,7 +360,6 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
             acquisition: Acquisition::new(),
             target: TargetFilter::with_defaults(),
             edge: EdgeShift::NONE,
-            still: true,
         })
     }
 
@@ -557,7 +552,12 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         // hue table: the learnt one while the block is held, the search one otherwise.
         let acquiring = !self.monitor.status().holds();
         self.colours.select(!acquiring);
-        self.still = self.moves_less_than_a_fine_step(dt_s);
+        // Turn probes in this frame's generations ([`Tracker::probe_turns`]): a hold the fitness
+        // has left unconfirmed for `DOUBT_FRAMES` frames while the block stands still.
+        let turns = feedforward == Feedforward::OnWithTarget
+            && !acquiring
+            && self.monitor.unsure_frames() >= DOUBT_FRAMES
+            && self.moves_less_than_a_fine_step(dt_s);
         // A tracked frame in every few tests where the silhouettes are (`crate::edge`).
         let edge_test = !acquiring && self.edge.is_due();
         probe.mark(Phase::Feedforward);
@@ -579,10 +579,10 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         }
 
         for _ in 1..self.config.tuning.generations_per_frame {
-            self.generation_on(frame, feedforward, acquiring, None, probe);
+            self.generation_on(frame, feedforward, acquiring, turns, None, probe);
         }
         let Outcome { best, cameras, estimate, target_measurement } =
-            self.generation_on(frame, feedforward, acquiring, Some(edge_test), probe);
+            self.generation_on(frame, feedforward, acquiring, turns, Some(edge_test), probe);
         // The status is decided on the fitness relative to what the true pose can score under
         // the current light (`crate::colour`), so that its thresholds mean the same in every light.
         let expected = self.colours.model().expected_fitness();
@@ -714,16 +714,17 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
     }
 
     /// One generation on `frame` (the population already moved by the feedforward): evaluate,
-    /// breed (with the depth probes in [`Feedforward::OnWithTarget`] while tracking, with
-    /// immigrants seeded from the colour blobs while `acquiring`). Returns the best of the
-    /// evaluated population and, on the frame's last generation (`last` is `Some(edge_test)`,
-    /// whether the frame runs the disparity test), the estimate and, in
+    /// breed (with the depth probes in [`Feedforward::OnWithTarget`] while tracking, the turn
+    /// probes too if `turns`, immigrants seeded from the colour blobs while `acquiring`).
+    /// Returns the best of the evaluated population and, on the frame's last generation (`last`
+    /// is `Some(edge_test)`, whether the frame runs the disparity test), the estimate and, in
     /// [`Feedforward::OnWithTarget`], the target filter's measurement (else the best).
     fn generation_on<F: PixelFormat>(
         &mut self,
         frame: &StereoFrame<'_, F>,
         feedforward: Feedforward,
         acquiring: bool,
+        turns: bool,
         last: Option<bool>,
         probe: &mut impl PhaseProbe,
     ) -> Outcome {
@@ -770,7 +771,7 @@ impl<const DOF: usize, const P: usize, const G: usize> Tracker<DOF, P, G> {
         self.ga.breed(&best, &self.config.tuning.ga, &self.config.search, &mut self.rng);
         if feedforward == Feedforward::OnWithTarget && !acquiring {
             self.probe_depth(&best.psi);
-            if self.monitor.unsure_frames() >= DOUBT_FRAMES && self.still {
+            if turns {
                 self.probe_turns(&best.psi);
             }
         }
